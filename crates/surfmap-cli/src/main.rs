@@ -1,0 +1,34 @@
+//! The `surfmap` command-line tool: argument parsing, progress and files only; the
+//! algorithms live in the `surfmap` library.
+
+mod cmd;
+
+use clap::{Parser, Subcommand};
+
+#[derive(Parser)]
+#[command(
+    name = "surfmap",
+    version,
+    about = "Variational surface maps: flip-free flattening, distortion reports, geometry images"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Read a mesh and report counts, bounding box, area, topology and defects.
+    Inspect(cmd::inspect::Args),
+}
+
+fn main() {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Inspect(a) => cmd::inspect::run(a),
+    };
+    if let Err(e) = result {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
+    }
+}

@@ -1,0 +1,1 @@
+//! Mesh files in and out: OBJ, OFF, PLY. (to be written)
