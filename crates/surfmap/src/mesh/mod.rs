@@ -2,7 +2,9 @@
 //! topology), file input/output, validation and opt-in repairs.
 
 pub mod io;
+pub mod repair;
 pub mod topology;
+pub mod validate;
 
 pub use topology::{BoundaryLoop, Topology};
 
