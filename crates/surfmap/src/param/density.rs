@@ -301,6 +301,7 @@ impl Default for EnergyKind {
 }
 
 #[cfg(test)]
+#[allow(clippy::needless_range_loop)] // matrix indices read best as indices
 mod tests {
     use super::*;
 
