@@ -447,7 +447,7 @@ fn column_coefficients(rest: &RestTriangle) -> [[f64; 3]; 2] {
 #[inline(always)]
 fn pull_back_hessian(rest: &RestTriangle, hj: &[[f64; 4]; 4], out: &mut [[f64; 6]; 6]) {
     let c = column_coefficients(rest);
-    // G[2i + j][(k, m)] = Σ_n HJ[2i + j][2m + n] c[n][l] for column DOF 2l + m, then
+    // G[2i + j][2l + m] = Σ_n HJ[2i + j][2m + n] c[n][l] for column DOF 2l + m, then
     // out[2k + i][2l + m] = area Σ_j c[j][k] G[2i + j][2l + m].
     let mut g = [[0.0; 6]; 4];
     for (row, grow) in hj.iter().zip(g.iter_mut()) {
@@ -457,11 +457,10 @@ fn pull_back_hessian(rest: &RestTriangle, hj: &[[f64; 4]; 4], out: &mut [[f64; 6
             }
         }
     }
-    for k in 0..3 {
+    for (k, (&c0k, &c1k)) in c[0].iter().zip(&c[1]).enumerate() {
+        let (ck0, ck1) = (rest.area * c0k, rest.area * c1k);
         for i in 0..2 {
             let r = 2 * k + i;
-            let ck0 = rest.area * c[0][k];
-            let ck1 = rest.area * c[1][k];
             for col in r..6 {
                 let v = ck0 * g[2 * i][col] + ck1 * g[2 * i + 1][col];
                 out[r][col] = v;
