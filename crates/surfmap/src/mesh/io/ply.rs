@@ -71,6 +71,14 @@ enum Property {
     },
 }
 
+impl Property {
+    fn name(&self) -> &str {
+        match self {
+            Property::Scalar { name, .. } | Property::List { name, .. } => name,
+        }
+    }
+}
+
 #[derive(Clone, Debug)]
 struct Element {
     name: String,
@@ -452,10 +460,11 @@ fn read_vertices<B: Body>(body: &mut B, element: &Element) -> Result<VertexData,
     };
     let at = Location::Line(element.line);
     let [Some(x), Some(y), Some(z)] = ["x", "y", "z"].map(index_of) else {
+        let names: Vec<&str> = element.properties.iter().map(Property::name).collect();
         return Err(ReadError::syntax(
             at,
             "scalar properties x, y and z in element 'vertex'",
-            element.name.as_bytes(),
+            names.join(" ").as_bytes(),
         ));
     };
     let uv = [
@@ -521,10 +530,11 @@ fn read_faces<B: Body>(
         .iter()
         .position(|p| is_list(&p, &["vertex_indices", "vertex_index"]))
     else {
+        let names: Vec<&str> = element.properties.iter().map(Property::name).collect();
         return Err(ReadError::syntax(
             Location::Line(element.line),
             "a list property 'vertex_indices' in element 'face'",
-            element.name.as_bytes(),
+            names.join(" ").as_bytes(),
         ));
     };
     let texcoord = element
@@ -576,7 +586,6 @@ fn read_faces<B: Body>(
                 }
             }
         }
-        let first = triangles.len();
         fan(&corners, &mut triangles);
         if let Some(uvs) = &mut corner_uvs {
             if coords.len() == 2 * corners.len() {
@@ -588,7 +597,6 @@ fn read_faces<B: Body>(
                 corner_uvs = None; // a face without matching texcoords: drop them all
             }
         }
-        debug_assert!(triangles.len() >= first);
     }
     Ok(Faces {
         triangles,
