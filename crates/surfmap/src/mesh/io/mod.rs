@@ -788,6 +788,48 @@ mod tests {
         }
     }
 
+    /// Small real files of each format from the shared data folder, when it is there.
+    fn real_seeds() -> Vec<(Format, Vec<u8>)> {
+        let dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data"));
+        let dir = std::env::var_os("SURFMAP_DATA_DIR").map_or(dir.to_path_buf(), PathBuf::from);
+        [
+            "nefertiti_small.off",
+            "faces/mp_canonical.obj",
+            "faces/flame/flame_template.ply",
+        ]
+        .into_iter()
+        .filter_map(|name| {
+            let path = dir.join(name);
+            Some((Format::from_path(&path)?, std::fs::read(&path).ok()?))
+        })
+        .collect()
+    }
+
+    #[test]
+    fn mutated_real_files_never_panic() {
+        let seeds = real_seeds();
+        if seeds.is_empty() {
+            println!("note: shared data folder not found; skipping mutations of real files");
+            return;
+        }
+        let config = ProptestConfig {
+            cases: (fuzz_cases() / 16).max(8),
+            failure_persistence: None,
+            ..ProptestConfig::default()
+        };
+        let strategy = (0..seeds.len(), prop::collection::vec(mutation(), 1..6));
+        proptest::test_runner::TestRunner::new(config)
+            .run(&strategy, |(seed, mutations)| {
+                let (format, mut bytes) = seeds[seed].clone();
+                for m in &mutations {
+                    apply(&mut bytes, m);
+                }
+                read_is_total(&bytes, format);
+                Ok(())
+            })
+            .unwrap();
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig { cases: fuzz_cases(), failure_persistence: None, ..ProptestConfig::default() })]
 
