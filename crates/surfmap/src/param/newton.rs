@@ -181,20 +181,20 @@ impl<'m> NewtonSolver<'m> {
 
     /// `E(u) = Σ_T area(T)·W` (thesis (2.5) summed per triangle); `+∞` if any
     /// triangle is flipped or degenerate.
-    pub fn energy(&self, uv: &[[f64; 2]], density: &dyn Density) -> f64 {
+    pub fn energy<D: Density + ?Sized>(&self, uv: &[[f64; 2]], density: &D) -> f64 {
         (0..self.triangles.len())
             .into_par_iter()
             .with_min_len(4096)
-            .map(|t| element::energy(&self.rest[t], self.corners(uv, t), density))
+            .map(|t| element::energy(&self.rest[t], &self.corners(uv, t), density))
             .sum()
     }
 
     /// Runs Newton iterations from `uv` (modified in place) until convergence, the
     /// iteration cap or locking. `log` receives one entry per iteration.
-    pub fn minimize(
+    pub fn minimize<D: Density + ?Sized>(
         &mut self,
         uv: &mut [[f64; 2]],
-        density: &dyn Density,
+        density: &D,
         settings: &NewtonSettings,
         stage: usize,
         clock: Instant,
@@ -274,7 +274,7 @@ impl<'m> NewtonSolver<'m> {
     }
 
     /// Fills the gradient and the projected Hessian values for the current `uv`.
-    fn assemble(&mut self, uv: &[[f64; 2]], density: &dyn Density) {
+    fn assemble<D: Density + ?Sized>(&mut self, uv: &[[f64; 2]], density: &D) {
         let triangles = self.triangles;
         let rest = &self.rest;
         self.elem_grad
@@ -287,7 +287,7 @@ impl<'m> NewtonSolver<'m> {
                 let tri = triangles[t];
                 let corners = [uv[tri[0] as usize], uv[tri[1] as usize], uv[tri[2] as usize]];
                 let mut hess = [[0.0; 6]; 6];
-                *e = element::gradient_and_projected_hessian(&rest[t], corners, density, g, &mut hess);
+                *e = element::gradient_and_projected_hessian(&rest[t], &corners, density, g, &mut hess);
                 for (p, &(i, j)) in LOWER_PAIRS.iter().enumerate() {
                     h[p] = hess[i][j];
                 }
