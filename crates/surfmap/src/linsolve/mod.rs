@@ -113,6 +113,10 @@ impl SpdSystem {
     /// input pair, the index of its slot in `values_mut()` (so callers refill values in O(1) each step:
     /// zero the values, then `values[slot[k]] += v_k`). Pairs with row < col map to the mirrored slot.
     ///
+    /// Every slot holds the *sum* of the values scattered into it, and `(i, j)` and `(j, i)`
+    /// share one slot: list an off-diagonal entry of the symmetric matrix once (either
+    /// triangle), or scatter half of it from each side.
+    ///
     /// Cost: O(nnz log(row length)) for the pattern plus faer's symbolic analysis
     /// (AMD ordering, elimination tree, supernodal structure).
     pub fn new(n: usize, entries: &[(u32, u32)]) -> Result<(Self, Vec<u32>), SolveError> {
