@@ -314,9 +314,9 @@ mod tests {
                     dot(cross(e1, e2), cross(e1, e2)).sqrt().atan2(dot(e1, e2));
             }
         }
-        for v in 0..mesh.num_vertices() {
+        for (v, sum) in angle_sum.iter().enumerate() {
             if !boundary.contains(&(v as u32)) {
-                assert!((angle_sum[v] - TAU).abs() < 1e-12);
+                assert!((sum - TAU).abs() < 1e-12);
             }
         }
     }
