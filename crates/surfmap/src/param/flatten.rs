@@ -3,10 +3,10 @@
 //! projected Newton (with optional α-continuation), verifies the result has no
 //! flipped triangle, and returns UVs in the mesh's own units.
 
-use super::density::{Density, EnergyKind, Litke};
+use super::density::{EnergyKind, Litke};
 use super::element::{RestTriangleError, rest_triangles};
 use super::newton::{IterationLog, NewtonSettings, NewtonSolver, StopReason};
-use super::{count_flipped, lscm, signed_uv_area, tutte};
+use super::{InitialMapError, count_flipped, lscm, signed_uv_area, tutte};
 use crate::linsolve::SolveError;
 use crate::mesh::validate::{Defect, validate};
 use crate::mesh::{Topology, TriMesh};
@@ -93,6 +93,8 @@ pub enum FlattenError {
     Degenerate(#[from] RestTriangleError),
     #[error("linear solve failed: {0}")]
     Solve(#[from] SolveError),
+    #[error("initial map: {0}")]
+    InitialMap(#[from] InitialMapError),
     #[error("both initial maps flipped triangles (LSCM: {lscm}, mean-value: {mean_value}); the mesh geometry is probably broken (non-finite or coincident vertices)")]
     NoAdmissibleStart { lscm: usize, mean_value: usize },
     #[error("internal error: the result has {0} flipped triangles; please report this mesh")]
@@ -157,7 +159,7 @@ pub fn flatten_with_progress(
     let (mut uv, start) = match options.start {
         StartChoice::MeanValue => (tutte::mean_value(&positions, &mesh.triangles, boundary)?, StartMap::MeanValue),
         StartChoice::Auto | StartChoice::Lscm => {
-            let mut uv = lscm::lscm(&positions, &mesh.triangles, boundary)?.uvs;
+            let mut uv = lscm::lscm(&positions, &mesh.triangles, boundary)?.uv;
             lscm_flipped = admissible(&mut uv);
             if lscm_flipped == 0 || options.start == StartChoice::Lscm {
                 (uv, StartMap::Lscm)
