@@ -892,3 +892,12 @@ mod tests {
         assert!(solve_general(2, &[(0, 0, 1.0), (1, 0, 1.0)], &mut [&mut b]).is_err());
     }
 }
+
+#[cfg(test)]
+mod send_sync {
+    #[test]
+    fn spd_system_is_send_and_sync() {
+        fn assert_send_sync<T: Send + Sync>() {}
+        assert_send_sync::<super::SpdSystem>();
+    }
+}

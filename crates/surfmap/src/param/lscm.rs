@@ -289,8 +289,8 @@ mod tests {
         let a = (2..n).find(|a| gcd(*a, n) == 1 && *a > n / 3).unwrap();
         let perm: Vec<u32> = (0..n).map(|v| ((v * a + 5) % n) as u32).collect();
         let mut positions = vec![[0.0; 3]; n];
-        for v in 0..n {
-            positions[perm[v] as usize] = mesh.positions[v];
+        for (v, &p) in perm.iter().enumerate() {
+            positions[p as usize] = mesh.positions[v];
         }
         // Rotate corners, reverse triangle order.
         let triangles: Vec<[u32; 3]> = mesh
@@ -313,8 +313,8 @@ mod tests {
         b.rotate_left(7);
         let permuted = lscm(&positions, &triangles, &b).unwrap();
         assert_eq!(permuted.pinned, map.pinned.map(|v| perm[v as usize]));
-        for v in 0..n {
-            let (p, q) = (map.uv[v], permuted.uv[perm[v] as usize]);
+        for (p, &pv) in map.uv.iter().zip(&perm) {
+            let q = permuted.uv[pv as usize];
             assert!((p[0] - q[0]).abs() < 1e-9 && (p[1] - q[1]).abs() < 1e-9);
         }
         // The boundary loop given in the other direction gives the same map.

@@ -136,6 +136,98 @@ pub(crate) fn check_disc_input(
     Ok(2 * forward >= boundary.len())
 }
 
+/// Real meshes from `shared/data` for tests, read by a minimal OFF/OBJ reader (positions
+/// and polygon faces only, fan-triangulated) so these tests do not depend on `mesh::io`.
+#[cfg(test)]
+pub(crate) mod test_meshes {
+    use crate::mesh::TriMesh;
+    use std::path::PathBuf;
+
+    /// `shared/data` (`$SURFMAP_DATA`, or `../../../shared/data` from the crate, or one
+    /// level further up for a worktree under `wt/`), or `None` (with a note) when missing.
+    pub fn data_dir() -> Option<PathBuf> {
+        let crate_dir = env!("CARGO_MANIFEST_DIR");
+        let candidates = [
+            std::env::var_os("SURFMAP_DATA").map(PathBuf::from),
+            Some(PathBuf::from(format!("{crate_dir}/../../../shared/data"))),
+            Some(PathBuf::from(format!(
+                "{crate_dir}/../../../../shared/data"
+            ))),
+        ];
+        let found = candidates.into_iter().flatten().find(|d| d.is_dir());
+        if found.is_none() {
+            eprintln!("note: shared/data not found; skipping real-mesh test");
+        }
+        found
+    }
+
+    fn fan(face: &[u32], triangles: &mut Vec<[u32; 3]>) {
+        for k in 1..face.len().saturating_sub(1) {
+            triangles.push([face[0], face[k], face[k + 1]]);
+        }
+    }
+
+    /// Reads `name` (OFF or OBJ) from the data folder.
+    pub fn read(name: &str) -> Option<TriMesh> {
+        let text = std::fs::read_to_string(data_dir()?.join(name)).ok()?;
+        let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+        let num = |t: &str| t.parse::<f64>().ok();
+        if name.ends_with(".obj") {
+            for line in text.lines() {
+                let mut it = line.split_whitespace();
+                match it.next() {
+                    Some("v") => {
+                        let p: Vec<f64> = it.take(3).filter_map(num).collect();
+                        positions.push([p[0], p[1], p[2]]);
+                    }
+                    Some("f") => {
+                        let face: Vec<u32> = it
+                            .filter_map(|t| t.split('/').next()?.parse::<u32>().ok())
+                            .map(|i| i - 1)
+                            .collect();
+                        fan(&face, &mut triangles);
+                    }
+                    _ => {}
+                }
+            }
+        } else {
+            let mut lines = text
+                .lines()
+                .map(|l| l.split('#').next().unwrap().trim())
+                .filter(|l| !l.is_empty());
+            let header = lines.next()?;
+            let counts_line = if header.len() > 3 {
+                header[3..].trim()
+            } else {
+                lines.next()?
+            };
+            let counts: Vec<usize> = counts_line
+                .split_whitespace()
+                .filter_map(|t| t.parse().ok())
+                .collect();
+            for _ in 0..counts[0] {
+                let p: Vec<f64> = lines
+                    .next()?
+                    .split_whitespace()
+                    .take(3)
+                    .filter_map(num)
+                    .collect();
+                positions.push([p[0], p[1], p[2]]);
+            }
+            for _ in 0..counts[1] {
+                let f: Vec<u32> = lines
+                    .next()?
+                    .split_whitespace()
+                    .filter_map(|t| t.parse().ok())
+                    .collect();
+                let k = f[0] as usize;
+                fan(&f[1..=k], &mut triangles);
+            }
+        }
+        Some(TriMesh::new(positions, triangles))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -400,3 +400,32 @@ mod tests {
         ));
     }
 }
+
+#[cfg(test)]
+mod real_mesh_tests {
+    use super::*;
+    use crate::mesh::generate::disc_boundary;
+    use crate::param::{count_flipped, lscm::lscm, test_meshes};
+
+    /// Floater's theorem on real scans: mean-value and uniform maps onto a circle are
+    /// injective. LSCM flips are printed (no guarantee), and must be 0 on the hemisphere.
+    #[test]
+    fn fixed_boundary_maps_of_real_discs_are_injective() {
+        for name in ["nefertiti_small.off", "three_peaks.off", "hemisphere.obj"] {
+            let Some(mesh) = test_meshes::read(name) else {
+                return;
+            };
+            let b = disc_boundary(&mesh.triangles).expect("a disc");
+            let mv = mean_value(&mesh.positions, &mesh.triangles, &b).unwrap();
+            assert_eq!(count_flipped(&mv, &mesh.triangles), 0, "{name}: mean value");
+            let un = tutte_uniform(&mesh.positions, &mesh.triangles, &b).unwrap();
+            assert_eq!(count_flipped(&un, &mesh.triangles), 0, "{name}: uniform");
+            let conformal = lscm(&mesh.positions, &mesh.triangles, &b).unwrap();
+            let flips = count_flipped(&conformal.uv, &mesh.triangles);
+            eprintln!("{name}: LSCM flipped triangles: {flips}");
+            if name == "hemisphere.obj" {
+                assert_eq!(flips, 0);
+            }
+        }
+    }
+}
