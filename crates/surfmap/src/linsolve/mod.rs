@@ -329,6 +329,23 @@ impl SpdSystem {
         })
     }
 
+    /// Numeric LLᵀ without any shift: fails with [`SolveError::NotPositiveDefinite`]
+    /// when the matrix is not positive definite. Lets a caller test whether an exact
+    /// (unprojected) Hessian is usable before falling back to a projected one.
+    pub fn factorize_unshifted(&mut self) -> Result<(), SolveError> {
+        self.factorized = false;
+        if let Some((index, &value)) = self.values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(SolveError::NonFiniteValue { index, value });
+        }
+        match self.factorize_numeric() {
+            Ok(()) => {
+                self.factorized = true;
+                Ok(())
+            }
+            Err(pivot) => Err(SolveError::NotPositiveDefinite { pivot, shift: 0.0 }),
+        }
+    }
+
     /// One numeric factorization of the current values; `Err(pivot)` on a non-positive
     /// pivot (index in the permuted order).
     fn factorize_numeric(&mut self) -> Result<(), usize> {
