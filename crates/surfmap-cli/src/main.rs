@@ -31,7 +31,15 @@ fn main() {
         Command::Flatten(a) => cmd::flatten::run(a),
     };
     if let Err(e) = result {
-        eprintln!("error: {e:#}");
+        // Print the chain of causes, skipping a cause its parent already quotes.
+        let mut message = e.to_string();
+        for cause in e.chain().skip(1) {
+            let c = cause.to_string();
+            if !message.contains(&c) {
+                message = format!("{message}: {c}");
+            }
+        }
+        eprintln!("error: {message}");
         std::process::exit(1);
     }
 }
