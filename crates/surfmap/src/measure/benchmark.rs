@@ -114,6 +114,7 @@ fn sides<const N: usize>(p: [[f64; N]; 3]) -> (f64, f64, f64) {
 }
 
 /// Computes the benchmark row. Inputs are assumed checked by the caller.
+#[allow(clippy::needless_range_loop)]
 pub fn benchmark_scores(
     positions: &[[f64; 3]],
     triangles: &[[u32; 3]],

@@ -4,6 +4,7 @@
 //! not a set of flipped triangles (the referee `distortion.py` does the same).
 
 /// Chart label `0..k` of every face, and the number of charts `k`.
+#[allow(clippy::needless_range_loop)]
 pub fn chart_labels(triangles: &[[u32; 3]], corner_uvs: &[[[f64; 2]; 3]]) -> (Vec<u32>, usize) {
     let n = triangles.len();
     let mut sides: Vec<([u32; 2], [u64; 4], u32)> = Vec::with_capacity(3 * n);
@@ -25,7 +26,7 @@ pub fn chart_labels(triangles: &[[u32; 3]], corner_uvs: &[[[f64; 2]; 3]]) -> (Ve
             sides.push(([lo, hi], key, t as u32));
         }
     }
-    sides.sort_unstable_by(|x, y| (x.0, x.1).cmp(&(y.0, y.1)));
+    sides.sort_unstable_by_key(|x| (x.0, x.1));
     let mut parent: Vec<u32> = (0..n as u32).collect();
     fn find(parent: &mut [u32], mut x: u32) -> u32 {
         while parent[x as usize] != x {

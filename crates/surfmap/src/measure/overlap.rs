@@ -76,7 +76,7 @@ pub fn boundary_segments(
             sides.push(([lo, hi], key, t as u32, k as u8));
         }
     }
-    sides.sort_unstable_by(|x, y| (x.0, x.1).cmp(&(y.0, y.1)));
+    sides.sort_unstable_by_key(|x| (x.0, x.1));
     let mut out = Vec::new();
     let mut i = 0;
     while i < sides.len() {
