@@ -31,13 +31,22 @@ pub struct BoundaryOverlap {
     pub overlap_area: f64,
     /// `overlap_area / Σ |T_i|`.
     pub overlap_fraction: f64,
+    /// `false` when a heavily tangled layout exhausted the work budget
+    /// ([`PAIR_BUDGET_PER_ITEM`] candidate pairs per element): the crossing count and
+    /// the overlap area are then lower bounds.
+    pub complete: bool,
 }
+
+/// Candidate pairs examined per triangle (or segment), plus a constant 10⁶, before
+/// the overlap search gives up: a layout tangled enough to exceed it (thousands of
+/// flipped, stretched triangles) would otherwise cost quadratic time.
+pub const PAIR_BUDGET_PER_ITEM: usize = 200;
 
 /// Computes [`BoundaryOverlap`] for triangles with per-corner UVs.
 pub fn boundary_overlap(triangles: &[[u32; 3]], corner_uvs: &[[[f64; 2]; 3]]) -> BoundaryOverlap {
     let segments = boundary_segments(triangles, corner_uvs);
-    let crossings = count_segment_crossings(&segments);
-    let overlap = overlap_area(corner_uvs);
+    let (crossings, complete_c) = count_segment_crossings(&segments);
+    let (overlap, complete_o) = overlap_area(corner_uvs);
     let total: f64 = corner_uvs
         .iter()
         .map(|t| super::jacobian::signed_uv_area(*t).abs())
@@ -47,6 +56,7 @@ pub fn boundary_overlap(triangles: &[[u32; 3]], corner_uvs: &[[[f64; 2]; 3]]) ->
         boundary_crossings: crossings,
         overlap_area: overlap,
         overlap_fraction: if total > 0.0 { overlap / total } else { 0.0 },
+        complete: complete_c && complete_o,
     }
 }
 
@@ -94,26 +104,28 @@ pub fn boundary_segments(
     out
 }
 
-/// Number of segment pairs that share no endpoint and touch or cross.
-pub fn count_segment_crossings(segments: &[[[f64; 2]; 2]]) -> usize {
+/// Number of segment pairs that share no endpoint and touch or cross, and whether the
+/// search finished within its budget.
+pub fn count_segment_crossings(segments: &[[[f64; 2]; 2]]) -> (usize, bool) {
     let boxes: Vec<[f64; 4]> = segments.iter().map(|s| bbox(s)).collect();
     let mut count = 0;
-    for_each_overlapping_pair(&boxes, |i, j| {
+    let complete = for_each_overlapping_pair(&boxes, |i, j| {
         let (a, b) = (segments[i], segments[j]);
         let shares = a.iter().any(|p| b.iter().any(|q| p == q));
         if !shares && segments_intersect(a[0], a[1], b[0], b[1]) {
             count += 1;
         }
     });
-    count
+    (count, complete)
 }
 
 /// `Σ_{i<j} |T_i ∩ T_j|` over UV triangles (see the module docs). Intersections below
-/// `1e-9` of the smaller triangle's area (shared edges, rounding) are ignored.
-pub fn overlap_area(corner_uvs: &[[[f64; 2]; 3]]) -> f64 {
+/// `1e-9` of the smaller triangle's area (shared edges, rounding) are ignored. The flag
+/// tells whether the search finished within its budget.
+pub fn overlap_area(corner_uvs: &[[[f64; 2]; 3]]) -> (f64, bool) {
     let boxes: Vec<[f64; 4]> = corner_uvs.iter().map(|t| bbox(t)).collect();
     let mut total = 0.0;
-    for_each_overlapping_pair(&boxes, |i, j| {
+    let complete = for_each_overlapping_pair(&boxes, |i, j| {
         let (a, b) = (corner_uvs[i], corner_uvs[j]);
         let (aa, ab) = (
             super::jacobian::signed_uv_area(a).abs(),
@@ -127,7 +139,7 @@ pub fn overlap_area(corner_uvs: &[[[f64; 2]; 3]]) -> f64 {
             total += area;
         }
     });
-    total
+    (total, complete)
 }
 
 /// Area of the intersection of two triangles (any orientation) by Sutherland–Hodgman
@@ -224,14 +236,16 @@ pub fn segments_intersect(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) ->
 }
 
 /// Calls `f(i, j)` once for every pair `i < j` of boxes `[xmin, ymin, xmax, ymax]` that
-/// overlap (closed), using a uniform grid. Non-finite boxes are skipped.
-fn for_each_overlapping_pair(boxes: &[[f64; 4]], mut f: impl FnMut(usize, usize)) {
+/// overlap (closed), using a uniform grid. Non-finite boxes are skipped. Returns
+/// `false` if it stopped early because the candidate-pair budget ran out.
+fn for_each_overlapping_pair(boxes: &[[f64; 4]], mut f: impl FnMut(usize, usize)) -> bool {
     let valid: Vec<usize> = (0..boxes.len())
         .filter(|&i| boxes[i].iter().all(|x| x.is_finite()))
         .collect();
     if valid.len() < 2 {
-        return;
+        return true;
     }
+    let mut budget = PAIR_BUDGET_PER_ITEM * valid.len() + 1_000_000;
     let mut lo = [f64::INFINITY; 2];
     let mut hi = [f64::NEG_INFINITY; 2];
     let mut mean_extent = 0.0;
@@ -293,6 +307,10 @@ fn for_each_overlapping_pair(boxes: &[[f64; 4]], mut f: impl FnMut(usize, usize)
             let list = &items[start[c] as usize..start[c + 1] as usize];
             for (k, &i) in list.iter().enumerate() {
                 for &j in &list[k + 1..] {
+                    if budget == 0 {
+                        return false;
+                    }
+                    budget -= 1;
                     let (a, b) = (boxes[i as usize], boxes[j as usize]);
                     if a[0] > b[2] || b[0] > a[2] || a[1] > b[3] || b[1] > a[3] {
                         continue;
@@ -307,6 +325,7 @@ fn for_each_overlapping_pair(boxes: &[[f64; 4]], mut f: impl FnMut(usize, usize)
             }
         }
     }
+    true
 }
 
 #[cfg(test)]
@@ -363,6 +382,23 @@ mod tests {
         let o = boundary_overlap(&tris, &uvs);
         assert!(!o.self_intersecting);
         assert!(o.overlap_area < 1e-12);
+        assert!(o.complete);
+    }
+
+    #[test]
+    fn a_hopelessly_tangled_layout_stops_within_budget() {
+        // Every triangle is a long sliver across the same square: all pairs overlap.
+        let n = 3000;
+        let uvs: Vec<[[f64; 2]; 3]> = (0..n)
+            .map(|k| {
+                let t = k as f64 / n as f64;
+                [[0.0, t], [1.0, 1.0 - t], [0.5, 0.5 + 0.01]]
+            })
+            .collect();
+        let tris: Vec<[u32; 3]> = (0..n as u32).map(|k| [3 * k, 3 * k + 1, 3 * k + 2]).collect();
+        let o = boundary_overlap(&tris, &uvs);
+        assert!(!o.complete);
+        assert!(o.overlap_area > 0.0 && o.self_intersecting);
     }
 
     #[test]
