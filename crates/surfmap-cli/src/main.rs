@@ -20,12 +20,15 @@ struct Cli {
 enum Command {
     /// Read a mesh and report counts, bounding box, area, topology and defects.
     Inspect(cmd::inspect::Args),
+    /// Flatten a disc-topology mesh to the plane without flipped triangles.
+    Flatten(cmd::flatten::Args),
 }
 
 fn main() {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Inspect(a) => cmd::inspect::run(a),
+        Command::Flatten(a) => cmd::flatten::run(a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

@@ -1,4 +1,9 @@
-//! `surfmap inspect`. (to be written)
+//! `surfmap inspect MESH [--json]`: counts, bounding box, area, topology and defects.
+
+use super::load_mesh;
+use serde::Serialize;
+use surfmap::mesh::validate::{Defect, validate};
+use surfmap::{Topology, TriMesh};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -9,6 +14,108 @@ pub struct Args {
     pub json: bool,
 }
 
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("not written yet")
+/// The JSON report of `surfmap inspect --json`.
+#[derive(Serialize)]
+pub struct InspectReport {
+    pub file: String,
+    pub format: String,
+    /// Vertex records in the file.
+    pub vertices: usize,
+    /// Faces as stored (a quad counts once).
+    pub faces: usize,
+    /// Triangles after fan triangulation.
+    pub triangles: usize,
+    pub edges: usize,
+    pub boundary_loops: usize,
+    /// Edge count of each boundary loop, longest first.
+    pub boundary_loop_lengths: Vec<usize>,
+    pub components: usize,
+    pub euler_characteristic: i64,
+    pub genus: Option<u32>,
+    pub manifold: bool,
+    pub orientable: bool,
+    pub disc: bool,
+    pub has_uvs: bool,
+    pub bbox_min: Option<[f64; 3]>,
+    pub bbox_max: Option<[f64; 3]>,
+    pub area: f64,
+    pub defects: Vec<Defect>,
+}
+
+pub fn report(path: &std::path::Path, format: String, stored_faces: usize, mesh: &TriMesh) -> InspectReport {
+    let topo = Topology::new(mesh);
+    let mut loop_lengths: Vec<usize> = topo.boundary_loops.iter().map(|l| l.vertices.len()).collect();
+    loop_lengths.sort_unstable_by(|a, b| b.cmp(a));
+    let bbox = mesh.bounding_box();
+    InspectReport {
+        file: path.display().to_string(),
+        format,
+        vertices: mesh.positions.len(),
+        faces: stored_faces,
+        triangles: mesh.triangles.len(),
+        edges: topo.edges.len(),
+        boundary_loops: topo.boundary_loops.len(),
+        boundary_loop_lengths: loop_lengths,
+        components: topo.num_components,
+        euler_characteristic: topo.euler_characteristic(),
+        genus: topo.genus(),
+        manifold: topo.is_manifold(),
+        orientable: topo.orientable,
+        disc: topo.is_disc(),
+        has_uvs: mesh.uvs.is_some(),
+        bbox_min: bbox.map(|b| b.0),
+        bbox_max: bbox.map(|b| b.1),
+        area: mesh.area(),
+        defects: validate(mesh, &topo),
+    }
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let file = load_mesh(&args.mesh)?;
+    let r = report(&args.mesh, format!("{:?}", file.format), file.stored_faces, &file.mesh);
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&r)?);
+        return Ok(());
+    }
+    println!("{} ({})", r.file, r.format);
+    println!("  vertices   {:>10}", r.vertices);
+    println!("  faces      {:>10}   ({} triangles)", r.faces, r.triangles);
+    println!("  edges      {:>10}", r.edges);
+    if let (Some(lo), Some(hi)) = (r.bbox_min, r.bbox_max) {
+        println!(
+            "  bbox       [{:.4}, {:.4}, {:.4}] – [{:.4}, {:.4}, {:.4}]  (size {:.4} × {:.4} × {:.4})",
+            lo[0],
+            lo[1],
+            lo[2],
+            hi[0],
+            hi[1],
+            hi[2],
+            hi[0] - lo[0],
+            hi[1] - lo[1],
+            hi[2] - lo[2]
+        );
+    }
+    println!("  area       {:.6}", r.area);
+    println!(
+        "  topology   {} component(s), {} boundary loop(s), χ = {}, genus {}, {}, {}",
+        r.components,
+        r.boundary_loops,
+        r.euler_characteristic,
+        r.genus.map_or("undefined".to_string(), |g| g.to_string()),
+        if r.manifold { "manifold" } else { "NON-MANIFOLD" },
+        if r.orientable { "orientable" } else { "NOT orientable" },
+    );
+    println!(
+        "  disc       {}",
+        if r.disc { "yes: ready to flatten" } else { "no: see the defects below" }
+    );
+    if r.defects.is_empty() {
+        println!("  defects    none");
+    } else {
+        println!("  defects    {}", r.defects.len());
+        for d in &r.defects {
+            println!("    - [{}] {}", serde_json::to_value(d.kind)?.as_str().unwrap_or("?"), d.message);
+        }
+    }
+    Ok(())
 }

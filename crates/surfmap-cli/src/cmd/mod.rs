@@ -1,1 +1,87 @@
+pub mod flatten;
 pub mod inspect;
+
+use anyhow::Context;
+use std::path::Path;
+use surfmap::mesh::io::{MeshFile, read_mesh};
+
+/// Reads a mesh, turning the reader's error into a message that names the file.
+pub fn load_mesh(path: &Path) -> anyhow::Result<MeshFile> {
+    read_mesh(path).with_context(|| format!("cannot read mesh {}", path.display()))
+}
+
+/// Opt-in repairs shared by the commands that read a mesh; each one applied is
+/// reported on stderr.
+#[derive(clap::Args, Clone, Default)]
+pub struct RepairArgs {
+    /// Weld vertices closer than TOL (0 = exactly coincident) before anything else.
+    #[arg(long, value_name = "TOL", num_args = 0..=1, default_missing_value = "0")]
+    pub weld: Option<f64>,
+    /// Remove faces with a repeated vertex or zero area.
+    #[arg(long)]
+    pub drop_degenerate: bool,
+    /// Flip faces to make the orientation consistent.
+    #[arg(long)]
+    pub reorient: bool,
+    /// Keep only the largest connected component.
+    #[arg(long, conflicts_with = "component")]
+    pub keep_largest: bool,
+    /// Keep only connected component N (numbered as `inspect` lists them).
+    #[arg(long, value_name = "N")]
+    pub component: Option<usize>,
+    /// Remove vertices no face uses.
+    #[arg(long)]
+    pub drop_unreferenced: bool,
+}
+
+impl RepairArgs {
+    pub fn apply(&self, mut mesh: surfmap::TriMesh, quiet: bool) -> anyhow::Result<surfmap::TriMesh> {
+        use surfmap::mesh::repair;
+        let say = |s: String| {
+            if !quiet {
+                eprintln!("repair: {s}");
+            }
+        };
+        if let Some(tol) = self.weld {
+            if !(tol >= 0.0) {
+                anyhow::bail!("--weld tolerance must be ≥ 0, got {tol}");
+            }
+            let (m, n) = repair::weld(&mesh, tol);
+            say(format!("welded {n} vertices (tolerance {tol})"));
+            mesh = m;
+        }
+        if self.drop_degenerate {
+            let (m, n) = repair::drop_degenerate(&mesh);
+            say(format!("dropped {n} degenerate faces"));
+            mesh = m;
+        }
+        if self.reorient {
+            let (m, n) = repair::reorient(&mesh).ok_or_else(|| {
+                anyhow::anyhow!("--reorient: the surface is not orientable (a Möbius-like piece); it cannot be made consistent")
+            })?;
+            say(format!("flipped {n} faces for a consistent orientation"));
+            mesh = m;
+        }
+        if self.keep_largest || self.component.is_some() {
+            let choice = match self.component {
+                Some(i) => repair::ComponentChoice::Index(i),
+                None => repair::ComponentChoice::Largest,
+            };
+            let (m, n) = repair::keep_component(&mesh, choice).ok_or_else(|| {
+                anyhow::anyhow!(
+                    "--component {}: no such component ({} found)",
+                    self.component.unwrap_or(0),
+                    surfmap::Topology::new(&mesh).num_components
+                )
+            })?;
+            say(format!("kept one component, dropped {n} faces of the others"));
+            mesh = m;
+        }
+        if self.drop_unreferenced {
+            let (m, n) = repair::drop_unreferenced(&mesh);
+            say(format!("dropped {n} unreferenced vertices"));
+            mesh = m;
+        }
+        Ok(mesh)
+    }
+}

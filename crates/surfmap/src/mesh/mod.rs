@@ -1,8 +1,11 @@
 //! Triangle meshes: positions and triangles (connectivity kept apart from derived
 //! topology), file input/output, validation and opt-in repairs.
 
+pub mod generate;
 pub mod io;
+pub mod repair;
 pub mod topology;
+pub mod validate;
 
 pub use topology::{BoundaryLoop, Topology};
 

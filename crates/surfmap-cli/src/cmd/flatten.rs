@@ -1,0 +1,230 @@
+//! `surfmap flatten IN -o OUT.obj`: flip-free flattening of a disc-topology mesh.
+
+use super::{RepairArgs, load_mesh};
+use anyhow::{Context, bail};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use surfmap::mesh::io::write_obj;
+use surfmap::param::density::{EnergyKind, Litke};
+use surfmap::param::flatten::{FlattenOptions, Flattening, StartChoice, flatten_with_progress};
+use surfmap::{TriMesh, Uvs};
+
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum Preset {
+    /// α = (0.005, 0.005, 0.99): nearly conformal (angle-preserving).
+    Conformal,
+    /// α = (1/3, 1/3, 1/3): length, area and angle weighted equally.
+    Balanced,
+    /// Area-preserving emphasis.
+    Area,
+    /// Length-preserving emphasis.
+    Length,
+}
+
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum Energy {
+    /// Litke's energy (thesis (2.5)) with the chosen α.
+    Litke,
+    /// Symmetric Dirichlet: σ1² + σ2² + σ1⁻² + σ2⁻² (as libigl SLIM minimizes).
+    Sd,
+    /// MIPS: σ1/σ2 + σ2/σ1 (conformal; scale is free).
+    Mips,
+    /// As-rigid-as-possible: (σ1 − 1)² + (σ2 − 1)².
+    Arap,
+}
+
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum Start {
+    /// LSCM, or mean-value coordinates if LSCM flips a triangle.
+    Auto,
+    Lscm,
+    MeanValue,
+}
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Input mesh (OBJ, OFF or PLY) with disc topology.
+    pub input: PathBuf,
+    /// Output OBJ with texture coordinates (`vt`).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Distortion trade-off preset.
+    #[arg(long, value_enum, default_value = "balanced")]
+    pub preset: Preset,
+    /// Custom α = L,A,C (length, area, angle weights; normalized to sum 1). Overrides --preset.
+    #[arg(long, value_parser = parse_alpha)]
+    pub alpha: Option<[f64; 3]>,
+    /// Energy density.
+    #[arg(long, value_enum, default_value = "litke")]
+    pub energy: Energy,
+    /// Continuation: minimize first at this α = L,A,C, then move to the target α in steps.
+    #[arg(long, value_parser = parse_alpha)]
+    pub from_alpha: Option<[f64; 3]>,
+    /// Initial map.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub start: Start,
+    /// Scale and translate the UVs into [0,1]² (aspect ratio kept).
+    #[arg(long)]
+    pub normalize: bool,
+    /// Write the flat mesh itself: positions (u, v, 0), for viewing the layout.
+    #[arg(long)]
+    pub uv_as_positions: bool,
+    /// Newton iteration cap (per continuation stage).
+    #[arg(long, default_value_t = 200)]
+    pub max_iters: usize,
+    /// Stop when half the Newton decrement (energy per unit area) is below this.
+    #[arg(long, default_value_t = 1e-10)]
+    pub tolerance: f64,
+    /// Armijo sufficient-decrease constant c (thesis: 0.5).
+    #[arg(long, default_value_t = 0.5)]
+    pub armijo_c: f64,
+    /// Reference a texture image from the OBJ (writes OUT.mtl with map_Kd).
+    #[arg(long)]
+    pub texture: Option<PathBuf>,
+    /// Write a JSON report (measures, solver log, timings) here.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Do not print the summary line or progress.
+    #[arg(short, long)]
+    pub quiet: bool,
+    #[command(flatten)]
+    pub repair: RepairArgs,
+}
+
+fn parse_alpha(s: &str) -> Result<[f64; 3], String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    if parts.len() != 3 {
+        return Err(format!("expected three comma-separated numbers L,A,C (e.g. 1,1,1), got {s:?}"));
+    }
+    let mut out = [0.0; 3];
+    for (o, p) in out.iter_mut().zip(&parts) {
+        *o = p.parse().map_err(|_| format!("{p:?} is not a number (in α = {s:?})"))?;
+    }
+    Ok(out)
+}
+
+fn litke(alpha: [f64; 3]) -> anyhow::Result<Litke> {
+    Litke::new(alpha[0], alpha[1], alpha[2]).context("invalid α")
+}
+
+/// Builds library options from the command line.
+pub fn options(args: &Args) -> anyhow::Result<FlattenOptions> {
+    let target = match (args.alpha, args.preset) {
+        (Some(a), _) => litke(a)?,
+        (None, Preset::Conformal) => Litke::conformal(),
+        (None, Preset::Balanced) => Litke::balanced(),
+        (None, Preset::Area) => Litke::area(),
+        (None, Preset::Length) => Litke::length(),
+    };
+    let energy = match args.energy {
+        Energy::Litke => EnergyKind::Litke(target),
+        Energy::Sd => EnergyKind::SymmetricDirichlet,
+        Energy::Mips => EnergyKind::Mips,
+        Energy::Arap => EnergyKind::Arap,
+    };
+    if args.from_alpha.is_some() && !matches!(args.energy, Energy::Litke) {
+        bail!("--from-alpha is a continuation in Litke's α; it needs --energy litke");
+    }
+    let mut opts = FlattenOptions {
+        energy,
+        from_alpha: args.from_alpha.map(litke).transpose()?,
+        start: match args.start {
+            Start::Auto => StartChoice::Auto,
+            Start::Lscm => StartChoice::Lscm,
+            Start::MeanValue => StartChoice::MeanValue,
+        },
+        ..Default::default()
+    };
+    if !(args.tolerance > 0.0) {
+        bail!("--tolerance must be positive, got {}", args.tolerance);
+    }
+    if !(args.armijo_c > 0.0 && args.armijo_c < 1.0) {
+        bail!("--armijo-c must be in (0, 1), got {}", args.armijo_c);
+    }
+    opts.newton.max_iterations = args.max_iters;
+    opts.newton.tolerance = args.tolerance;
+    opts.newton.armijo_c = args.armijo_c;
+    Ok(opts)
+}
+
+/// Runs the flattening with a progress spinner on a terminal.
+pub fn flatten_mesh(mesh: &TriMesh, opts: &FlattenOptions, quiet: bool) -> anyhow::Result<Flattening> {
+    let bar = (!quiet && std::io::stderr().is_terminal() && mesh.triangles.len() > 20_000).then(|| {
+        let b = ProgressBar::new_spinner();
+        b.set_style(ProgressStyle::with_template("{spinner} {elapsed} {msg}").expect("valid template"));
+        b
+    });
+    let result = flatten_with_progress(mesh, opts, &mut |it| {
+        if let Some(b) = &bar {
+            b.set_message(format!("stage {} iteration {}: energy {:.6}", it.stage, it.iteration, it.energy));
+            b.tick();
+        }
+    });
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    Ok(result?)
+}
+
+/// Maps UVs into [0,1]² keeping the aspect ratio.
+pub fn normalize_uvs(uvs: &mut [[f64; 2]]) {
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in uvs.iter() {
+        for k in 0..2 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    let size = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(f64::MIN_POSITIVE);
+    for p in uvs.iter_mut() {
+        *p = [(p[0] - lo[0]) / size, (p[1] - lo[1]) / size];
+    }
+}
+
+/// The mesh to write: the input with per-vertex UVs, or the flat mesh itself.
+pub fn output_mesh(mesh: &TriMesh, uvs: &[[f64; 2]], uv_as_positions: bool) -> TriMesh {
+    TriMesh {
+        positions: if uv_as_positions {
+            uvs.iter().map(|p| [p[0], p[1], 0.0]).collect()
+        } else {
+            mesh.positions.clone()
+        },
+        triangles: mesh.triangles.clone(),
+        uvs: Some(Uvs::PerVertex(uvs.to_vec())),
+    }
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let file = load_mesh(&args.input)?;
+    let opts = options(&args)?;
+    let mesh = args.repair.apply(file.mesh, args.quiet)?;
+    let result = flatten_mesh(&mesh, &opts, args.quiet)
+        .with_context(|| format!("cannot flatten {}", args.input.display()))?;
+    let mut uvs = result.uvs.clone();
+    if args.normalize {
+        normalize_uvs(&mut uvs);
+    }
+    let out = output_mesh(&mesh, &uvs, args.uv_as_positions);
+    let material = args.texture.as_ref().map(|t| surfmap::mesh::io::ObjMaterial { texture: t.clone() });
+    write_obj(&args.output, &out, material.as_ref())
+        .with_context(|| format!("cannot write {}", args.output.display()))?;
+    if !args.quiet {
+        println!(
+            "{}: start {}, {} iterations, {}, energy {:.6}, flipped triangles {}, {:.3} s → {}",
+            args.input.display(),
+            match result.start {
+                surfmap::param::flatten::StartMap::Lscm => "lscm".to_string(),
+                surfmap::param::flatten::StartMap::MeanValue =>
+                    format!("mean-value (LSCM flipped {})", result.lscm_flipped),
+            },
+            result.iterations,
+            if result.converged { "converged" } else { "NOT converged" },
+            result.energy,
+            result.flipped_triangles,
+            result.time_total,
+            args.output.display()
+        );
+    }
+    Ok(())
+}

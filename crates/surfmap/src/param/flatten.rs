@@ -1,0 +1,298 @@
+//! The one-call flattening: checks the input is a disc, computes the initial map
+//! (free-boundary conformal, with an injective fallback), normalizes scale, runs
+//! projected Newton (with optional α-continuation), verifies the result has no
+//! flipped triangle, and returns UVs in the mesh's own units.
+
+use super::density::{EnergyKind, Litke};
+use super::element::{RestTriangleError, rest_triangles};
+use super::newton::{IterationLog, NewtonSettings, NewtonSolver, StopReason};
+use super::{InitialMapError, count_flipped, lscm, signed_uv_area, tutte};
+use crate::linsolve::SolveError;
+use crate::mesh::validate::{Defect, validate};
+use crate::mesh::{Topology, TriMesh};
+use serde::Serialize;
+use std::time::Instant;
+
+/// Which initial map to use (thesis §3.1.1).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StartChoice {
+    /// LSCM, falling back to mean-value coordinates when LSCM flips a triangle.
+    #[default]
+    Auto,
+    Lscm,
+    MeanValue,
+}
+
+/// The initial map that was actually used.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StartMap {
+    /// Free-boundary least-squares conformal map.
+    Lscm,
+    /// Mean-value coordinates onto a circle (injective by construction), used because
+    /// LSCM flipped or degenerated `lscm_flipped` triangles.
+    MeanValue,
+}
+
+/// Options of [`flatten`].
+#[derive(Clone, Debug)]
+pub struct FlattenOptions {
+    /// The energy density to minimize (default: Litke's, balanced α).
+    pub energy: EnergyKind,
+    /// Continuation (§3.1.3): first minimize Litke's energy at this α, then move to
+    /// `energy`'s α in steps (Litke energy only).
+    pub from_alpha: Option<Litke>,
+    pub start: StartChoice,
+    pub newton: NewtonSettings,
+}
+
+impl Default for FlattenOptions {
+    fn default() -> Self {
+        Self {
+            energy: EnergyKind::Litke(Litke::balanced()),
+            from_alpha: None,
+            start: StartChoice::Auto,
+            newton: NewtonSettings::default(),
+        }
+    }
+}
+
+/// Result of a flattening.
+#[derive(Clone, Debug, Serialize)]
+pub struct Flattening {
+    /// One UV per vertex, in the mesh's length units (an isometry keeps lengths).
+    pub uvs: Vec<[f64; 2]>,
+    pub start: StartMap,
+    /// Triangles LSCM flipped or degenerated (0 when LSCM was used).
+    pub lscm_flipped: usize,
+    /// Newton iterations, all stages together.
+    pub iterations: usize,
+    pub converged: bool,
+    pub stop_reason: StopReason,
+    /// Final energy per unit 3D area (mean density).
+    pub energy: f64,
+    /// Flipped or degenerate triangles in the output, counted on the output: always 0
+    /// for a returned flattening (a non-zero count is an error instead).
+    pub flipped_triangles: usize,
+    /// α values of the continuation stages actually solved (empty without continuation).
+    pub continuation: Vec<[f64; 3]>,
+    pub log: Vec<IterationLog>,
+    /// Seconds: initial map, Newton (all stages), total.
+    pub time_start: f64,
+    pub time_newton: f64,
+    pub time_total: f64,
+}
+
+/// Why a flattening failed.
+#[derive(Debug, thiserror::Error)]
+pub enum FlattenError {
+    #[error("the mesh is not a disc, so it cannot be flattened:\n{}", .0.iter().map(|d| format!("  - {}", d.message)).collect::<Vec<_>>().join("\n"))]
+    NotADisc(Vec<Defect>),
+    #[error("{0}; run with --drop-degenerate or fix the mesh")]
+    Degenerate(#[from] RestTriangleError),
+    #[error("linear solve failed: {0}")]
+    Solve(#[from] SolveError),
+    #[error("initial map: {0}")]
+    InitialMap(#[from] InitialMapError),
+    #[error("both initial maps flipped triangles (LSCM: {lscm}, mean-value: {mean_value}); the mesh geometry is probably broken (non-finite or coincident vertices)")]
+    NoAdmissibleStart { lscm: usize, mean_value: usize },
+    #[error("internal error: the result has {0} flipped triangles; please report this mesh")]
+    FlippedResult(usize),
+}
+
+/// Flattens a disc-topology mesh. See the module docs.
+pub fn flatten(mesh: &TriMesh, options: &FlattenOptions) -> Result<Flattening, FlattenError> {
+    flatten_with_progress(mesh, options, &mut |_| {})
+}
+
+/// [`flatten`] with a callback receiving every iteration's log entry as it happens
+/// (for progress bars).
+pub fn flatten_with_progress(
+    mesh: &TriMesh,
+    options: &FlattenOptions,
+    progress: &mut dyn FnMut(&IterationLog),
+) -> Result<Flattening, FlattenError> {
+    let clock = Instant::now();
+    // Vertices used by no face get no UV from the solve: flatten the used part and
+    // put them at the origin afterwards.
+    let (compact, old_of_new) = without_unreferenced(mesh);
+    if let Some(compact) = compact {
+        let mut result = flatten_with_progress(&compact, options, progress)?;
+        let mut uvs = vec![[0.0, 0.0]; mesh.positions.len()];
+        for (new, &old) in old_of_new.iter().enumerate() {
+            uvs[old as usize] = result.uvs[new];
+        }
+        result.uvs = uvs;
+        return Ok(result);
+    }
+    let topo = Topology::new(mesh);
+    if !topo.is_disc() || mesh.positions.iter().any(|p| p.iter().any(|x| !x.is_finite())) {
+        let defects: Vec<Defect> =
+            validate(mesh, &topo).into_iter().filter(|d| d.blocks_flattening).collect();
+        if !defects.is_empty() || !topo.is_disc() {
+            return Err(FlattenError::NotADisc(defects));
+        }
+    }
+    // Scale normalization: work on the surface scaled to unit area, so energies and
+    // tolerances are scale-free; the UVs are scaled back at the end.
+    let area = mesh.area();
+    let scale = area.sqrt();
+    let positions: Vec<[f64; 3]> = mesh.positions.iter().map(|p| p.map(|x| x / scale)).collect();
+    let rest = rest_triangles(&positions, &mesh.triangles)?;
+    let boundary = &topo.boundary_loops[0].vertices;
+
+    // Initial map (§3.1.1), checked: any flipped or degenerate triangle → fallback.
+    let admissible = |uv: &mut Vec<[f64; 2]>| -> usize {
+        // A reflected map is as good as any: mirror if most triangles are negative.
+        let negative = mesh
+            .triangles
+            .iter()
+            .filter(|t| signed_uv_area([uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]]) < 0.0)
+            .count();
+        if 2 * negative > mesh.triangles.len() {
+            uv.iter_mut().for_each(|p| p[1] = -p[1]);
+        }
+        count_flipped(uv, &mesh.triangles)
+    };
+    let mut lscm_flipped = 0;
+    let (mut uv, start) = match options.start {
+        StartChoice::MeanValue => (tutte::mean_value(&positions, &mesh.triangles, boundary)?, StartMap::MeanValue),
+        StartChoice::Auto | StartChoice::Lscm => {
+            let mut uv = lscm::lscm(&positions, &mesh.triangles, boundary)?.uv;
+            lscm_flipped = admissible(&mut uv);
+            if lscm_flipped == 0 || options.start == StartChoice::Lscm {
+                (uv, StartMap::Lscm)
+            } else {
+                (tutte::mean_value(&positions, &mesh.triangles, boundary)?, StartMap::MeanValue)
+            }
+        }
+    };
+    let start_flipped = admissible(&mut uv);
+    if start_flipped > 0 {
+        return Err(FlattenError::NoAdmissibleStart { lscm: lscm_flipped, mean_value: start_flipped });
+    }
+    // Scale the start so its area matches the (unit) surface area: lengths scale by
+    // √(area3D / areaUV) (NOTES.md §1).
+    let uv_area: f64 = mesh
+        .triangles
+        .iter()
+        .map(|t| signed_uv_area([uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]]))
+        .sum();
+    let s = (1.0 / uv_area).sqrt();
+    // Rigid-motion pins: the two boundary vertices farthest apart in the start map,
+    // rotated onto the u axis.
+    let (p0, p1) = farthest_pair(&uv, boundary);
+    let (dx, dy) = (uv[p1 as usize][0] - uv[p0 as usize][0], uv[p1 as usize][1] - uv[p0 as usize][1]);
+    let len = dx.hypot(dy).max(f64::MIN_POSITIVE);
+    let (c, sn) = (dx / len, dy / len);
+    let origin = uv[p0 as usize];
+    for p in uv.iter_mut() {
+        let (x, y) = (p[0] - origin[0], p[1] - origin[1]);
+        *p = [s * (c * x + sn * y), s * (-sn * x + c * y)];
+    }
+    let time_start = clock.elapsed().as_secs_f64();
+
+    let mut solver = NewtonSolver::new(mesh.positions.len(), &mesh.triangles, rest, &[(p0, 0), (p0, 1), (p1, 1)])?;
+    let mut log = Vec::new();
+    let mut record = |entry: IterationLog| {
+        progress(&entry);
+        log.push(entry);
+    };
+    let mut iterations = 0;
+    let mut continuation = Vec::new();
+    let (stop, energy) = match (&options.energy, &options.from_alpha) {
+        (EnergyKind::Litke(target), Some(from)) => {
+            // Continuation (§3.1.3): θ from 0 to 1, halving the step when a stage locks.
+            let (stop0, it0, _) =
+                solver.minimize(&mut uv, from, &options.newton, 0, clock, &mut record)?;
+            iterations += it0;
+            continuation.push(from.alphas());
+            let _ = stop0;
+            let (mut theta, mut dtheta) = (0.0f64, 1.0f64);
+            let mut stage = 1;
+            let mut last = (StopReason::Converged, f64::NAN);
+            while theta < 1.0 {
+                let next = (theta + dtheta).min(1.0);
+                let alpha = from.blend(target, next);
+                let mut trial = uv.clone();
+                let (stop, it, e) =
+                    solver.minimize(&mut trial, &alpha, &options.newton, stage, clock, &mut record)?;
+                iterations += it;
+                stage += 1;
+                if stop == StopReason::Locked && dtheta > 1.0 / 64.0 {
+                    dtheta *= 0.5;
+                    continue;
+                }
+                uv = trial;
+                theta = next;
+                continuation.push(alpha.alphas());
+                last = (stop, e);
+                dtheta = (2.0 * dtheta).min(1.0);
+            }
+            last
+        }
+        (energy, _) => {
+            let (stop, it, e) = solver.minimize(&mut uv, energy, &options.newton, 0, clock, &mut record)?;
+            iterations += it;
+            (stop, e)
+        }
+    };
+    let time_newton = clock.elapsed().as_secs_f64() - time_start;
+    let flipped = count_flipped(&uv, &mesh.triangles);
+    if flipped > 0 {
+        return Err(FlattenError::FlippedResult(flipped));
+    }
+    let uvs = uv.iter().map(|p| [p[0] * scale, p[1] * scale]).collect();
+    Ok(Flattening {
+        uvs,
+        start,
+        lscm_flipped,
+        iterations,
+        converged: stop == StopReason::Converged,
+        stop_reason: stop,
+        energy,
+        flipped_triangles: flipped,
+        continuation,
+        log,
+        time_start,
+        time_newton,
+        time_total: clock.elapsed().as_secs_f64(),
+    })
+}
+
+/// The two loop vertices farthest apart (approximately: farthest from the loop's
+/// first vertex, then farthest from that), deterministic for a given map.
+fn farthest_pair(uv: &[[f64; 2]], boundary: &[u32]) -> (u32, u32) {
+    let far = |from: u32| -> u32 {
+        let o = uv[from as usize];
+        *boundary
+            .iter()
+            .max_by(|&&a, &&b| {
+                let da = (uv[a as usize][0] - o[0]).hypot(uv[a as usize][1] - o[1]);
+                let db = (uv[b as usize][0] - o[0]).hypot(uv[b as usize][1] - o[1]);
+                da.total_cmp(&db)
+            })
+            .expect("a disc has a boundary")
+    };
+    let a = far(boundary[0]);
+    let b = far(a);
+    (a, b)
+}
+
+/// The mesh without unreferenced vertices (`None` when all are used) and, for each
+/// kept vertex, its old index.
+fn without_unreferenced(mesh: &TriMesh) -> (Option<TriMesh>, Vec<u32>) {
+    let mut used = vec![false; mesh.positions.len()];
+    for t in &mesh.triangles {
+        for &v in t {
+            used[v as usize] = true;
+        }
+    }
+    if used.iter().all(|&u| u) {
+        return (None, Vec::new());
+    }
+    let old_of_new: Vec<u32> = (0..used.len() as u32).filter(|&v| used[v as usize]).collect();
+    let (compact, _) = crate::mesh::repair::drop_unreferenced(mesh);
+    (Some(compact), old_of_new)
+}

@@ -1,0 +1,316 @@
+//! Projected Newton minimization of the discrete elastic energy (thesis §3.1.3).
+//!
+//! `E(u) = Σ_T area3D(T) · W(a_T, d_T)` over the UV coordinates `u` of the vertices.
+//! Each iteration:
+//! 1. assembles the gradient and the per-triangle Hessians, each projected to positive
+//!    semi-definite in closed form ([`element::gradient_and_projected_hessian`]);
+//! 2. solves `H p = −∇E` (the sign NOTES.md §1 corrects in thesis (3.1)) with a sparse
+//!    Cholesky whose symbolic factorization is computed once, in [`NewtonSolver::new`];
+//! 3. steps along `p` with Armijo backtracking (thesis fig. 3.3) started at or below
+//!    the largest flip-free step, so no accepted iterate has `det J ≤ 0` anywhere.
+//!
+//! Rigid motions are removed by pinning three coordinates (both coordinates of one
+//! vertex, the `v` coordinate of a second one after rotating it onto the `u` axis):
+//! the energy is invariant under rigid motions, so this changes nothing but the
+//! output's placement, and keeps the Cholesky factorization well-posed.
+
+use super::density::Density;
+use super::element::{self, RestTriangle};
+use super::flip_free::max_flip_free_step;
+use crate::linsolve::{SolveError, SpdSystem};
+use rayon::prelude::*;
+use serde::Serialize;
+use std::time::Instant;
+
+/// One Newton iteration, as logged (the data of thesis fig. 4.1).
+#[derive(Clone, Debug, Serialize)]
+pub struct IterationLog {
+    /// Iteration number within its stage (0 = the start).
+    pub iteration: usize,
+    /// Continuation stage (0 when there is no continuation).
+    pub stage: usize,
+    /// Energy after the iteration (per unit 3D area: the mean density).
+    pub energy: f64,
+    /// ‖∇E‖₂ before the step, in normalized units.
+    pub gradient_norm: f64,
+    /// Newton decrement `λ² = −∇Eᵀp` before the step.
+    pub newton_decrement: f64,
+    /// Accepted step length τ.
+    pub step: f64,
+    /// Largest flip-free step along `p`.
+    pub flip_free_step: f64,
+    /// Wall time since the start of the flattening, seconds.
+    pub time: f64,
+}
+
+/// Why an iteration loop stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StopReason {
+    /// Newton decrement below tolerance: a local minimum.
+    Converged,
+    /// The iteration cap was reached.
+    IterationCap,
+    /// The line search found no step that decreases the energy ("locking", §3.1.3).
+    Locked,
+}
+
+/// Line-search and stopping parameters.
+#[derive(Clone, Copy, Debug)]
+pub struct NewtonSettings {
+    /// Armijo sufficient-decrease constant `c` (thesis: 0.5).
+    pub armijo_c: f64,
+    /// Backtracking factor `ρ` (thesis: 0.8).
+    pub armijo_rho: f64,
+    /// Stop when `λ²/2 ≤ tolerance` (energy per unit area, so scale-free).
+    pub tolerance: f64,
+    pub max_iterations: usize,
+}
+
+impl Default for NewtonSettings {
+    fn default() -> Self {
+        Self { armijo_c: 0.5, armijo_rho: 0.8, tolerance: 1e-10, max_iterations: 200 }
+    }
+}
+
+/// The Newton solver for one mesh: rest triangles, the pinned-DOF map and the sparse
+/// system with its symbolic factorization, all built once and reused across
+/// iterations and continuation stages.
+pub struct NewtonSolver<'m> {
+    triangles: &'m [[u32; 3]],
+    rest: Vec<RestTriangle>,
+    /// Reduced unknown of coordinate `2·v + c`, or `u32::MAX` when pinned.
+    dof: Vec<u32>,
+    system: SpdSystem,
+    /// For each triangle, the value slot of its 21 lower-triangle local pairs
+    /// (`u32::MAX` where a pinned coordinate is involved).
+    slots: Vec<[u32; 21]>,
+    elem_grad: Vec<[f64; 6]>,
+    elem_hess: Vec<[f64; 21]>,
+    elem_energy: Vec<f64>,
+    gradient: Vec<f64>,
+    direction: Vec<[f64; 2]>,
+    trial: Vec<[f64; 2]>,
+}
+
+/// Local pairs `(i, j)` with `j ≤ i` of a 6×6 element matrix, in a fixed order.
+const LOWER_PAIRS: [(usize, usize); 21] = {
+    let mut out = [(0, 0); 21];
+    let mut k = 0;
+    let mut i = 0;
+    while i < 6 {
+        let mut j = 0;
+        while j <= i {
+            out[k] = (i, j);
+            k += 1;
+            j += 1;
+        }
+        i += 1;
+    }
+    out
+};
+
+impl<'m> NewtonSolver<'m> {
+    /// Builds the solver from the rest triangles (one per triangle, from positions the
+    /// caller normalized to unit area), the pinned coordinates `pins`
+    /// (`(vertex, coordinate)`), the sparse pattern and its symbolic factorization.
+    pub fn new(
+        num_vertices: usize,
+        triangles: &'m [[u32; 3]],
+        rest: Vec<RestTriangle>,
+        pins: &[(u32, usize)],
+    ) -> Result<Self, SolveError> {
+        let nv = num_vertices;
+        let mut dof = vec![0u32; 2 * nv];
+        for &(v, c) in pins {
+            dof[2 * v as usize + c] = u32::MAX;
+        }
+        let mut n = 0u32;
+        for d in dof.iter_mut() {
+            if *d != u32::MAX {
+                *d = n;
+                n += 1;
+            }
+        }
+        let local_dofs = |t: &[u32; 3]| -> [u32; 6] {
+            std::array::from_fn(|i| dof[2 * t[i / 2] as usize + i % 2])
+        };
+        let mut entries = Vec::with_capacity(triangles.len() * 21);
+        for t in triangles {
+            let ld = local_dofs(t);
+            for &(i, j) in &LOWER_PAIRS {
+                if ld[i] != u32::MAX && ld[j] != u32::MAX {
+                    entries.push((ld[i], ld[j]));
+                }
+            }
+        }
+        let (system, entry_slots) = SpdSystem::new(n as usize, &entries)?;
+        drop(entries);
+        let mut slots = vec![[u32::MAX; 21]; triangles.len()];
+        let mut k = 0;
+        for (t, tri) in triangles.iter().enumerate() {
+            let ld = local_dofs(tri);
+            for (p, &(i, j)) in LOWER_PAIRS.iter().enumerate() {
+                if ld[i] != u32::MAX && ld[j] != u32::MAX {
+                    slots[t][p] = entry_slots[k];
+                    k += 1;
+                }
+            }
+        }
+        let nf = triangles.len();
+        Ok(Self {
+            triangles,
+            rest,
+            dof,
+            system,
+            slots,
+            elem_grad: vec![[0.0; 6]; nf],
+            elem_hess: vec![[0.0; 21]; nf],
+            elem_energy: vec![0.0; nf],
+            gradient: vec![0.0; n as usize],
+            direction: vec![[0.0; 2]; nv],
+            trial: vec![[0.0; 2]; nv],
+        })
+    }
+
+    #[inline]
+    fn corners(&self, uv: &[[f64; 2]], t: usize) -> [[f64; 2]; 3] {
+        let tri = self.triangles[t];
+        [uv[tri[0] as usize], uv[tri[1] as usize], uv[tri[2] as usize]]
+    }
+
+    /// `E(u) = Σ_T area(T)·W` (thesis (2.5) summed per triangle); `+∞` if any
+    /// triangle is flipped or degenerate.
+    pub fn energy<D: Density + ?Sized>(&self, uv: &[[f64; 2]], density: &D) -> f64 {
+        (0..self.triangles.len())
+            .into_par_iter()
+            .with_min_len(4096)
+            .map(|t| element::energy(&self.rest[t], &self.corners(uv, t), density))
+            .sum()
+    }
+
+    /// Runs Newton iterations from `uv` (modified in place) until convergence, the
+    /// iteration cap or locking. `log` receives one entry per iteration.
+    pub fn minimize<D: Density + ?Sized>(
+        &mut self,
+        uv: &mut [[f64; 2]],
+        density: &D,
+        settings: &NewtonSettings,
+        stage: usize,
+        clock: Instant,
+        log: &mut dyn FnMut(IterationLog),
+    ) -> Result<(StopReason, usize, f64), SolveError> {
+        let mut energy = self.energy(uv, density);
+        log(IterationLog {
+            iteration: 0,
+            stage,
+            energy,
+            gradient_norm: f64::NAN,
+            newton_decrement: f64::NAN,
+            step: 0.0,
+            flip_free_step: f64::NAN,
+            time: clock.elapsed().as_secs_f64(),
+        });
+        for it in 1..=settings.max_iterations {
+            self.assemble(uv, density);
+            let gradient_norm = self.gradient.iter().map(|g| g * g).sum::<f64>().sqrt();
+            self.system.factorize()?;
+            let mut p: Vec<f64> = self.gradient.iter().map(|g| -g).collect();
+            self.system.solve_in_place(&mut p)?;
+            let decrement = -self.gradient.iter().zip(&p).map(|(g, p)| g * p).sum::<f64>();
+            if !(decrement.is_finite()) || decrement <= 0.0 {
+                // The projected Hessian is PSD, so p is a descent direction unless
+                // the gradient vanished to rounding: we are at the minimum.
+                return Ok((StopReason::Converged, it - 1, energy));
+            }
+            if 0.5 * decrement <= settings.tolerance {
+                return Ok((StopReason::Converged, it - 1, energy));
+            }
+            for (v, d) in self.direction.iter_mut().enumerate() {
+                for c in 0..2 {
+                    let k = self.dof[2 * v + c];
+                    d[c] = if k == u32::MAX { 0.0 } else { p[k as usize] };
+                }
+            }
+            let t_max = max_flip_free_step(uv, self.triangles, &self.direction);
+            // Start at the full Newton step, or 90% of the way to the first flip.
+            let mut step = 1.0f64.min(0.9 * t_max);
+            let slope = -decrement; // ∇Eᵀp
+            let mut accepted = None;
+            // Roundoff guard: near the minimum E(u + τp) − E(u) drowns in the rounding
+            // of the sum; allow that much slack.
+            let slack = 1e-13 * energy.abs();
+            for _ in 0..200 {
+                for (tr, (u, d)) in self.trial.iter_mut().zip(uv.iter().zip(&self.direction)) {
+                    *tr = [u[0] + step * d[0], u[1] + step * d[1]];
+                }
+                let e = self.energy(&self.trial, density);
+                if e.is_finite() && e <= energy + settings.armijo_c * step * slope + slack {
+                    accepted = Some(e);
+                    break;
+                }
+                step *= settings.armijo_rho;
+                if step < 1e-14 {
+                    break;
+                }
+            }
+            let Some(e_new) = accepted else {
+                return Ok((StopReason::Locked, it - 1, energy));
+            };
+            uv.copy_from_slice(&self.trial);
+            energy = e_new;
+            log(IterationLog {
+                iteration: it,
+                stage,
+                energy,
+                gradient_norm,
+                newton_decrement: decrement,
+                step,
+                flip_free_step: t_max,
+                time: clock.elapsed().as_secs_f64(),
+            });
+        }
+        Ok((StopReason::IterationCap, settings.max_iterations, energy))
+    }
+
+    /// Fills the gradient and the projected Hessian values for the current `uv`.
+    fn assemble<D: Density + ?Sized>(&mut self, uv: &[[f64; 2]], density: &D) {
+        let triangles = self.triangles;
+        let rest = &self.rest;
+        self.elem_grad
+            .par_iter_mut()
+            .zip(self.elem_hess.par_iter_mut())
+            .zip(self.elem_energy.par_iter_mut())
+            .enumerate()
+            .with_min_len(1024)
+            .for_each(|(t, ((g, h), e))| {
+                let tri = triangles[t];
+                let corners = [uv[tri[0] as usize], uv[tri[1] as usize], uv[tri[2] as usize]];
+                let mut hess = [[0.0; 6]; 6];
+                *e = element::gradient_and_projected_hessian(&rest[t], &corners, density, g, &mut hess);
+                for (p, &(i, j)) in LOWER_PAIRS.iter().enumerate() {
+                    h[p] = hess[i][j];
+                }
+            });
+        self.gradient.iter_mut().for_each(|g| *g = 0.0);
+        let values = self.system.values_mut();
+        values.iter_mut().for_each(|v| *v = 0.0);
+        for (t, tri) in triangles.iter().enumerate() {
+            let slots = &self.slots[t];
+            let h = &self.elem_hess[t];
+            for p in 0..21 {
+                let s = slots[p];
+                if s != u32::MAX {
+                    values[s as usize] += h[p];
+                }
+            }
+            let g = &self.elem_grad[t];
+            for i in 0..6 {
+                let k = self.dof[2 * tri[i / 2] as usize + i % 2];
+                if k != u32::MAX {
+                    self.gradient[k as usize] += g[i];
+                }
+            }
+        }
+    }
+}
