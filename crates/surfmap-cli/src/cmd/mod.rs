@@ -1,5 +1,6 @@
 pub mod flatten;
 pub mod inspect;
+pub mod measure;
 
 use anyhow::Context;
 use std::path::Path;

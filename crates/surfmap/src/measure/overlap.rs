@@ -395,7 +395,9 @@ mod tests {
                 [[0.0, t], [1.0, 1.0 - t], [0.5, 0.5 + 0.01]]
             })
             .collect();
-        let tris: Vec<[u32; 3]> = (0..n as u32).map(|k| [3 * k, 3 * k + 1, 3 * k + 2]).collect();
+        let tris: Vec<[u32; 3]> = (0..n as u32)
+            .map(|k| [3 * k, 3 * k + 1, 3 * k + 2])
+            .collect();
         let o = boundary_overlap(&tris, &uvs);
         assert!(!o.complete);
         assert!(o.overlap_area > 0.0 && o.self_intersecting);
