@@ -22,6 +22,8 @@ enum Command {
     Inspect(cmd::inspect::Args),
     /// Flatten a disc-topology mesh to the plane without flipped triangles.
     Flatten(cmd::flatten::Args),
+    /// Score a map: distortion measures, flips and overlap of a mesh's texture coordinates.
+    Measure(cmd::measure::Args),
 }
 
 fn main() {
@@ -29,6 +31,7 @@ fn main() {
     let result = match cli.command {
         Command::Inspect(a) => cmd::inspect::run(a),
         Command::Flatten(a) => cmd::flatten::run(a),
+        Command::Measure(a) => cmd::measure::run(a),
     };
     if let Err(e) = result {
         // Print the chain of causes, skipping a cause its parent already quotes.

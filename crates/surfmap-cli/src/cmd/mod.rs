@@ -1,5 +1,6 @@
 pub mod flatten;
 pub mod inspect;
+pub mod measure;
 
 use std::path::Path;
 use surfmap::mesh::io::{MeshFile, read_mesh};
