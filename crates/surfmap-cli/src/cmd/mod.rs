@@ -1,5 +1,7 @@
+pub mod demo;
 pub mod flatten;
 pub mod inspect;
+pub mod tradeoff;
 pub mod measure;
 
 use std::path::Path;
