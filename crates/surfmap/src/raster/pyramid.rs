@@ -1,0 +1,3 @@
+//! (in progress)
+pub struct Pyramid;
+pub struct PyramidLevel;
