@@ -49,6 +49,9 @@ mod tests {
         let mut e = boundary_edges(&[[0, 1, 2], [0, 2, 3]]);
         e.sort();
         assert_eq!(e, vec![[0, 1], [1, 2], [2, 3], [3, 0]]);
-        assert_eq!(boundary_vertices(5, &[[0, 1, 2], [0, 2, 3]]), vec![true, true, true, true, false]);
+        assert_eq!(
+            boundary_vertices(5, &[[0, 1, 2], [0, 2, 3]]),
+            vec![true, true, true, true, false]
+        );
     }
 }

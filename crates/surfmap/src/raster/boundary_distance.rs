@@ -143,7 +143,9 @@ mod tests {
             let r = if i % 2 == 0 { 0.4 } else { 0.17 };
             xi.push([0.5 + r * a.cos(), 0.5 + r * a.sin()]);
         }
-        let tris: Vec<[u32; 3]> = (0..m as u32).map(|i| [0, 1 + i, 1 + (i + 1) % m as u32]).collect();
+        let tris: Vec<[u32; 3]> = (0..m as u32)
+            .map(|i| [0, 1 + i, 1 + (i + 1) % m as u32])
+            .collect();
         let n = 129;
         let raster = Rasterization::new(&xi, &tris, n).unwrap();
         let segs: Vec<[[f64; 2]; 2]> = boundary_edges(&tris)
@@ -155,7 +157,10 @@ mod tests {
         for i in 0..n {
             for j in 0..n {
                 let p = node_position(n, i, j);
-                let exact = segs.iter().map(|&s| point_segment_distance(p, s)).fold(f64::INFINITY, f64::min);
+                let exact = segs
+                    .iter()
+                    .map(|&s| point_segment_distance(p, s))
+                    .fold(f64::INFINITY, f64::min);
                 let k = i * n + j;
                 max_err = max_err.max((d[k].abs() - exact).abs());
                 if exact > 1e-9 {

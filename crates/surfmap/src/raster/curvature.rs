@@ -151,7 +151,10 @@ mod tests {
             let err = h.iter().map(|v| (v - 1.0 / r).abs()).fold(0.0, f64::max);
             errs.push(err);
         }
-        assert!(errs[1] < errs[0] && errs[2] < errs[1] && errs[2] < 0.01 / r, "{errs:?}");
+        assert!(
+            errs[1] < errs[0] && errs[2] < errs[1] && errs[2] < 0.01 / r,
+            "{errs:?}"
+        );
     }
 
     #[test]
@@ -161,7 +164,8 @@ mod tests {
         let r = 2.0;
         let mut errs = vec![];
         for n in [6, 12, 24] {
-            let (x, _, tris) = testmesh::disc(n, 1.2, |u, v| [u, v, (r * r - u * u - v * v).sqrt()]);
+            let (x, _, tris) =
+                testmesh::disc(n, 1.2, |u, v| [u, v, (r * r - u * u - v * v).sqrt()]);
             let h = vertex_mean_curvature(&x, &tris);
             errs.push(h.iter().map(|v| (v - 1.0 / r).abs()).sum::<f64>() / h.len() as f64);
         }
@@ -198,6 +202,9 @@ mod tests {
             let h = vertex_mean_curvature(&x, &tris);
             errs.push(h.iter().map(|v| (v - 0.5 / r).abs()).fold(0.0, f64::max));
         }
-        assert!(errs[1] < errs[0] && errs[2] < errs[1] && errs[2] < 0.01 / r, "{errs:?}");
+        assert!(
+            errs[1] < errs[0] && errs[2] < errs[1] && errs[2] < 0.01 / r,
+            "{errs:?}"
+        );
     }
 }

@@ -178,7 +178,10 @@ pub fn seed_polyline(
         let steps = (2.0 * len_nodes).ceil().max(1.0) as usize;
         for t in 0..=steps {
             let f = t as f64 / steps as f64;
-            let p = [(a[0] + f * (b[0] - a[0])) * s, (a[1] + f * (b[1] - a[1])) * s];
+            let p = [
+                (a[0] + f * (b[0] - a[0])) * s,
+                (a[1] + f * (b[1] - a[1])) * s,
+            ];
             let (x0, y0) = (p[0].floor() as i64, p[1].floor() as i64);
             for y in y0 - SEED_RADIUS + 1..=y0 + SEED_RADIUS {
                 for x in x0 - SEED_RADIUS + 1..=x0 + SEED_RADIUS {
@@ -270,7 +273,11 @@ mod tests {
         // g with eigenvalues 9 and 1 along a 30° frame: anisotropy ratio 3.
         let (s, c) = 30f64.to_radians().sin_cos();
         let (l1, l2) = (9.0, 1.0);
-        let g = [l1 * c * c + l2 * s * s, (l1 - l2) * c * s, l1 * s * s + l2 * c * c];
+        let g = [
+            l1 * c * c + l2 * s * s,
+            (l1 - l2) * c * s,
+            l1 * s * s + l2 * c * c,
+        ];
         let e65 = constant_metric_point_error(65, g);
         let e257 = constant_metric_point_error(257, g);
         assert!(e257 < 0.7 * e65 && e257 < 0.03, "{e65} {e257}");
@@ -295,7 +302,11 @@ mod tests {
                 if !(0.3..=0.7).contains(&p[0]) {
                     continue;
                 }
-                assert!((d[i * n + j] - exact).abs() < 1e-9, "{i},{j}: {} vs {exact}", d[i * n + j]);
+                assert!(
+                    (d[i * n + j] - exact).abs() < 1e-9,
+                    "{i},{j}: {} vs {exact}",
+                    d[i * n + j]
+                );
             }
         }
     }
@@ -326,7 +337,10 @@ mod tests {
         let mut d = vec![f64::INFINITY; n * n];
         d[0] = 0.0;
         solve_eikonal(n, &metric, &upd, &mut d).unwrap();
-        assert!(d.iter().enumerate().all(|(k, v)| (k % n < 4) == v.is_finite()));
+        assert!(
+            d.iter()
+                .enumerate()
+                .all(|(k, v)| (k % n < 4) == v.is_finite())
+        );
     }
 }
-

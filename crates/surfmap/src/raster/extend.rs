@@ -79,15 +79,24 @@ pub fn harmonic_extension(
 ///
 /// TODO(linsolve): switch to `crate::linsolve::solve_spd` once it is merged; until then a
 /// Jacobi-preconditioned conjugate gradient (fine for tests, slow on 1025² grids).
-fn solve_spd(n: usize, triplets: &[(u32, u32, f64)], rhs: &mut [&mut [f64]]) -> Result<(), RasterError> {
+fn solve_spd(
+    n: usize,
+    triplets: &[(u32, u32, f64)],
+    rhs: &mut [&mut [f64]],
+) -> Result<(), RasterError> {
     // CSR with summed duplicates.
     let mut sorted: Vec<(u32, u32, f64)> = triplets.to_vec();
     sorted.sort_unstable_by_key(|t| (t.0, t.1));
     let mut start = vec![0usize; n + 1];
     let mut cols: Vec<u32> = Vec::with_capacity(sorted.len());
     let mut vals: Vec<f64> = Vec::with_capacity(sorted.len());
-    if let Some(&(r, c, _)) = sorted.iter().find(|t| t.0 as usize >= n || t.1 as usize >= n) {
-        return Err(RasterError::Solve(format!("entry ({r}, {c}) outside {n}×{n}")));
+    if let Some(&(r, c, _)) = sorted
+        .iter()
+        .find(|t| t.0 as usize >= n || t.1 as usize >= n)
+    {
+        return Err(RasterError::Solve(format!(
+            "entry ({r}, {c}) outside {n}×{n}"
+        )));
     }
     let mut k = 0;
     for r in 0..n {
@@ -112,7 +121,9 @@ fn solve_spd(n: usize, triplets: &[(u32, u32, f64)], rhs: &mut [&mut [f64]]) -> 
             }
         }
         if diag[r] <= 0.0 {
-            return Err(RasterError::Solve(format!("non-positive diagonal in row {r}")));
+            return Err(RasterError::Solve(format!(
+                "non-positive diagonal in row {r}"
+            )));
         }
     }
     let matvec = |x: &[f64], y: &mut [f64]| {
@@ -160,7 +171,9 @@ fn solve_spd(n: usize, triplets: &[(u32, u32, f64)], rhs: &mut [&mut [f64]]) -> 
             }
         }
         if !converged {
-            return Err(RasterError::Solve("conjugate gradient did not converge".into()));
+            return Err(RasterError::Solve(
+                "conjugate gradient did not converge".into(),
+            ));
         }
         b.copy_from_slice(&x);
     }
@@ -174,7 +187,10 @@ mod tests {
     fn disc_mask(n: usize) -> Vec<bool> {
         (0..n * n)
             .map(|k| {
-                let (x, y) = ((k % n) as f64 / (n - 1) as f64, (k / n) as f64 / (n - 1) as f64);
+                let (x, y) = (
+                    (k % n) as f64 / (n - 1) as f64,
+                    (k / n) as f64 / (n - 1) as f64,
+                );
                 (x - 0.45).powi(2) + (y - 0.55).powi(2) < 0.09
             })
             .collect()
@@ -185,7 +201,13 @@ mod tests {
         let n = 33;
         let inside = disc_mask(n);
         let f0: Vec<f64> = (0..n * n)
-            .map(|k| if inside[k] { ((k % n) as f64 * 0.3).sin() + (k / n) as f64 * 0.1 } else { 7.0 })
+            .map(|k| {
+                if inside[k] {
+                    ((k % n) as f64 * 0.3).sin() + (k / n) as f64 * 0.1
+                } else {
+                    7.0
+                }
+            })
             .collect();
         let mut f = f0.clone();
         harmonic_extension(n, &inside, &mut [&mut f]).unwrap();
@@ -197,7 +219,12 @@ mod tests {
             }
             let (i, j) = (p / n, p % n);
             let mut res = 0.0;
-            for (ok, q) in [(j > 0, p.wrapping_sub(1)), (j + 1 < n, p + 1), (i > 0, p.wrapping_sub(n)), (i + 1 < n, p + n)] {
+            for (ok, q) in [
+                (j > 0, p.wrapping_sub(1)),
+                (j + 1 < n, p + 1),
+                (i > 0, p.wrapping_sub(n)),
+                (i + 1 < n, p + n),
+            ] {
                 if ok {
                     res += f[p] - f[q];
                 }
@@ -206,7 +233,11 @@ mod tests {
         }
         assert!(max_res < 1e-10, "residual {max_res}");
         // Maximum principle: extended values within the range of the inside values.
-        let (lo, hi) = (0..n * n).filter(|&k| inside[k]).fold((f64::MAX, f64::MIN), |(a, b), k| (a.min(f0[k]), b.max(f0[k])));
+        let (lo, hi) = (0..n * n)
+            .filter(|&k| inside[k])
+            .fold((f64::MAX, f64::MIN), |(a, b), k| {
+                (a.min(f0[k]), b.max(f0[k]))
+            });
         assert!(f.iter().all(|&v| v >= lo - 1e-12 && v <= hi + 1e-12));
     }
 
@@ -217,7 +248,9 @@ mod tests {
         let n = 33;
         let inside: Vec<bool> = (0..n * n).map(|k| (10..=20).contains(&(k % n))).collect();
         let a = |k: usize| ((k % n) as f64).powi(2);
-        let mut f: Vec<f64> = (0..n * n).map(|k| if inside[k] { a(k) } else { -5.0 }).collect();
+        let mut f: Vec<f64> = (0..n * n)
+            .map(|k| if inside[k] { a(k) } else { -5.0 })
+            .collect();
         harmonic_extension(n, &inside, &mut [&mut f]).unwrap();
         for k in 0..n * n {
             let exact = a(k).clamp(100.0, 400.0);
@@ -243,13 +276,19 @@ mod tests {
         }
         harmonic_extension(n, &inside, &mut [&mut g11, &mut g12, &mut g22]).unwrap();
         for k in 0..n * n {
-            assert!(g11[k] > 0.0 && g11[k] * g22[k] - g12[k] * g12[k] > 0.0, "node {k}");
+            assert!(
+                g11[k] > 0.0 && g11[k] * g22[k] - g12[k] * g12[k] > 0.0,
+                "node {k}"
+            );
         }
     }
 
     #[test]
     fn empty_domain_is_an_error() {
         let mut f = vec![0.0; 9];
-        assert!(matches!(harmonic_extension(3, &[false; 9], &mut [&mut f]), Err(RasterError::EmptyDomain)));
+        assert!(matches!(
+            harmonic_extension(3, &[false; 9], &mut [&mut f]),
+            Err(RasterError::EmptyDomain)
+        ));
     }
 }

@@ -54,10 +54,14 @@ impl FeatureFile {
                 problem,
             };
             if f.name.trim().is_empty() {
-                return Err(RasterError::FeatureFile(format!("feature #{i} has an empty name")));
+                return Err(RasterError::FeatureFile(format!(
+                    "feature #{i} has an empty name"
+                )));
             }
             if self.features[..i].iter().any(|g| g.name == f.name) {
-                return Err(err("the name is used twice; names pair features across surfaces".into()));
+                return Err(err(
+                    "the name is used twice; names pair features across surfaces".into(),
+                ));
             }
             if f.vertices.is_empty() {
                 return Err(err("the vertex list is empty".into()));
@@ -85,7 +89,9 @@ impl FeatureMask {
     /// Reads a PNG (any colour type; alpha ignored).
     pub fn read_png(path: &std::path::Path) -> Result<Self, RasterError> {
         let img = image::open(path)
-            .map_err(|e| RasterError::FeatureFile(format!("cannot read mask {}: {e}", path.display())))?
+            .map_err(|e| {
+                RasterError::FeatureFile(format!("cannot read mask {}: {e}", path.display()))
+            })?
             .to_rgb8();
         Ok(Self {
             width: img.width(),
@@ -96,7 +102,12 @@ impl FeatureMask {
 
     /// The distinct non-black colours, sorted: one region (feature) each.
     pub fn region_colours(&self) -> Vec<[u8; 3]> {
-        let mut c: Vec<[u8; 3]> = self.rgb.iter().copied().filter(|&c| c != [0, 0, 0]).collect();
+        let mut c: Vec<[u8; 3]> = self
+            .rgb
+            .iter()
+            .copied()
+            .filter(|&c| c != [0, 0, 0])
+            .collect();
         c.sort_unstable();
         c.dedup();
         c
@@ -105,8 +116,12 @@ impl FeatureMask {
     /// Colour of the pixel containing texture coordinates `(u, v)` (`v` up), clamped.
     #[inline]
     pub fn lookup(&self, uv: [f64; 2]) -> [u8; 3] {
-        let x = (uv[0] * self.width as f64).floor().clamp(0.0, self.width as f64 - 1.0) as usize;
-        let y = ((1.0 - uv[1]) * self.height as f64).floor().clamp(0.0, self.height as f64 - 1.0) as usize;
+        let x = (uv[0] * self.width as f64)
+            .floor()
+            .clamp(0.0, self.width as f64 - 1.0) as usize;
+        let y = ((1.0 - uv[1]) * self.height as f64)
+            .floor()
+            .clamp(0.0, self.height as f64 - 1.0) as usize;
         self.rgb[y * self.width as usize + x]
     }
 
@@ -122,8 +137,13 @@ impl FeatureMask {
                 });
             }
         }
-        if self.width == 0 || self.height == 0 || self.rgb.len() != (self.width * self.height) as usize {
-            return Err(RasterError::FeatureFile("the feature mask has no pixels".into()));
+        if self.width == 0
+            || self.height == 0
+            || self.rgb.len() != (self.width * self.height) as usize
+        {
+            return Err(RasterError::FeatureFile(
+                "the feature mask has no pixels".into(),
+            ));
         }
         if self.region_colours().is_empty() {
             return Err(RasterError::FeatureFile(
@@ -161,10 +181,17 @@ mod tests {
         assert!(!f.features[1].closed && f.features[0].closed);
         let e = FeatureFile::parse(ok, 4).unwrap_err().to_string();
         assert!(e.contains("nose") && e.contains("vertex 4"), "{e}");
-        let e = FeatureFile::parse(r#"{"features": [{"name": "a", "vertices": []}]}"#, 4).unwrap_err();
+        let e =
+            FeatureFile::parse(r#"{"features": [{"name": "a", "vertices": []}]}"#, 4).unwrap_err();
         assert!(e.to_string().contains("empty"), "{e}");
         assert!(FeatureFile::parse(r#"{"features": []}"#, 4).is_err());
-        assert!(FeatureFile::parse(r#"{"features": [{"name": "a", "vertices": [1]}, {"name": "a", "vertices": [2]}]}"#, 4).is_err());
+        assert!(
+            FeatureFile::parse(
+                r#"{"features": [{"name": "a", "vertices": [1]}, {"name": "a", "vertices": [2]}]}"#,
+                4
+            )
+            .is_err()
+        );
         assert!(FeatureFile::parse(r#"{"feature": []}"#, 4).is_err());
     }
 
@@ -179,8 +206,15 @@ mod tests {
         assert_eq!(m.lookup([0.1, 0.9]), [255, 0, 0]); // top-left
         assert_eq!(m.lookup([0.9, 0.1]), [0, 255, 0]); // bottom-right
         assert!(m.validate(Some((2, 2))).is_ok());
-        assert!(matches!(m.validate(Some((4, 2))), Err(RasterError::MaskSize { .. })));
-        let black = FeatureMask { width: 1, height: 1, rgb: vec![[0, 0, 0]] };
+        assert!(matches!(
+            m.validate(Some((4, 2))),
+            Err(RasterError::MaskSize { .. })
+        ));
+        let black = FeatureMask {
+            width: 1,
+            height: 1,
+            rgb: vec![[0, 0, 0]],
+        };
         assert!(black.validate(None).is_err());
         assert_eq!(colour_name([255, 0, 16]), "#ff0010");
     }

@@ -10,17 +10,17 @@
 
 use rayon::prelude::*;
 
+use super::RasterError;
 use super::boundary::boundary_edges;
 use super::boundary_distance::signed_boundary_distance;
 use super::curvature::vertex_mean_curvature;
-use super::domain::{grid_level, DomainTransform};
+use super::domain::{DomainTransform, grid_level};
 use super::eikonal::{seed_polyline, seed_region_boundary, solve_eikonal};
 use super::extend::harmonic_extension;
-use super::features::{colour_name, FeatureSource};
+use super::features::{FeatureSource, colour_name};
 use super::metric::triangle_metrics;
 use super::pyramid::Pyramid;
-use super::rasterize::{Rasterization, OUTSIDE};
-use super::RasterError;
+use super::rasterize::{OUTSIDE, Rasterization};
 use crate::mesh::{TriMesh, Uvs};
 
 /// Which length unit the images use (see the module docs).
@@ -156,7 +156,11 @@ impl GeometryImages {
         if !(length_unit.is_finite() && length_unit > 0.0) {
             return Err(RasterError::DegenerateDomain);
         }
-        let scaled: Vec<[f64; 3]> = mesh.positions.iter().map(|p| p.map(|c| c / length_unit)).collect();
+        let scaled: Vec<[f64; 3]> = mesh
+            .positions
+            .iter()
+            .map(|p| p.map(|c| c / length_unit))
+            .collect();
 
         let position = raster.sample_vertex_field(&mesh.triangles, &mesh.positions);
         let metric = raster.sample_triangle_field(&triangle_metrics(&scaled, &xi, &mesh.triangles));
@@ -195,7 +199,13 @@ impl GeometryImages {
             let tex_uv = tex_uv.as_ref().unwrap();
             (0..n * n)
                 .into_par_iter()
-                .map(|k| if inside[k] { t.sample(tex_uv[k]) } else { [0, 0, 0] })
+                .map(|k| {
+                    if inside[k] {
+                        t.sample(tex_uv[k])
+                    } else {
+                        [0, 0, 0]
+                    }
+                })
                 .collect()
         });
 
@@ -205,7 +215,8 @@ impl GeometryImages {
             if !d.iter().any(|v| v.is_finite()) {
                 return Err(RasterError::Feature {
                     name,
-                    problem: "it covers no grid node inside the surface; raise the grid size".into(),
+                    problem: "it covers no grid node inside the surface; raise the grid size"
+                        .into(),
                 });
             }
             solve_eikonal(n, &metric_extended, &inside, &mut d)?;
@@ -228,7 +239,13 @@ impl GeometryImages {
                 mask.validate(texture_image.map(|t| (t.width, t.height)))?;
                 let tex_uv = tex_uv.as_ref().unwrap();
                 let labels: Vec<[u8; 3]> = (0..n * n)
-                    .map(|k| if inside[k] { mask.lookup(tex_uv[k]) } else { [0, 0, 0] })
+                    .map(|k| {
+                        if inside[k] {
+                            mask.lookup(tex_uv[k])
+                        } else {
+                            [0, 0, 0]
+                        }
+                    })
                     .collect();
                 for c in mask.region_colours() {
                     let region: Vec<bool> = labels.iter().map(|&l| l == c).collect();
@@ -240,7 +257,12 @@ impl GeometryImages {
         }
         let feature_distance = (!features_out.is_empty()).then(|| {
             (0..n * n)
-                .map(|k| features_out.iter().map(|f| f.distance[k]).fold(f64::INFINITY, f64::min))
+                .map(|k| {
+                    features_out
+                        .iter()
+                        .map(|f| f.distance[k])
+                        .fold(f64::INFINITY, f64::min)
+                })
                 .collect()
         });
 
@@ -272,11 +294,16 @@ impl GeometryImages {
 }
 
 /// Corner `k` of triangle `t` in the mesh's own texture coordinates.
-fn node_texture_coordinates(mesh: &TriMesh, raster: &Rasterization) -> Result<Vec<[f64; 2]>, RasterError> {
+fn node_texture_coordinates(
+    mesh: &TriMesh,
+    raster: &Rasterization,
+) -> Result<Vec<[f64; 2]>, RasterError> {
     let corner = |t: usize, k: usize| -> Option<[f64; 2]> {
         match mesh.uvs.as_ref()? {
             Uvs::PerVertex(uv) => uv.get(mesh.triangles[t][k] as usize).copied(),
-            Uvs::PerCorner { coords, indices } => coords.get(*indices.get(t)?.get(k)? as usize).copied(),
+            Uvs::PerCorner { coords, indices } => {
+                coords.get(*indices.get(t)?.get(k)? as usize).copied()
+            }
         }
     };
     if mesh.uvs.is_none() {
@@ -299,7 +326,9 @@ fn node_texture_coordinates(mesh: &TriMesh, raster: &Rasterization) -> Result<Ve
                 return [f64::NAN; 2];
             }
             let c = [0, 1, 2].map(|k| corner(t as usize, k).unwrap());
-            std::array::from_fn(|d| b[0] as f64 * c[0][d] + b[1] as f64 * c[1][d] + b[2] as f64 * c[2][d])
+            std::array::from_fn(|d| {
+                b[0] as f64 * c[0][d] + b[1] as f64 * c[1][d] + b[2] as f64 * c[2][d]
+            })
         })
         .collect())
 }
@@ -338,15 +367,24 @@ mod tests {
         let mut errs = vec![];
         for (m, size) in [(8, 65), (16, 129), (32, 257)] {
             let img = images(testmesh::sphere_cap(m, r, 1.0), size, FeatureSource::None);
-            errs.push(max_inside_error(&img, |k| (img.mean_curvature[k] - 1.0 / r).abs()));
+            errs.push(max_inside_error(&img, |k| {
+                (img.mean_curvature[k] - 1.0 / r).abs()
+            }));
         }
-        assert!(errs[1] < errs[0] && errs[2] < errs[1] && errs[2] < 2e-3, "sphere {errs:?}");
+        assert!(
+            errs[1] < errs[0] && errs[2] < errs[1] && errs[2] < 2e-3,
+            "sphere {errs:?}"
+        );
 
         let img = images(testmesh::cylinder_patch(16, 1.5), 129, FeatureSource::None);
         let e = max_inside_error(&img, |k| (img.mean_curvature[k] - 1.0 / 3.0).abs());
         assert!(e < 1e-6, "cylinder {e}");
 
-        let img = images(testmesh::grid(8, 1.0, |u, v| [u, v, 0.3 * u - 0.2 * v]), 65, FeatureSource::None);
+        let img = images(
+            testmesh::grid(8, 1.0, |u, v| [u, v, 0.3 * u - 0.2 * v]),
+            65,
+            FeatureSource::None,
+        );
         let e = max_inside_error(&img, |k| img.mean_curvature[k].abs());
         assert!(e < 1e-6, "plane {e}");
         // Outside the surface the raw images are NaN, the extended ones finite.
@@ -366,11 +404,20 @@ mod tests {
             let s2 = img.transform.scale.powi(2);
             errs.push(max_inside_error(&img, |k| {
                 let [u, v, z] = img.position[k];
-                let exact = [(1.0 + u * u / (z * z)) / s2, u * v / (z * z) / s2, (1.0 + v * v / (z * z)) / s2];
-                (0..3).map(|c| (img.metric[k][c] - exact[c]).abs() * s2).fold(0.0, f64::max)
+                let exact = [
+                    (1.0 + u * u / (z * z)) / s2,
+                    u * v / (z * z) / s2,
+                    (1.0 + v * v / (z * z)) / s2,
+                ];
+                (0..3)
+                    .map(|c| (img.metric[k][c] - exact[c]).abs() * s2)
+                    .fold(0.0, f64::max)
             }));
         }
-        assert!(errs[1] < 0.65 * errs[0] && errs[2] < 0.65 * errs[1] && errs[2] < 0.08, "{errs:?}");
+        assert!(
+            errs[1] < 0.65 * errs[0] && errs[2] < 0.65 * errs[1] && errs[2] < 0.08,
+            "{errs:?}"
+        );
         // The isometric cylinder parameterization has g = I / s²; the inscribed mesh's
         // chords shorten the curved direction by O(h²): the error drops fourfold per halving.
         let mut errs = vec![];
@@ -379,7 +426,10 @@ mod tests {
             let s2 = img.transform.scale.powi(2);
             errs.push(max_inside_error(&img, |k| {
                 let g = img.metric[k];
-                (g[0] * s2 - 1.0).abs().max(g[1].abs() * s2).max((g[2] * s2 - 1.0).abs())
+                (g[0] * s2 - 1.0)
+                    .abs()
+                    .max(g[1].abs() * s2)
+                    .max((g[2] * s2 - 1.0).abs())
             }));
         }
         assert!(errs[1] < 0.3 * errs[0] && errs[1] < 1e-3, "{errs:?}");
@@ -393,9 +443,17 @@ mod tests {
         for (m, size) in [(8, 65), (16, 129), (32, 257)] {
             let pole = ((m / 2) * (m + 1) + m / 2) as u32;
             let file = FeatureFile {
-                features: vec![FeatureCurve { name: "pole".into(), vertices: vec![pole], closed: false }],
+                features: vec![FeatureCurve {
+                    name: "pole".into(),
+                    vertices: vec![pole],
+                    closed: false,
+                }],
             };
-            let img = images(testmesh::sphere_cap(m, r, 1.0), size, FeatureSource::Curves(&file));
+            let img = images(
+                testmesh::sphere_cap(m, r, 1.0),
+                size,
+                FeatureSource::Curves(&file),
+            );
             let d = &img.features[0].distance;
             assert_eq!(img.feature_distance.as_ref().unwrap(), d);
             errs.push(max_inside_error(&img, |k| {
@@ -404,7 +462,10 @@ mod tests {
             }));
             assert!(d.iter().all(|v| v.is_finite()));
         }
-        assert!(errs[1] < 0.6 * errs[0] && errs[2] < 0.6 * errs[1] && errs[2] < 0.015, "{errs:?}");
+        assert!(
+            errs[1] < 0.6 * errs[0] && errs[2] < 0.6 * errs[1] && errs[2] < 0.015,
+            "{errs:?}"
+        );
     }
 
     #[test]
@@ -412,7 +473,9 @@ mod tests {
         let mut jumps = vec![];
         for size in [65, 129, 257] {
             // A surface with varying mean curvature.
-            let surface = testmesh::grid(16, 1.0, |u, v| [u, v, 0.4 * (u * u - v * v) + 0.3 * u * u * u]);
+            let surface = testmesh::grid(16, 1.0, |u, v| {
+                [u, v, 0.4 * (u * u - v * v) + 0.3 * u * u * u]
+            });
             let img = images(surface, size, FeatureSource::None);
             let n = size;
             let mut jump = 0.0f64;
@@ -422,13 +485,17 @@ mod tests {
                 }
                 for q in [p.wrapping_sub(1), p + 1, p.wrapping_sub(n), p + n] {
                     if q < n * n && img.raster.is_inside(q) && (q % n).abs_diff(p % n) <= 1 {
-                        jump = jump.max((img.mean_curvature_extended[p] - img.mean_curvature[q]).abs());
+                        jump = jump
+                            .max((img.mean_curvature_extended[p] - img.mean_curvature[q]).abs());
                     }
                 }
             }
             jumps.push(jump);
         }
-        assert!(jumps[1] < 0.7 * jumps[0] && jumps[2] < 0.7 * jumps[1] && jumps[2] < 0.05, "{jumps:?}");
+        assert!(
+            jumps[1] < 0.7 * jumps[0] && jumps[2] < 0.7 * jumps[1] && jumps[2] < 0.05,
+            "{jumps:?}"
+        );
     }
 
     #[test]
@@ -436,18 +503,41 @@ mod tests {
         // Plane grid over [−1, 1]² with texture coordinates (u + 1)/2, (v + 1)/2.
         let (x, uv, tris) = testmesh::grid(8, 1.0, |u, v| [u, v, 0.0]);
         let mut mesh = TriMesh::new(x, tris);
-        mesh.uvs = Some(Uvs::PerVertex(uv.iter().map(|p| [(p[0] + 1.0) / 2.0, (p[1] + 1.0) / 2.0]).collect()));
+        mesh.uvs = Some(Uvs::PerVertex(
+            uv.iter()
+                .map(|p| [(p[0] + 1.0) / 2.0, (p[1] + 1.0) / 2.0])
+                .collect(),
+        ));
         // Left half of the texture red.
         let (w, h) = (16u32, 16u32);
-        let rgb: Vec<[u8; 3]> = (0..w * h).map(|k| if k % w < 8 { [255, 0, 0] } else { [0, 0, 0] }).collect();
-        let mask = FeatureMask { width: w, height: h, rgb: rgb.clone() };
-        let tex = TextureImage { width: w, height: h, rgb };
-        let options = GeometryImagesOptions { size: 65, margin: 0.05, scale: SurfaceScale::Original, pyramid: true };
-        let img = GeometryImages::compute(&mesh, &uv, FeatureSource::Mask(&mask), Some(&tex), &options).unwrap();
+        let rgb: Vec<[u8; 3]> = (0..w * h)
+            .map(|k| if k % w < 8 { [255, 0, 0] } else { [0, 0, 0] })
+            .collect();
+        let mask = FeatureMask {
+            width: w,
+            height: h,
+            rgb: rgb.clone(),
+        };
+        let tex = TextureImage {
+            width: w,
+            height: h,
+            rgb,
+        };
+        let options = GeometryImagesOptions {
+            size: 65,
+            margin: 0.05,
+            scale: SurfaceScale::Original,
+            pyramid: true,
+        };
+        let img =
+            GeometryImages::compute(&mesh, &uv, FeatureSource::Mask(&mask), Some(&tex), &options)
+                .unwrap();
         assert_eq!(img.features.len(), 1);
         assert_eq!(img.features[0].name, "#ff0000");
         // The feature is the line u = 0: distance |u| on the plane.
-        let e = max_inside_error(&img, |k| (img.features[0].distance[k] - img.position[k][0].abs()).abs());
+        let e = max_inside_error(&img, |k| {
+            (img.features[0].distance[k] - img.position[k][0].abs()).abs()
+        });
         assert!(e < 0.04, "{e}");
         let t = img.texture.as_ref().unwrap();
         let k = 32 * 65 + 10; // u < 0
@@ -456,11 +546,23 @@ mod tests {
         assert_eq!(p.levels.len(), 7);
         assert_eq!(p.levels[6].images[0], img.mean_curvature_extended);
         // Wrong mask size, no texture coordinates.
-        let small = FeatureMask { width: 8, height: 16, rgb: vec![[255, 0, 0]; 128] };
-        let err = GeometryImages::compute(&mesh, &uv, FeatureSource::Mask(&small), Some(&tex), &options).unwrap_err();
+        let small = FeatureMask {
+            width: 8,
+            height: 16,
+            rgb: vec![[255, 0, 0]; 128],
+        };
+        let err = GeometryImages::compute(
+            &mesh,
+            &uv,
+            FeatureSource::Mask(&small),
+            Some(&tex),
+            &options,
+        )
+        .unwrap_err();
         assert!(matches!(err, RasterError::MaskSize { .. }), "{err}");
         mesh.uvs = None;
-        let err = GeometryImages::compute(&mesh, &uv, FeatureSource::Mask(&mask), None, &options).unwrap_err();
+        let err = GeometryImages::compute(&mesh, &uv, FeatureSource::Mask(&mask), None, &options)
+            .unwrap_err();
         assert!(matches!(err, RasterError::NoTextureCoordinates), "{err}");
     }
 
@@ -469,11 +571,19 @@ mod tests {
         let r = 2.0;
         let (x, uv, tris) = testmesh::sphere_cap(16, r, 1.0);
         let mesh = TriMesh::new(x, tris);
-        let options = GeometryImagesOptions { size: 65, pyramid: false, ..Default::default() };
+        let options = GeometryImagesOptions {
+            size: 65,
+            pyramid: false,
+            ..Default::default()
+        };
         let img = GeometryImages::compute(&mesh, &uv, FeatureSource::None, None, &options).unwrap();
         assert!((img.length_unit - mesh.area().sqrt()).abs() < 1e-12);
-        let e = max_inside_error(&img, |k| (img.mean_curvature[k] - img.length_unit / r).abs());
+        let e = max_inside_error(&img, |k| {
+            (img.mean_curvature[k] - img.length_unit / r).abs()
+        });
         assert!(e < 0.01, "{e}");
-        assert!(GeometryImages::compute(&mesh, &uv[1..], FeatureSource::None, None, &options).is_err());
+        assert!(
+            GeometryImages::compute(&mesh, &uv[1..], FeatureSource::None, None, &options).is_err()
+        );
     }
 }

@@ -67,7 +67,11 @@ mod tests {
             .collect();
         let g = triangle_metrics(&x, &xi, &[[0, 1, 2], [3, 1, 2]]);
         let col = |c: usize| [a[0][c], a[1][c], a[2][c]];
-        let exact = [dot3(col(0), col(0)), dot3(col(0), col(1)), dot3(col(1), col(1))];
+        let exact = [
+            dot3(col(0), col(0)),
+            dot3(col(0), col(1)),
+            dot3(col(1), col(1)),
+        ];
         for gt in g {
             for k in 0..3 {
                 assert!((gt[k] - exact[k]).abs() < 1e-12, "{gt:?} vs {exact:?}");
@@ -80,11 +84,12 @@ mod tests {
         let xi = vec![[0.1, 0.1], [0.5, 0.2], [0.2, 0.6]];
         let x = vec![[0.0, 0.0, 1.0], [2.0, 0.3, 0.0], [-0.5, 1.0, 2.0]];
         let g = triangle_metrics(&x, &xi, &[[0, 1, 2]])[0];
-        let area3 = 0.5 * dot3(
-            cross3(sub3(x[1], x[0]), sub3(x[2], x[0])),
-            cross3(sub3(x[1], x[0]), sub3(x[2], x[0])),
-        )
-        .sqrt();
+        let area3 = 0.5
+            * dot3(
+                cross3(sub3(x[1], x[0]), sub3(x[2], x[0])),
+                cross3(sub3(x[1], x[0]), sub3(x[2], x[0])),
+            )
+            .sqrt();
         let area2 = 0.5 * ((0.4 * 0.5) - (0.1 * 0.1));
         assert!(((g[0] * g[2] - g[1] * g[1]).sqrt() - area3 / area2).abs() < 1e-10);
     }

@@ -18,6 +18,7 @@ pub mod features;
 pub mod images;
 pub mod metric;
 pub mod npy;
+pub mod output;
 pub mod picture;
 pub mod pyramid;
 pub mod rasterize;
@@ -59,7 +60,9 @@ pub enum RasterError {
     Feature { name: String, problem: String },
     #[error("feature file: {0}")]
     FeatureFile(String),
-    #[error("feature mask is {got_width}×{got_height} pixels but must be {want_width}×{want_height} (the size of the mesh's texture)")]
+    #[error(
+        "feature mask is {got_width}×{got_height} pixels but must be {want_width}×{want_height} (the size of the mesh's texture)"
+    )]
     MaskSize {
         got_width: u32,
         got_height: u32,

@@ -143,7 +143,10 @@ pub fn prolongate(img: &[f64], size: usize) -> Vec<f64> {
         for (j, o) in row.iter_mut().enumerate() {
             let (j0, j1) = (j / 2, j.div_ceil(2));
             *o = 0.25
-                * (img[i0 * size + j0] + img[i0 * size + j1] + img[i1 * size + j0] + img[i1 * size + j1]);
+                * (img[i0 * size + j0]
+                    + img[i0 * size + j1]
+                    + img[i1 * size + j0]
+                    + img[i1 * size + j1]);
         }
     });
     out
@@ -161,7 +164,12 @@ mod tests {
         let (a, b) = (2.0, 1.0);
         let f = |x: f64, y: f64| (a * PI * x).cos() * (b * PI * y).cos();
         let img: Vec<f64> = (0..n * n)
-            .map(|k| f((k % n) as f64 / (n - 1) as f64, (k / n) as f64 / (n - 1) as f64))
+            .map(|k| {
+                f(
+                    (k % n) as f64 / (n - 1) as f64,
+                    (k / n) as f64 / (n - 1) as f64,
+                )
+            })
             .collect();
         let p = Pyramid::build(n, vec!["f".into()], vec![img]);
         assert_eq!(p.levels.len(), 8);
@@ -170,10 +178,19 @@ mod tests {
             let m = lvl.size;
             let mut err = 0.0f64;
             for k in 0..m * m {
-                let exact = damp * f((k % m) as f64 / (m - 1) as f64, (k / m) as f64 / (m - 1) as f64);
+                let exact = damp
+                    * f(
+                        (k % m) as f64 / (m - 1) as f64,
+                        (k / m) as f64 / (m - 1) as f64,
+                    );
                 err = err.max((lvl.images[0][k] - exact).abs());
             }
-            assert!(err < 0.02 * damp.max(1e-3), "level {} σ {} err {err} damp {damp}", lvl.level, lvl.sigma);
+            assert!(
+                err < 0.02 * damp.max(1e-3),
+                "level {} σ {} err {err} damp {damp}",
+                lvl.level,
+                lvl.sigma
+            );
         }
     }
 
@@ -196,7 +213,12 @@ mod tests {
             }
             assert!((mass - 1.0).abs() < 1e-4, "level {} mass {mass}", lvl.level);
             let s2 = lvl.sigma * lvl.sigma;
-            assert!((var / mass - s2).abs() < 0.02 * s2, "level {}: var {} vs {s2}", lvl.level, var / mass);
+            assert!(
+                (var / mass - s2).abs() < 0.02 * s2,
+                "level {}: var {} vs {s2}",
+                lvl.level,
+                var / mass
+            );
         }
     }
 
@@ -205,12 +227,20 @@ mod tests {
         let m = 9;
         let f = |x: f64, y: f64| 1.0 + 2.0 * x - 3.0 * y + 0.5 * x * y;
         let coarse: Vec<f64> = (0..m * m)
-            .map(|k| f((k % m) as f64 / (m - 1) as f64, (k / m) as f64 / (m - 1) as f64))
+            .map(|k| {
+                f(
+                    (k % m) as f64 / (m - 1) as f64,
+                    (k / m) as f64 / (m - 1) as f64,
+                )
+            })
             .collect();
         let fine = prolongate(&coarse, m);
         let n = 2 * m - 1;
         for k in 0..n * n {
-            let exact = f((k % n) as f64 / (n - 1) as f64, (k / n) as f64 / (n - 1) as f64);
+            let exact = f(
+                (k % n) as f64 / (n - 1) as f64,
+                (k / n) as f64 / (n - 1) as f64,
+            );
             assert!((fine[k] - exact).abs() < 1e-12);
         }
         assert_eq!(restrict(&fine, n), coarse);
@@ -218,6 +248,9 @@ mod tests {
 
     #[test]
     fn mirror_reflects_about_border_nodes() {
-        assert_eq!((-3..8).map(|i| mirror(i, 4)).collect::<Vec<_>>(), vec![3, 2, 1, 0, 1, 2, 3, 2, 1, 0, 1]);
+        assert_eq!(
+            (-3..8).map(|i| mirror(i, 4)).collect::<Vec<_>>(),
+            vec![3, 2, 1, 0, 1, 2, 3, 2, 1, 0, 1]
+        );
     }
 }

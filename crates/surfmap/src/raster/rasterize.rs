@@ -167,7 +167,9 @@ impl Rasterization {
                 }
                 let [i0, i1, i2] = triangles[t as usize].map(|v| v as usize);
                 let (b0, b1, b2) = (b[0] as f64, b[1] as f64, b[2] as f64);
-                std::array::from_fn(|d| b0 * values[i0][d] + b1 * values[i1][d] + b2 * values[i2][d])
+                std::array::from_fn(|d| {
+                    b0 * values[i0][d] + b1 * values[i1][d] + b2 * values[i2][d]
+                })
             })
             .collect()
     }
@@ -219,7 +221,9 @@ mod tests {
                     let exact = 3.0 * p[0] - 2.0 * p[1] + 1.0;
                     assert!((s[k][0] - exact).abs() < 1e-6);
                     let b = r.bary[k];
-                    assert!(b.iter().all(|&x| x >= -1e-6) && (b.iter().sum::<f32>() - 1.0).abs() < 1e-6);
+                    assert!(
+                        b.iter().all(|&x| x >= -1e-6) && (b.iter().sum::<f32>() - 1.0).abs() < 1e-6
+                    );
                 } else {
                     assert!(s[k][0].is_nan());
                 }
@@ -239,7 +243,9 @@ mod tests {
             let a = std::f64::consts::TAU * i as f64 / m as f64;
             xi.push([0.5 + 0.4 * a.cos(), 0.5 + 0.4 * a.sin()]);
         }
-        let tris: Vec<[u32; 3]> = (0..m as u32).map(|i| [0, 1 + i, 1 + (i + 1) % m as u32]).collect();
+        let tris: Vec<[u32; 3]> = (0..m as u32)
+            .map(|i| [0, 1 + i, 1 + (i + 1) % m as u32])
+            .collect();
         let exact = 0.5 * m as f64 * 0.16 * (std::f64::consts::TAU / m as f64).sin();
         let mut errs = vec![];
         for n in [65, 257] {

@@ -62,7 +62,10 @@ pub fn grid(
     let mut uv = vec![];
     for i in 0..=n {
         for j in 0..=n {
-            uv.push([-a + 2.0 * a * j as f64 / n as f64, -a + 2.0 * a * i as f64 / n as f64]);
+            uv.push([
+                -a + 2.0 * a * j as f64 / n as f64,
+                -a + 2.0 * a * i as f64 / n as f64,
+            ]);
         }
     }
     let id = |i: usize, j: usize| (i * (n + 1) + j) as u32;
