@@ -244,6 +244,7 @@ pub fn metric_point_segment_distance(g: [f64; 3], x: [f64; 2], a: [f64; 2], b: [
 }
 
 #[cfg(test)]
+#[allow(clippy::needless_range_loop)]
 mod tests {
     use super::*;
     use crate::raster::domain::node_position;

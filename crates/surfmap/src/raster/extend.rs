@@ -79,6 +79,7 @@ pub fn harmonic_extension(
 ///
 /// TODO(linsolve): switch to `crate::linsolve::solve_spd` once it is merged; until then a
 /// Jacobi-preconditioned conjugate gradient (fine for tests, slow on 1025² grids).
+#[allow(clippy::needless_range_loop)]
 fn solve_spd(
     n: usize,
     triplets: &[(u32, u32, f64)],
@@ -181,6 +182,7 @@ fn solve_spd(
 }
 
 #[cfg(test)]
+#[allow(clippy::needless_range_loop)]
 mod tests {
     use super::*;
 

@@ -127,8 +127,10 @@ impl FeatureMask {
 
     /// Checks the mask size against the texture's, when there is one, and that it has regions.
     pub fn validate(&self, texture_size: Option<(u32, u32)>) -> Result<(), RasterError> {
-        if let Some((w, h)) = texture_size {
-            if (w, h) != (self.width, self.height) {
+        if let Some((w, h)) = texture_size
+            && (w, h) != (self.width, self.height)
+        {
+            {
                 return Err(RasterError::MaskSize {
                     got_width: self.width,
                     got_height: self.height,

@@ -121,6 +121,8 @@ pub struct GeometryImages {
     pub texture: Option<Vec<[u8; 3]>>,
     /// Pyramid of `h`, `g11`, `g12`, `g22` (extended), when requested.
     pub pyramid: Option<Pyramid>,
+    /// Wall-clock seconds per stage, in order.
+    pub timings: Vec<(&'static str, f64)>,
 }
 
 impl GeometryImages {
@@ -136,6 +138,12 @@ impl GeometryImages {
     ) -> Result<Self, RasterError> {
         let n = options.size;
         grid_level(n)?;
+        let mut timings = vec![];
+        let mut clock = std::time::Instant::now();
+        let mut lap = |name: &'static str, timings: &mut Vec<(&'static str, f64)>| {
+            timings.push((name, clock.elapsed().as_secs_f64()));
+            clock = std::time::Instant::now();
+        };
         if uvs.len() != mesh.num_vertices() {
             return Err(RasterError::UvCount {
                 count: uvs.len(),
@@ -145,6 +153,7 @@ impl GeometryImages {
         let transform = DomainTransform::fit(uvs, options.margin)?;
         let xi: Vec<[f64; 2]> = uvs.iter().map(|&p| transform.to_domain(p)).collect();
         let raster = Rasterization::new(&xi, &mesh.triangles, n)?;
+        lap("rasterize", &mut timings);
         let inside = raster.inside_mask();
         if !inside.iter().any(|&b| b) {
             return Err(RasterError::EmptyDomain);
@@ -173,6 +182,7 @@ impl GeometryImages {
             .into_iter()
             .map(|v| v[0])
             .collect();
+        lap("sample position, metric, curvature", &mut timings);
 
         // Harmonic extension of h and g (one solve, four right-hand sides).
         let mut hx = mean_curvature.clone();
@@ -181,12 +191,14 @@ impl GeometryImages {
         let mut g22: Vec<f64> = metric.iter().map(|g| g[2]).collect();
         harmonic_extension(n, &inside, &mut [&mut hx, &mut g11, &mut g12, &mut g22])?;
         let metric_extended: Vec<[f64; 3]> = (0..n * n).map(|k| [g11[k], g12[k], g22[k]]).collect();
+        lap("harmonic extension", &mut timings);
 
         let segments: Vec<[[f64; 2]; 2]> = boundary_edges(&mesh.triangles)
             .iter()
             .map(|e| [xi[e[0] as usize], xi[e[1] as usize]])
             .collect();
         let boundary_distance = signed_boundary_distance(&raster, &segments);
+        lap("boundary distance", &mut timings);
 
         // Texture coordinates of every inside node (for texture and mask lookups).
         let needs_tex = texture_image.is_some() || matches!(features, FeatureSource::Mask(_));
@@ -209,21 +221,9 @@ impl GeometryImages {
                 .collect()
         });
 
-        let mut features_out = vec![];
-        let outside: Vec<bool> = inside.iter().map(|&b| !b).collect();
-        let mut run = |name: String, mut d: Vec<f64>| -> Result<(), RasterError> {
-            if !d.iter().any(|v| v.is_finite()) {
-                return Err(RasterError::Feature {
-                    name,
-                    problem: "it covers no grid node inside the surface; raise the grid size"
-                        .into(),
-                });
-            }
-            solve_eikonal(n, &metric_extended, &inside, &mut d)?;
-            solve_eikonal(n, &metric_extended, &outside, &mut d)?;
-            features_out.push(FeatureDistance { name, distance: d });
-            Ok(())
-        };
+        // Seeds per feature, then the Eikonal solves in parallel (features are independent):
+        // first on the surface, then continued outside with the extended metric.
+        let mut seeds: Vec<(String, Vec<f64>)> = vec![];
         match features {
             FeatureSource::None => {}
             FeatureSource::Curves(file) => {
@@ -232,7 +232,7 @@ impl GeometryImages {
                     let pts: Vec<[f64; 2]> = f.vertices.iter().map(|&v| xi[v as usize]).collect();
                     let mut d = vec![f64::INFINITY; n * n];
                     seed_polyline(n, &metric_extended, &inside, &pts, f.closed, &mut d);
-                    run(f.name.clone(), d)?;
+                    seeds.push((f.name.clone(), d));
                 }
             }
             FeatureSource::Mask(mask) => {
@@ -251,10 +251,25 @@ impl GeometryImages {
                     let region: Vec<bool> = labels.iter().map(|&l| l == c).collect();
                     let mut d = vec![f64::INFINITY; n * n];
                     seed_region_boundary(n, &metric_extended, &inside, &region, &mut d);
-                    run(colour_name(c), d)?;
+                    seeds.push((colour_name(c), d));
                 }
             }
         }
+        if let Some((name, _)) = seeds.iter().find(|(_, d)| !d.iter().any(|v| v.is_finite())) {
+            return Err(RasterError::Feature {
+                name: name.clone(),
+                problem: "it covers no grid node inside the surface; raise the grid size".into(),
+            });
+        }
+        let outside: Vec<bool> = inside.iter().map(|&b| !b).collect();
+        let features_out: Vec<FeatureDistance> = seeds
+            .into_par_iter()
+            .map(|(name, mut d)| {
+                solve_eikonal(n, &metric_extended, &inside, &mut d)?;
+                solve_eikonal(n, &metric_extended, &outside, &mut d)?;
+                Ok(FeatureDistance { name, distance: d })
+            })
+            .collect::<Result<_, RasterError>>()?;
         let feature_distance = (!features_out.is_empty()).then(|| {
             (0..n * n)
                 .map(|k| {
@@ -266,6 +281,7 @@ impl GeometryImages {
                 .collect()
         });
 
+        lap("texture and feature distances", &mut timings);
         let pyramid = options.pyramid.then(|| {
             Pyramid::build(
                 n,
@@ -273,6 +289,7 @@ impl GeometryImages {
                 vec![hx.clone(), g11, g12, g22],
             )
         });
+        lap("pyramid", &mut timings);
         Ok(Self {
             size: n,
             transform,
@@ -289,6 +306,7 @@ impl GeometryImages {
             feature_distance,
             texture,
             pyramid,
+            timings,
         })
     }
 }
@@ -340,7 +358,7 @@ mod tests {
     use crate::raster::testmesh;
 
     fn images(
-        (x, uv, tris): (Vec<[f64; 3]>, Vec<[f64; 2]>, Vec<[u32; 3]>),
+        (x, uv, tris): testmesh::TestMesh,
         size: usize,
         features: FeatureSource<'_>,
     ) -> GeometryImages {

@@ -280,6 +280,6 @@ mod tests {
         assert_eq!(sequential(1.0), [253, 231, 37]);
         let s = contact_sheet(&[("H".into(), p.clone()), ("G".into(), p)], 2, 20);
         assert_eq!(s.width, 2 * 28 + 8);
-        assert!(s.rgb.iter().any(|&c| c == [20, 20, 20]));
+        assert!(s.rgb.contains(&[20, 20, 20]));
     }
 }

@@ -153,6 +153,7 @@ pub fn prolongate(img: &[f64], size: usize) -> Vec<f64> {
 }
 
 #[cfg(test)]
+#[allow(clippy::needless_range_loop)]
 mod tests {
     use super::*;
     use std::f64::consts::PI;

@@ -1,16 +1,15 @@
 //! Small analytic test meshes (test builds only): a disc of concentric rings in the
 //! parameter plane, mapped onto a surface by a known parameterization.
 
+/// `(positions, uv, triangles)`.
+pub type TestMesh = (Vec<[f64; 3]>, Vec<[f64; 2]>, Vec<[u32; 3]>);
+
 use std::f64::consts::TAU;
 
 /// Ring-disc mesh of radius `radius` with `n` rings (ring `k` has `6k` vertices), mapped
 /// by `map(u, v)`. Returns `(positions, uv, triangles)`; triangles are counter-clockwise
 /// in the `(u, v)` plane.
-pub fn disc(
-    n: usize,
-    radius: f64,
-    map: impl Fn(f64, f64) -> [f64; 3],
-) -> (Vec<[f64; 3]>, Vec<[f64; 2]>, Vec<[u32; 3]>) {
+pub fn disc(n: usize, radius: f64, map: impl Fn(f64, f64) -> [f64; 3]) -> TestMesh {
     let mut uv = vec![[0.0, 0.0]];
     let mut ring_start = vec![0usize];
     for k in 1..=n {
@@ -54,11 +53,7 @@ pub fn disc(
 
 /// Regular `n × n`-cell grid over `[−a, a]²` (every cell split along the same diagonal, so
 /// every interior one-ring is centrally symmetric), mapped by `map(u, v)`.
-pub fn grid(
-    n: usize,
-    a: f64,
-    map: impl Fn(f64, f64) -> [f64; 3],
-) -> (Vec<[f64; 3]>, Vec<[f64; 2]>, Vec<[u32; 3]>) {
+pub fn grid(n: usize, a: f64, map: impl Fn(f64, f64) -> [f64; 3]) -> TestMesh {
     let mut uv = vec![];
     for i in 0..=n {
         for j in 0..=n {
@@ -82,13 +77,13 @@ pub fn grid(
 
 /// Spherical cap of radius `r` over the square `[−a, a]²`, `a < r/√2` (orthographic
 /// parameterization `(u, v) ↦ (u, v, √(r² − u² − v²))`, outward normals up).
-pub fn sphere_cap(n: usize, r: f64, a: f64) -> (Vec<[f64; 3]>, Vec<[f64; 2]>, Vec<[u32; 3]>) {
+pub fn sphere_cap(n: usize, r: f64, a: f64) -> TestMesh {
     grid(n, a, |u, v| [u, v, (r * r - u * u - v * v).sqrt()])
 }
 
 /// Cylinder patch of radius `r`, axis along y, isometric parameterization
 /// `(u, v) ↦ (r sin(u/r), v, r cos(u/r))` over `[−1, 1]²` (outward normals).
-pub fn cylinder_patch(n: usize, r: f64) -> (Vec<[f64; 3]>, Vec<[f64; 2]>, Vec<[u32; 3]>) {
+pub fn cylinder_patch(n: usize, r: f64) -> TestMesh {
     grid(n, 1.0, |u, v| [r * (u / r).sin(), v, r * (u / r).cos()])
 }
 
