@@ -5,7 +5,7 @@
 
 use super::density::{EnergyKind, Litke};
 use super::element::{RestTriangleError, rest_triangles};
-use super::newton::{IterationLog, NewtonSettings, NewtonSolver, StopReason};
+use super::newton::{IterationLog, NewtonSettings, NewtonSolver, NewtonTimings, StopReason};
 use super::{InitialMapError, count_flipped, lscm, signed_uv_area, tutte};
 use crate::linsolve::SolveError;
 use crate::mesh::validate::{Defect, validate};
@@ -82,6 +82,8 @@ pub struct Flattening {
     pub time_start: f64,
     pub time_newton: f64,
     pub time_total: f64,
+    /// Newton time by phase.
+    pub newton_timings: NewtonTimings,
 }
 
 /// Why a flattening failed.
@@ -258,6 +260,7 @@ pub fn flatten_with_progress(
         time_start,
         time_newton,
         time_total: clock.elapsed().as_secs_f64(),
+        newton_timings: solver.timings,
     })
 }
 
