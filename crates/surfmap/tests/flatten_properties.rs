@@ -1,0 +1,382 @@
+//! Properties of `surfmap::param::flatten` checked against expectations that do not come
+//! from the solver itself (thesis §2.1, §3.1, §4.1; NOTES.md §1):
+//!
+//! 1. developable patches (cylinder, cone) flatten to an isometry under every energy;
+//! 2. a k-fold symmetric hemisphere flattens to a k-fold symmetric map;
+//! 3. refining the same analytic surface converges (thesis §4.1.3);
+//! 4. α-continuation reaches the same minimum as the direct solve (§3.1.3);
+//! 5. rigid motions / uniform scaling / vertex permutations of the input act as expected;
+//! 6. the initial-map fallback when LSCM flips triangles (three_peaks.off);
+//! 7. every output is flip-free, checked with signed areas computed here.
+//!
+//! Rigid alignment uses a 2D Procrustes fit written here (no reflection: every output is
+//! orientation-preserving, so maps can differ only by a rotation and a translation).
+
+use std::f64::consts::{FRAC_PI_2, PI, TAU};
+use std::path::PathBuf;
+
+use surfmap::measure::{corner_uvs_from_vertex_uvs, triangle_singular_values};
+use surfmap::mesh::TriMesh;
+use surfmap::mesh::generate::{bumpy_disc, cylinder_patch, spherical_cap};
+use surfmap::param::count_flipped;
+use surfmap::param::density::{EnergyKind, Litke};
+use surfmap::param::flatten::{FlattenOptions, Flattening, StartChoice, StartMap, flatten};
+use surfmap::param::newton::NewtonSettings;
+
+// ---------------------------------------------------------------------------------------
+// Helpers
+// ---------------------------------------------------------------------------------------
+
+/// Options with a tighter Newton tolerance than the default, so the solver error is far
+/// below the tolerances asserted here (Newton converges quadratically, so this costs
+/// one or two iterations).
+fn options(energy: EnergyKind) -> FlattenOptions {
+    FlattenOptions {
+        energy,
+        newton: NewtonSettings {
+            tolerance: 1e-18,
+            ..NewtonSettings::default()
+        },
+        ..FlattenOptions::default()
+    }
+}
+
+fn litke(alpha: Litke) -> FlattenOptions {
+    options(EnergyKind::Litke(alpha))
+}
+
+/// Property 7: the result claims no flips, and every UV triangle has positive signed
+/// area as computed here (not via the library's `signed_uv_area`).
+fn assert_flip_free(mesh: &TriMesh, result: &Flattening, what: &str) {
+    assert_eq!(result.flipped_triangles, 0, "{what}: reported flips");
+    assert_eq!(count_flipped(&result.uvs, &mesh.triangles), 0, "{what}: count_flipped");
+    assert_eq!(result.uvs.len(), mesh.positions.len(), "{what}: one UV per vertex");
+    let mut min_ratio = f64::INFINITY;
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        let [a, b, c] = tri.map(|v| result.uvs[v as usize]);
+        let twice = (b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]);
+        assert!(
+            twice.is_finite() && twice > 0.0,
+            "{what}: triangle {t} has signed UV area {}",
+            0.5 * twice
+        );
+        min_ratio = min_ratio.min(0.5 * twice / area3(mesh, t));
+    }
+    assert!(min_ratio > 0.0, "{what}: min UV/3D area ratio {min_ratio}");
+}
+
+fn sub3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn norm3(a: [f64; 3]) -> f64 {
+    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
+}
+
+fn area3(mesh: &TriMesh, t: usize) -> f64 {
+    let [a, b, c] = mesh.triangles[t].map(|v| mesh.positions[v as usize]);
+    let (e1, e2) = (sub3(b, a), sub3(c, a));
+    let n = [
+        e1[1] * e2[2] - e1[2] * e2[1],
+        e1[2] * e2[0] - e1[0] * e2[2],
+        e1[0] * e2[1] - e1[1] * e2[0],
+    ];
+    0.5 * norm3(n)
+}
+
+fn dist2(a: [f64; 2], b: [f64; 2]) -> f64 {
+    (a[0] - b[0]).hypot(a[1] - b[1])
+}
+
+/// Best rigid motion (rotation + translation, no reflection, no scaling) taking `from`
+/// onto `to` in the least-squares sense (2D Procrustes / Kabsch):
+/// centre both sets, then the optimal angle is `atan2(Σ x × y, Σ x · y)` over the
+/// centred pairs `(x, y)`.
+struct RigidFit {
+    /// Rotation angle in radians.
+    angle: f64,
+    /// Root-mean-square residual after alignment.
+    rms: f64,
+    /// Largest residual after alignment.
+    max: f64,
+    /// Root-mean-square distance of `to` from its centroid (a size for relative errors).
+    size: f64,
+}
+
+fn rigid_fit(from: &[[f64; 2]], to: &[[f64; 2]]) -> RigidFit {
+    assert_eq!(from.len(), to.len());
+    let n = from.len() as f64;
+    let centroid = |p: &[[f64; 2]]| {
+        let s = p.iter().fold([0.0, 0.0], |s, q| [s[0] + q[0], s[1] + q[1]]);
+        [s[0] / n, s[1] / n]
+    };
+    let (ca, cb) = (centroid(from), centroid(to));
+    let (mut dot, mut cross) = (0.0, 0.0);
+    for (a, b) in from.iter().zip(to) {
+        let x = [a[0] - ca[0], a[1] - ca[1]];
+        let y = [b[0] - cb[0], b[1] - cb[1]];
+        dot += x[0] * y[0] + x[1] * y[1];
+        cross += x[0] * y[1] - x[1] * y[0];
+    }
+    let angle = cross.atan2(dot);
+    let (c, s) = (angle.cos(), angle.sin());
+    let (mut sum_sq, mut max, mut size_sq) = (0.0, 0.0f64, 0.0);
+    for (a, b) in from.iter().zip(to) {
+        let x = [a[0] - ca[0], a[1] - ca[1]];
+        let y = [b[0] - cb[0], b[1] - cb[1]];
+        let r = dist2([c * x[0] - s * x[1], s * x[0] + c * x[1]], y);
+        sum_sq += r * r;
+        max = max.max(r);
+        size_sq += y[0] * y[0] + y[1] * y[1];
+    }
+    RigidFit {
+        angle,
+        rms: (sum_sq / n).sqrt(),
+        max,
+        size: (size_sq / n).sqrt(),
+    }
+}
+
+/// The shared data folder: `../../../shared/data` from this crate, else `SURFMAP_DATA_DIR`.
+fn data_dir() -> Option<PathBuf> {
+    let default = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data"));
+    if default.is_dir() {
+        return Some(default);
+    }
+    std::env::var_os("SURFMAP_DATA_DIR")
+        .map(PathBuf::from)
+        .filter(|d| d.is_dir())
+}
+
+/// Patch of the cone with apex at the origin, axis +z and half-angle `half_angle`:
+/// slant distance `s ∈ [s0, s1]` in `m` steps, azimuth `φ ∈ [0, angle]` in `n` steps;
+/// vertex `(i, j)` (azimuth step `i`, slant step `j`) at `s_j (sin β cos φ_i,
+/// sin β sin φ_i, cos β)` with index `j·(n + 1) + i`, each quad split along the diagonal
+/// `(i, j)–(i + 1, j + 1)`.
+///
+/// Every quad lies on two generator lines through the apex, so it is a planar
+/// trapezoid, and the triangulated patch is exactly developable: at an interior vertex
+/// the two wedges on either side of its generator each contribute an angle of π.
+fn cone_patch(half_angle: f64, s0: f64, s1: f64, angle: f64, n: usize, m: usize) -> TriMesh {
+    let mut positions = Vec::with_capacity((n + 1) * (m + 1));
+    for j in 0..=m {
+        let s = s0 + (s1 - s0) * j as f64 / m as f64;
+        for i in 0..=n {
+            let phi = angle * i as f64 / n as f64;
+            positions.push([
+                s * half_angle.sin() * phi.cos(),
+                s * half_angle.sin() * phi.sin(),
+                s * half_angle.cos(),
+            ]);
+        }
+    }
+    let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+    let mut triangles = Vec::with_capacity(2 * n * m);
+    for j in 0..m {
+        for i in 0..n {
+            triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    TriMesh::new(positions, triangles)
+}
+
+/// Angle sum defect `2π − Σ angles` at interior vertices, max over the mesh (0 for an
+/// intrinsically flat mesh): an independent check that the test surfaces are developable.
+fn max_angle_defect(mesh: &TriMesh) -> f64 {
+    let nv = mesh.positions.len();
+    let mut sum = vec![0.0; nv];
+    let mut boundary = vec![false; nv];
+    let mut edges = std::collections::HashMap::new();
+    for tri in &mesh.triangles {
+        for k in 0..3 {
+            let (a, b) = (tri[k], tri[(k + 1) % 3]);
+            *edges.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+            let (p, q, r) = (
+                mesh.positions[tri[k] as usize],
+                mesh.positions[tri[(k + 1) % 3] as usize],
+                mesh.positions[tri[(k + 2) % 3] as usize],
+            );
+            let (u, v) = (sub3(q, p), sub3(r, p));
+            let cos = (u[0] * v[0] + u[1] * v[1] + u[2] * v[2]) / (norm3(u) * norm3(v));
+            sum[tri[k] as usize] += cos.clamp(-1.0, 1.0).acos();
+        }
+    }
+    for (&(a, b), &count) in &edges {
+        if count == 1 {
+            boundary[a as usize] = true;
+            boundary[b as usize] = true;
+        }
+    }
+    (0..nv)
+        .filter(|&v| !boundary[v])
+        .map(|v| (TAU - sum[v]).abs())
+        .fold(0.0, f64::max)
+}
+
+// ---------------------------------------------------------------------------------------
+// 1. Developable patches flatten to isometries
+// ---------------------------------------------------------------------------------------
+
+fn all_energies() -> Vec<(&'static str, EnergyKind)> {
+    vec![
+        ("conformal", EnergyKind::Litke(Litke::conformal())),
+        ("balanced", EnergyKind::Litke(Litke::balanced())),
+        ("area", EnergyKind::Litke(Litke::area())),
+        ("length", EnergyKind::Litke(Litke::length())),
+        ("symmetric dirichlet", EnergyKind::SymmetricDirichlet),
+        ("arap", EnergyKind::Arap),
+    ]
+}
+
+/// Largest `|σ − 1|` over all triangles and largest relative edge-length error.
+fn isometry_errors(mesh: &TriMesh, uvs: &[[f64; 2]]) -> (f64, f64) {
+    let corners = corner_uvs_from_vertex_uvs(&mesh.triangles, uvs).unwrap();
+    let sv = triangle_singular_values(&mesh.positions, &mesh.triangles, &corners, false).unwrap();
+    assert_eq!(sv.uv_scale, 1.0, "no normalization asked for");
+    let sigma_err = sv
+        .sigma
+        .iter()
+        .map(|s| (s[0] - 1.0).abs().max((s[1] - 1.0).abs()))
+        .fold(0.0, f64::max);
+    let mut edge_err = 0.0f64;
+    for tri in &mesh.triangles {
+        for k in 0..3 {
+            let (a, b) = (tri[k] as usize, tri[(k + 1) % 3] as usize);
+            let l3 = norm3(sub3(mesh.positions[a], mesh.positions[b]));
+            let l2 = dist2(uvs[a], uvs[b]);
+            edge_err = edge_err.max((l2 - l3).abs() / l3);
+        }
+    }
+    (sigma_err, edge_err)
+}
+
+fn check_isometry(name: &str, mesh: &TriMesh) {
+    assert!(max_angle_defect(mesh) < 1e-12, "{name} must be developable");
+    // LSCM is exact on a developable mesh, so from LSCM the solver has nothing to do;
+    // the mean-value start (boundary on a circle) is far from isometric and makes Newton
+    // find the isometry itself.
+    for start in [StartChoice::Auto, StartChoice::MeanValue] {
+        for (energy_name, energy) in all_energies() {
+            let what = format!("{name}, {energy_name}, start {start:?}");
+            let result = flatten(mesh, &FlattenOptions { start, ..options(energy) }).unwrap();
+            assert_flip_free(mesh, &result, &what);
+            let (sigma_err, edge_err) = isometry_errors(mesh, &result.uvs);
+            println!(
+                "{what}: max |σ−1| = {sigma_err:.2e}, max rel. edge error = {edge_err:.2e}, {} iterations, {:?}",
+                result.iterations, result.stop_reason
+            );
+            assert!(sigma_err < 1e-6, "{what}: max |σ − 1| = {sigma_err}");
+            assert!(edge_err < 1e-6, "{what}: max relative edge error = {edge_err}");
+            // At an isometry a = 2, d = 1, so the mean density equals W(2, 1).
+            let w_iso = match energy {
+                EnergyKind::Litke(l) => {
+                    let [al, aa, _] = l.alphas();
+                    2.0 * al + aa * (1.0 + al / aa + 1.0)
+                }
+                EnergyKind::SymmetricDirichlet => 4.0,
+                EnergyKind::Arap => 0.0,
+                EnergyKind::Mips => 2.0,
+            };
+            assert!(
+                (result.energy - w_iso).abs() < 1e-9 * w_iso.max(1.0),
+                "{what}: energy {} vs W(2, 1) = {w_iso}",
+                result.energy
+            );
+        }
+    }
+}
+
+#[test]
+fn cylinder_patch_flattens_to_an_isometry_for_every_energy() {
+    // Radius 0.7, 100° of arc, height 1.3: a curved, non-square patch in odd units.
+    let mesh = cylinder_patch(0.7, 100f64.to_radians(), 1.3, 14, 9);
+    check_isometry("cylinder patch", &mesh);
+}
+
+#[test]
+fn cone_patch_flattens_to_an_isometry_for_every_energy() {
+    // Half-angle 0.5 rad, slant 1..2.5, 150° of azimuth: unrolls to a 72° annular wedge.
+    let mesh = cone_patch(0.5, 1.0, 2.5, 150f64.to_radians(), 16, 8);
+    check_isometry("cone patch", &mesh);
+}
+
+// ---------------------------------------------------------------------------------------
+// 2. Rotational symmetry of a symmetric hemisphere
+// ---------------------------------------------------------------------------------------
+
+#[test]
+fn symmetric_hemisphere_flattens_to_a_symmetric_map() {
+    // `spherical_cap` stitches equal rings identically, so rotating every ring by one
+    // segment (vertex 1 + (k−1)·S + m ↦ 1 + (k−1)·S + (m+1 mod S), pole fixed) maps the
+    // triangulation onto itself: the mesh has exact S-fold symmetry about the pole.
+    let (rings, segments) = (8usize, 12usize);
+    let mesh = spherical_cap(1.3, FRAC_PI_2, rings, segments);
+    let vertex = |k: usize, m: usize| 1 + (k - 1) * segments + m % segments;
+    let rotate = |v: usize| if v == 0 { 0 } else { vertex((v - 1) / segments + 1, (v - 1) % segments + 1) };
+    // Independent check of the symmetry claim: the rotated triangle set is the same set.
+    let canonical = |t: [u32; 3]| {
+        let k = (0..3).min_by_key(|&k| t[k]).unwrap();
+        [t[k], t[(k + 1) % 3], t[(k + 2) % 3]]
+    };
+    let set: std::collections::HashSet<[u32; 3]> = mesh.triangles.iter().map(|&t| canonical(t)).collect();
+    for t in &mesh.triangles {
+        assert!(set.contains(&canonical(t.map(|v| rotate(v as usize) as u32))));
+    }
+
+    for (name, alpha) in [("balanced", Litke::balanced()), ("conformal", Litke::conformal())] {
+        let result = flatten(&mesh, &litke(alpha)).unwrap();
+        assert_flip_free(&mesh, &result, name);
+        let uv = &result.uvs;
+        let pole = uv[0];
+        // Radii about the pole's UV are constant around every ring.
+        let mut worst_spread = 0.0f64;
+        let mut last_radius = 0.0;
+        let mut ring_radius = Vec::new();
+        for k in 1..=rings {
+            let radii: Vec<f64> = (0..segments).map(|m| dist2(uv[vertex(k, m)], pole)).collect();
+            let (lo, hi) = radii.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &r| (lo.min(r), hi.max(r)));
+            let mean = radii.iter().sum::<f64>() / segments as f64;
+            let spread = (hi - lo) / mean;
+            worst_spread = worst_spread.max(spread);
+            assert!(spread < 1e-6, "{name}: ring {k} radius spread {spread:e}");
+            assert!(mean > last_radius, "{name}: ring radii must grow outward");
+            ring_radius.push(mean);
+            last_radius = mean;
+        }
+        // A radially symmetric conformal map of a sphere cap is a scaled stereographic
+        // projection, r ∝ tan(θ/2); the nearly conformal preset (αc = 0.99) must come
+        // close (discretization and the 1 % length/area terms make up the rest).
+        let stereo_err = (1..=rings)
+            .map(|k| {
+                let theta = |k: usize| FRAC_PI_2 * k as f64 / rings as f64;
+                let want = (theta(k) / 2.0).tan() / (theta(rings) / 2.0).tan();
+                (ring_radius[k - 1] / ring_radius[rings - 1] - want).abs() / want
+            })
+            .fold(0.0, f64::max);
+        println!("hemisphere {name}: max rel. deviation of ring radii from stereographic: {stereo_err:.3e}");
+        if name == "conformal" {
+            assert!(stereo_err < 0.02, "{name}: not close to stereographic ({stereo_err})");
+        }
+        // Rotating the mesh by one segment maps the UVs onto themselves up to a rigid
+        // motion, and that motion is a rotation by ±2π/S (the sign is the orientation).
+        let rotated: Vec<[f64; 2]> = (0..uv.len()).map(|v| uv[rotate(v)]).collect();
+        let fit = rigid_fit(uv, &rotated);
+        let rel = fit.max / fit.size;
+        println!(
+            "hemisphere {name}: ring radius spread {worst_spread:.2e}, rotation residual {rel:.2e}, angle {:.12} (2π/S = {:.12})",
+            fit.angle,
+            TAU / segments as f64
+        );
+        assert!(rel < 1e-6, "{name}: symmetry residual {rel:e}");
+        assert!(
+            (fit.angle.abs() - TAU / segments as f64).abs() < 1e-6,
+            "{name}: rotation angle {} instead of ±2π/{segments}",
+            fit.angle
+        );
+        // The pole stays the centre: it is the fixed point of that rotation.
+        let centre = uv.iter().fold([0.0, 0.0], |s, p| [s[0] + p[0], s[1] + p[1]]);
+        let centre = [centre[0] / uv.len() as f64, centre[1] / uv.len() as f64];
+        assert!(dist2(centre, pole) < 1e-6 * fit.size, "{name}: pole off centre");
+    }
+}
