@@ -27,14 +27,15 @@ use surfmap::param::newton::NewtonSettings;
 // Helpers
 // ---------------------------------------------------------------------------------------
 
-/// Options with a tighter Newton tolerance than the default, so the solver error is far
-/// below the tolerances asserted here (Newton converges quadratically, so this costs
-/// one or two iterations).
+/// Options with a tighter Newton tolerance than the default (1e-10), so the solver error
+/// is far below the tolerances asserted here (Newton converges quadratically, so this
+/// costs about one iteration). Not tighter: see
+/// `newton_energy_never_increases_at_a_tolerance_below_rounding` for what happens then.
 fn options(energy: EnergyKind) -> FlattenOptions {
     FlattenOptions {
         energy,
         newton: NewtonSettings {
-            tolerance: 1e-18,
+            tolerance: 1e-14,
             ..NewtonSettings::default()
         },
         ..FlattenOptions::default()
@@ -378,5 +379,151 @@ fn symmetric_hemisphere_flattens_to_a_symmetric_map() {
         let centre = uv.iter().fold([0.0, 0.0], |s, p| [s[0] + p[0], s[1] + p[1]]);
         let centre = [centre[0] / uv.len() as f64, centre[1] / uv.len() as f64];
         assert!(dist2(centre, pole) < 1e-6 * fit.size, "{name}: pole off centre");
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// 3. Refinement consistency (thesis §4.1.3)
+// ---------------------------------------------------------------------------------------
+
+/// Flattens nested refinements of one analytic surface; `coarse_in_fine(level, v)` is
+/// the index in level `level + 1` of vertex `v` of level `level` (the same parameter
+/// point). Returns the relative RMS and max differences between consecutive levels at
+/// the coarse vertices after the best rigid alignment.
+fn refinement_differences(
+    name: &str,
+    meshes: &[TriMesh],
+    energy: Litke,
+    coarse_in_fine: impl Fn(usize, usize) -> usize,
+) -> Vec<(f64, f64)> {
+    let maps: Vec<Vec<[f64; 2]>> = meshes
+        .iter()
+        .enumerate()
+        .map(|(level, mesh)| {
+            let result = flatten(mesh, &litke(energy)).unwrap();
+            assert_flip_free(mesh, &result, &format!("{name} level {level}"));
+            assert!(result.converged, "{name} level {level}: {:?}", result.stop_reason);
+            result.uvs
+        })
+        .collect();
+    let mut out = Vec::new();
+    for level in 0..meshes.len() - 1 {
+        // Independent check of the nesting: the same 3D point.
+        let fine_points: Vec<[f64; 2]> = (0..meshes[level].positions.len())
+            .map(|v| {
+                let w = coarse_in_fine(level, v);
+                let d = norm3(sub3(meshes[level].positions[v], meshes[level + 1].positions[w]));
+                assert!(d < 1e-12, "{name}: vertex {v} of level {level} is not vertex {w} of the next");
+                maps[level + 1][w]
+            })
+            .collect();
+        let fit = rigid_fit(&maps[level], &fine_points);
+        out.push((fit.rms / fit.size, fit.max / fit.size));
+    }
+    out
+}
+
+fn report_rates(name: &str, diffs: &[(f64, f64)]) {
+    for (k, (rms, max)) in diffs.iter().enumerate() {
+        print!("{name}: level {k}→{}: rel. RMS {rms:.3e}, rel. max {max:.3e}", k + 1);
+        if k > 0 {
+            let (prev_rms, prev_max) = diffs[k - 1];
+            print!(", rate (log2 ratio) RMS {:.2}, max {:.2}", (prev_rms / rms).log2(), (prev_max / max).log2());
+        }
+        println!();
+    }
+    for w in diffs.windows(2) {
+        // Mesh width halves per level: first order would halve the difference; ask for
+        // clearly better than that (the observed rate is about 2, see the report).
+        assert!(w[1].0 < 0.4 * w[0].0, "{name}: RMS difference does not shrink: {diffs:?}");
+        assert!(w[1].1 < 0.5 * w[0].1, "{name}: max difference does not shrink: {diffs:?}");
+    }
+}
+
+#[test]
+fn refining_a_bumpy_disc_converges() {
+    // bumpy_disc(n): ring k (0..=n) has 6k vertices at radius k/n, vertex m of ring k at
+    // angle 2πm/6k, index 1 + 3k(k−1) + m; so ring k, vertex m of level n is ring 2k,
+    // vertex 2m of level 2n.
+    let levels = [6usize, 12, 24, 48];
+    let meshes: Vec<TriMesh> = levels.iter().map(|&n| bumpy_disc(n, 0.3)).collect();
+    let index = |k: usize, m: usize| if k == 0 { 0 } else { 1 + 3 * k * (k - 1) + m };
+    let ring_of = |v: usize| {
+        if v == 0 {
+            return (0, 0);
+        }
+        let mut k = 1;
+        while index(k + 1, 0) <= v {
+            k += 1;
+        }
+        (k, v - index(k, 0))
+    };
+    let coarse_in_fine = |_level: usize, v: usize| {
+        let (k, m) = ring_of(v);
+        index(2 * k, 2 * m)
+    };
+    let diffs = refinement_differences("bumpy disc, balanced", &meshes, Litke::balanced(), coarse_in_fine);
+    report_rates("bumpy disc, balanced", &diffs);
+}
+
+#[test]
+fn refining_a_spherical_cap_converges() {
+    // spherical_cap(rings, segments): vertex (k, m) at θ = Θk/rings, φ = 2πm/segments,
+    // index 1 + (k−1)·segments + m; (k, m) at (r, s) is (2k, 2m) at (2r, 2s).
+    let levels = [(4usize, 10usize), (8, 20), (16, 40), (32, 80)];
+    let meshes: Vec<TriMesh> = levels.iter().map(|&(r, s)| spherical_cap(1.0, 1.2, r, s)).collect();
+    let coarse_in_fine = |level: usize, v: usize| {
+        if v == 0 {
+            return 0;
+        }
+        let s = levels[level].1;
+        let (k, m) = ((v - 1) / s + 1, (v - 1) % s);
+        1 + (2 * k - 1) * (2 * s) + 2 * m
+    };
+    let diffs = refinement_differences("spherical cap, length", &meshes, Litke::length(), coarse_in_fine);
+    report_rates("spherical cap, length", &diffs);
+}
+
+// ---------------------------------------------------------------------------------------
+// Solver behaviour at the rounding floor (found while writing the tests above)
+// ---------------------------------------------------------------------------------------
+
+/// BUG (newton.rs, `NewtonSolver::minimize`): with a tolerance below what rounding
+/// allows, the iteration neither converges nor locks but cycles until the iteration cap,
+/// and the energy goes *up*. The Armijo test accepts `e ≤ E + c·τ·slope + 1e-13·|E|`,
+/// so once `λ²` is at the rounding level a step that increases the energy by up to
+/// `1e-13·|E|` passes; the step-doubling extrapolation (`step == 1 && 0.9·t_max > 2`)
+/// then compares only against that trial energy, accepts `τ = 2`, overshoots to the
+/// mirror point, and the next Newton step points straight back: a period-2 cycle
+/// (observed on `spherical_cap(1, 1.2, 32, 80)`, length preset: minimum reached at
+/// iteration 4 with E = 2.6392155572969056, then 196 iterations alternating between
+/// ≈ …9123 and ≈ …9136, returned E = …9145, `IterationCap`). Suggested fix: never accept
+/// `e > E` (use the slack only to declare convergence, i.e. return `Converged` when the
+/// best step cannot decrease E beyond rounding) and only extrapolate when the full step
+/// decreased E by more than the slack.
+#[test]
+#[ignore = "known bug: Newton cycles at the rounding floor when tolerance is tiny (see doc comment)"]
+fn newton_energy_never_increases_at_a_tolerance_below_rounding() {
+    let mesh = spherical_cap(1.0, 1.2, 32, 80);
+    let mut opts = litke(Litke::length());
+    opts.newton.tolerance = 1e-18;
+    let result = flatten(&mesh, &opts).unwrap();
+    assert_flip_free(&mesh, &result, "tight tolerance");
+    assert_ne!(
+        result.stop_reason,
+        surfmap::param::newton::StopReason::IterationCap,
+        "{} iterations",
+        result.iterations
+    );
+    for w in result.log.windows(2) {
+        if w[0].stage == w[1].stage {
+            assert!(
+                w[1].energy <= w[0].energy,
+                "energy increased at iteration {}: {} → {}",
+                w[1].iteration,
+                w[0].energy,
+                w[1].energy
+            );
+        }
     }
 }
