@@ -594,21 +594,12 @@ fn refining_a_spherical_cap_converges() {
 // Solver behaviour at the rounding floor (found while writing the tests above)
 // ---------------------------------------------------------------------------------------
 
-/// BUG (newton.rs, `NewtonSolver::minimize`): with a tolerance below what rounding
-/// allows, the iteration neither converges nor locks but cycles until the iteration cap,
-/// and the energy goes *up*. The Armijo test accepts `e ≤ E + c·τ·slope + 1e-13·|E|`,
-/// so once `λ²` is at the rounding level a step that increases the energy by up to
-/// `1e-13·|E|` passes; the step-doubling extrapolation (`step == 1 && 0.9·t_max > 2`)
-/// then compares only against that trial energy, accepts `τ = 2`, overshoots to the
-/// mirror point, and the next Newton step points straight back: a period-2 cycle
-/// (observed on `spherical_cap(1, 1.2, 32, 80)`, length preset: minimum reached at
-/// iteration 4 with E = 2.6392155572969056, then 196 iterations alternating between
-/// ≈ …9123 and ≈ …9136, returned E = …9145, `IterationCap`). Suggested fix: never accept
-/// `e > E` (use the slack only to declare convergence, i.e. return `Converged` when the
-/// best step cannot decrease E beyond rounding) and only extrapolate when the full step
-/// decreased E by more than the slack.
+/// Regression (found while writing these tests): with a tolerance below what rounding
+/// allows, the iteration used to cycle between two points until the iteration cap, the
+/// energy creeping up (the Armijo slack let `e > E` through and step doubling
+/// overshot). Now an increase is never accepted, and no measurable decrease means
+/// convergence at the rounding floor.
 #[test]
-#[ignore = "known bug: Newton cycles at the rounding floor when tolerance is tiny (see doc comment)"]
 fn newton_energy_never_increases_at_a_tolerance_below_rounding() {
     let mesh = spherical_cap(1.0, 1.2, 32, 80);
     let mut opts = litke(Litke::length());

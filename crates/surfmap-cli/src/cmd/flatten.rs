@@ -81,7 +81,7 @@ pub struct Args {
     #[arg(long, default_value_t = 200)]
     pub max_iters: usize,
     /// Stop when half the Newton decrement (energy per unit area) is below this.
-    #[arg(long, default_value_t = 1e-10)]
+    #[arg(long, default_value_t = 1e-12)]
     pub tolerance: f64,
     /// Armijo sufficient-decrease constant c (thesis: 0.5).
     #[arg(long, default_value_t = 0.5)]

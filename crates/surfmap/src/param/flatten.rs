@@ -95,6 +95,8 @@ pub enum FlattenError {
     Degenerate(#[from] RestTriangleError),
     #[error("linear solve failed: {0}")]
     Solve(#[from] SolveError),
+    #[error("continuation (--from-alpha) blends Litke α values; it needs the Litke energy as the target")]
+    ContinuationNeedsLitke,
     #[error("initial map: {0}")]
     InitialMap(#[from] InitialMapError),
     #[error("both initial maps flipped triangles (LSCM: {lscm}, mean-value: {mean_value}); the mesh geometry is probably broken (non-finite or coincident vertices)")]
@@ -116,6 +118,9 @@ pub fn flatten_with_progress(
     progress: &mut dyn FnMut(&IterationLog),
 ) -> Result<Flattening, FlattenError> {
     let clock = Instant::now();
+    if options.from_alpha.is_some() && !matches!(options.energy, EnergyKind::Litke(_)) {
+        return Err(FlattenError::ContinuationNeedsLitke);
+    }
     // Vertices used by no face get no UV from the solve: flatten the used part and
     // put them at the origin afterwards.
     let (compact, old_of_new) = without_unreferenced(mesh);

@@ -69,7 +69,7 @@ pub struct NewtonSettings {
 
 impl Default for NewtonSettings {
     fn default() -> Self {
-        Self { armijo_c: 0.5, armijo_rho: 0.8, tolerance: 1e-10, max_iterations: 200 }
+        Self { armijo_c: 0.5, armijo_rho: 0.8, tolerance: 1e-12, max_iterations: 200 }
     }
 }
 
@@ -309,13 +309,20 @@ impl<'m> NewtonSolver<'m> {
             // Roundoff guard: near the minimum E(u + τp) − E(u) drowns in the rounding
             // of the sum; allow that much slack.
             let slack = 1e-13 * energy.abs();
+            let mut at_rounding_floor = false;
             for _ in 0..200 {
                 for (tr, (u, d)) in self.trial.iter_mut().zip(uv.iter().zip(&self.direction)) {
                     *tr = [u[0] + step * d[0], u[1] + step * d[1]];
                 }
                 let e = self.energy(&self.trial, density);
-                if e.is_finite() && e <= energy + settings.armijo_c * step * slope + slack {
+                // Sufficient decrease (thesis fig. 3.3), but never an increase.
+                if e.is_finite() && e < energy && e <= energy + settings.armijo_c * step * slope + slack {
                     accepted = Some(e);
+                    break;
+                }
+                if e.is_finite() && (e - energy).abs() <= slack {
+                    // No decrease is measurable any more: a minimum to rounding.
+                    at_rounding_floor = true;
                     break;
                 }
                 step *= settings.armijo_rho;
@@ -324,13 +331,14 @@ impl<'m> NewtonSolver<'m> {
                 }
             }
             let Some(mut e_new) = accepted else {
-                return Ok((StopReason::Locked, it - 1, energy));
+                let reason = if at_rounding_floor { StopReason::Converged } else { StopReason::Locked };
+                return Ok((reason, it - 1, energy));
             };
             // Barrier-dominated regions (triangles the start map shrank a lot) take
             // Newton steps that are far too short (a 1/d barrier grows a shrunk
             // triangle by only ~20% per full step): when the full step was accepted and
             // the flip-free bound allows, try doubling it while the energy still drops.
-            if step == 1.0 && 0.9 * t_max > 2.0 {
+            if step == 1.0 && 0.9 * t_max > 2.0 && energy - e_new > 1e3 * slack {
                 std::mem::swap(&mut self.trial, &mut self.best);
                 let mut t = 2.0;
                 while t <= 0.9 * t_max {
