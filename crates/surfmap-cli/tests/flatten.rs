@@ -43,16 +43,37 @@ fn every_disc_mesh_flattens_without_flips_at_both_presets() {
                 .arg(&report)
                 .output()
                 .unwrap();
-            assert!(run.status.success(), "{name} {preset}: {}", String::from_utf8_lossy(&run.stderr));
-            let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
-            assert_eq!(r["converged"], true, "{name} {preset}: not converged ({})", r["stop_reason"]);
+            assert!(
+                run.status.success(),
+                "{name} {preset}: {}",
+                String::from_utf8_lossy(&run.stderr)
+            );
+            let r: serde_json::Value =
+                serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+            assert_eq!(
+                r["converged"], true,
+                "{name} {preset}: not converged ({})",
+                r["stop_reason"]
+            );
             assert_eq!(r["flipped_triangles"], 0, "{name} {preset}");
-            for key in ["symmetric_dirichlet", "iterations", "boundary_overlap", "measures", "log"] {
+            for key in [
+                "symmetric_dirichlet",
+                "iterations",
+                "boundary_overlap",
+                "measures",
+                "log",
+            ] {
                 assert!(!r[key].is_null(), "{name} {preset}: report lacks {key}");
             }
-            assert_eq!(r["boundary_overlap"]["self_intersecting"], false, "{name} {preset}: boundary overlaps");
+            assert_eq!(
+                r["boundary_overlap"]["self_intersecting"], false,
+                "{name} {preset}: boundary overlaps"
+            );
             let (min_area, n) = min_signed_uv_area(&out);
-            assert!(min_area > 0.0, "{name} {preset}: a UV triangle of {n} has signed area {min_area}");
+            assert!(
+                min_area > 0.0,
+                "{name} {preset}: a UV triangle of {n} has signed area {min_area}"
+            );
             let summary = String::from_utf8_lossy(&run.stdout);
             assert!(summary.contains("flipped triangles 0"), "{summary}");
         }
@@ -72,11 +93,20 @@ fn non_disc_inputs_get_a_clear_error() {
         ("moebius.obj", "not orientable"),
         ("beetle_messy.obj", "shared by more than two faces"),
     ] {
-        let run = surfmap().arg("flatten").arg(data.join(file)).arg("-o").arg(dir.join("x.obj")).output().unwrap();
+        let run = surfmap()
+            .arg("flatten")
+            .arg(data.join(file))
+            .arg("-o")
+            .arg(dir.join("x.obj"))
+            .output()
+            .unwrap();
         assert_eq!(run.status.code(), Some(1), "{file}");
         let err = String::from_utf8_lossy(&run.stderr);
         assert!(err.contains(says), "{file}: expected {says:?} in: {err}");
-        assert!(!dir.join("x.obj").exists(), "{file}: no output may be written on failure");
+        assert!(
+            !dir.join("x.obj").exists(),
+            "{file}: no output may be written on failure"
+        );
     }
     // A repair that makes it a disc: the mask without the cone.
     let out = dir.join("mask.obj");
@@ -87,7 +117,11 @@ fn non_disc_inputs_get_a_clear_error() {
         .arg(&out)
         .output()
         .unwrap();
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
     assert!(String::from_utf8_lossy(&run.stderr).contains("repair: kept one component"));
     assert!(min_signed_uv_area(&out).0 > 0.0);
     std::fs::remove_dir_all(&dir).unwrap();
@@ -96,10 +130,24 @@ fn non_disc_inputs_get_a_clear_error() {
 #[test]
 fn demo_writes_what_it_says() {
     let dir = temp_dir("demo");
-    let run = surfmap().arg("demo").arg("-o").arg(&dir).args(["--rings", "20"]).output().unwrap();
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let run = surfmap()
+        .arg("demo")
+        .arg("-o")
+        .arg(&dir)
+        .args(["--rings", "20"])
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
     let text = String::from_utf8_lossy(&run.stdout);
-    let listed: Vec<&str> = text.lines().filter(|l| l.starts_with("  ")).map(str::trim).collect();
+    let listed: Vec<&str> = text
+        .lines()
+        .filter(|l| l.starts_with("  "))
+        .map(str::trim)
+        .collect();
     assert!(listed.len() >= 10, "{text}");
     for p in listed {
         let meta = std::fs::metadata(p).unwrap_or_else(|_| panic!("listed {p} missing"));
@@ -114,7 +162,13 @@ fn demo_writes_what_it_says() {
 #[test]
 fn invalid_alpha_is_rejected_with_a_reason() {
     let dir = temp_dir("alpha");
-    let run = surfmap().arg("demo").arg("-o").arg(&dir).args(["--rings", "4"]).output().unwrap();
+    let run = surfmap()
+        .arg("demo")
+        .arg("-o")
+        .arg(&dir)
+        .args(["--rings", "4"])
+        .output()
+        .unwrap();
     assert!(run.status.success());
     let run = surfmap()
         .arg("flatten")
@@ -133,7 +187,10 @@ fn invalid_alpha_is_rejected_with_a_reason() {
 fn face_scans_with_open_eyes_and_mouth_flatten_with_fill_holes() {
     let Some(data) = data_dir() else { return };
     let dir = temp_dir("fill-holes");
-    for (file, extra) in [("faces/ict/ict_neutral.obj", vec![]), ("faces/flame/flame_template.ply", vec!["--keep-largest"])] {
+    for (file, extra) in [
+        ("faces/ict/ict_neutral.obj", vec![]),
+        ("faces/flame/flame_template.ply", vec!["--keep-largest"]),
+    ] {
         let out = dir.join("face.obj");
         let run = surfmap()
             .arg("flatten")
@@ -144,7 +201,11 @@ fn face_scans_with_open_eyes_and_mouth_flatten_with_fill_holes() {
             .arg(&out)
             .output()
             .unwrap();
-        assert!(run.status.success(), "{file}: {}", String::from_utf8_lossy(&run.stderr));
+        assert!(
+            run.status.success(),
+            "{file}: {}",
+            String::from_utf8_lossy(&run.stderr)
+        );
         let back = read_mesh(&out).unwrap().mesh;
         // The output is the input surface (holes open again), with a valid map.
         let input = read_mesh(&data.join(file)).unwrap().mesh;

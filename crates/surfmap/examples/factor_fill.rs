@@ -1,12 +1,14 @@
 //! Fill of the Newton system's Cholesky factor versus the scalar Laplacian's, and
 //! numeric factorization time, for one mesh (ordering experiments).
 //! `cargo run --release -p surfmap --example factor_fill -- MESH`
-use surfmap::linsolve::SpdSystem;
 use std::time::Instant;
+use surfmap::linsolve::SpdSystem;
 
 fn main() {
     let path = std::env::args().nth(1).expect("MESH");
-    let mesh = surfmap::mesh::io::read_mesh(path.as_ref()).expect("readable").mesh;
+    let mesh = surfmap::mesh::io::read_mesh(path.as_ref())
+        .expect("readable")
+        .mesh;
     let n = mesh.positions.len();
     let mut lap = Vec::new();
     let mut blk = Vec::new();

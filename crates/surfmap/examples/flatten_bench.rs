@@ -20,9 +20,10 @@ fn main() {
     }
     let data = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data"));
     let meshes: Vec<PathBuf> = if args.is_empty() {
-        let m: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(data.join("manifest.json")).expect("../shared/data"))
-                .unwrap();
+        let m: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(data.join("manifest.json")).expect("../shared/data"),
+        )
+        .unwrap();
         m["files"]
             .as_array()
             .unwrap()
@@ -45,7 +46,10 @@ fn main() {
             ("balanced", EnergyKind::Litke(Litke::balanced())),
             ("sd", EnergyKind::SymmetricDirichlet),
         ] {
-            let opts = FlattenOptions { energy, ..Default::default() };
+            let opts = FlattenOptions {
+                energy,
+                ..Default::default()
+            };
             let mut times = Vec::new();
             let mut last = None;
             for _ in 0..repeat {

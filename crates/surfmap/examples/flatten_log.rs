@@ -5,20 +5,41 @@ use surfmap::param::flatten::{FlattenOptions, flatten};
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let mesh = surfmap::mesh::io::read_mesh(std::path::Path::new(&args[0])).expect("readable").mesh;
+    let mesh = surfmap::mesh::io::read_mesh(std::path::Path::new(&args[0]))
+        .expect("readable")
+        .mesh;
     let energy = match args.get(1).map(String::as_str) {
         Some("conformal") => EnergyKind::Litke(Litke::conformal()),
         Some("sd") => EnergyKind::SymmetricDirichlet,
         _ => EnergyKind::Litke(Litke::balanced()),
     };
-    let r = flatten(&mesh, &FlattenOptions { energy, ..Default::default() }).expect("flattened");
-    println!("start {:?}, {} iterations, stop {:?}, total {:.3} s (start map {:.3} s)", r.start, r.iterations, r.stop_reason, r.time_total, r.time_start);
+    let r = flatten(
+        &mesh,
+        &FlattenOptions {
+            energy,
+            ..Default::default()
+        },
+    )
+    .expect("flattened");
+    println!(
+        "start {:?}, {} iterations, stop {:?}, total {:.3} s (start map {:.3} s)",
+        r.start, r.iterations, r.stop_reason, r.time_total, r.time_start
+    );
     println!("{:?}", r.newton_timings);
-    println!("{:>4} {:>14} {:>10} {:>10} {:>8} {:>10} {:>7}", "it", "energy", "|grad|", "decrement", "step", "flipfree", "time");
+    println!(
+        "{:>4} {:>14} {:>10} {:>10} {:>8} {:>10} {:>7}",
+        "it", "energy", "|grad|", "decrement", "step", "flipfree", "time"
+    );
     for l in &r.log {
         println!(
             "{:>4} {:>14.8} {:>10.3e} {:>10.3e} {:>8.4} {:>10.3e} {:>7.3}",
-            l.iteration, l.energy, l.gradient_norm, l.newton_decrement, l.step, l.flip_free_step, l.time
+            l.iteration,
+            l.energy,
+            l.gradient_norm,
+            l.newton_decrement,
+            l.step,
+            l.flip_free_step,
+            l.time
         );
     }
 }

@@ -13,8 +13,16 @@ use surfmap::param::flatten::{FlattenOptions, flatten};
 fn peak_rss_mib() -> f64 {
     std::fs::read_to_string("/proc/self/status")
         .ok()
-        .and_then(|s| s.lines().find(|l| l.starts_with("VmHWM:")).map(|l| l.to_string()))
-        .and_then(|l| l.split_whitespace().nth(1).and_then(|k| k.parse::<f64>().ok()))
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .map(|l| l.to_string())
+        })
+        .and_then(|l| {
+            l.split_whitespace()
+                .nth(1)
+                .and_then(|k| k.parse::<f64>().ok())
+        })
         .map_or(f64::NAN, |kib| kib / 1024.0)
 }
 
@@ -22,11 +30,17 @@ fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let path = args.first().expect("MESH LEVELS");
     let levels: usize = args.get(1).map_or(3, |s| s.parse().expect("LEVELS"));
-    let mut mesh = read_mesh(std::path::Path::new(path)).expect("readable").mesh;
+    let mut mesh = read_mesh(std::path::Path::new(path))
+        .expect("readable")
+        .mesh;
     for _ in 0..levels {
         mesh = subdivide_midpoint(&mesh);
     }
-    println!("{path} subdivided {levels}×: {} vertices, {} faces", mesh.positions.len(), mesh.triangles.len());
+    println!(
+        "{path} subdivided {levels}×: {} vertices, {} faces",
+        mesh.positions.len(),
+        mesh.triangles.len()
+    );
     let t = std::time::Instant::now();
     let r = flatten(&mesh, &FlattenOptions::default()).expect("flattened");
     let total = t.elapsed().as_secs_f64();

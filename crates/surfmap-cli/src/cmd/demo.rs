@@ -4,6 +4,7 @@
 
 use anyhow::Context;
 use std::path::PathBuf;
+use surfmap::Topology;
 use surfmap::fsutil::write_atomically;
 use surfmap::measure::{MeasureOptions, distortion_report_per_vertex};
 use surfmap::mesh::generate::bumpy_disc;
@@ -12,7 +13,6 @@ use surfmap::mesh::validate::validate;
 use surfmap::param::density::{EnergyKind, Litke};
 use surfmap::param::flatten::{FlattenOptions, StartMap};
 use surfmap::render::{TradeoffPanel, save_png, tradeoff_sheet};
-use surfmap::Topology;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -49,14 +49,25 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     );
     let defects = validate(&mesh, &Topology::new(&mesh));
     let mut maps = Vec::new();
-    for (name, alpha) in [("conformal", Litke::conformal()), ("balanced", Litke::balanced())] {
-        let opts = FlattenOptions { energy: EnergyKind::Litke(alpha), ..Default::default() };
+    for (name, alpha) in [
+        ("conformal", Litke::conformal()),
+        ("balanced", Litke::balanced()),
+    ] {
+        let opts = FlattenOptions {
+            energy: EnergyKind::Litke(alpha),
+            ..Default::default()
+        };
         let r = super::flatten::flatten_mesh(&mesh, &opts, false)?;
         let out = super::flatten::output_mesh(&mesh, &r.uvs, false);
         let obj = dir.join(format!("{name}.obj"));
         write_obj(&obj, &out, None)?;
         written.push(obj);
-        let measures = distortion_report_per_vertex(&mesh.positions, &mesh.triangles, &r.uvs, &MeasureOptions::default())?;
+        let measures = distortion_report_per_vertex(
+            &mesh.positions,
+            &mesh.triangles,
+            &r.uvs,
+            &MeasureOptions::default(),
+        )?;
         let report = super::flatten::FlattenReport::new(
             &dir.join("surface.obj"),
             &mesh,
@@ -76,7 +87,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 StartMap::MeanValue => "mean-value",
             },
             r.iterations,
-            if r.converged { "converged" } else { "NOT converged" },
+            if r.converged {
+                "converged"
+            } else {
+                "NOT converged"
+            },
             r.energy,
             measures.flipped_triangles,
             measures.measures.angle.mean,

@@ -3,16 +3,19 @@
 use super::{RepairArgs, load_mesh};
 use anyhow::{Context, bail};
 use indicatif::{ProgressBar, ProgressStyle};
+use serde::Serialize;
 use std::io::IsTerminal;
+use std::path::Path;
 use std::path::PathBuf;
+use surfmap::fsutil::write_atomically;
+use surfmap::measure::{
+    DistortionReport, Measure, MeasureOptions, corner_uvs_from_vertex_uvs,
+    distortion_report_per_vertex, per_triangle_measure,
+};
 use surfmap::mesh::io::write_obj;
+use surfmap::mesh::validate::{Defect, validate};
 use surfmap::param::density::{EnergyKind, Litke};
 use surfmap::param::flatten::{FlattenOptions, Flattening, StartChoice, flatten_with_progress};
-use serde::Serialize;
-use std::path::Path;
-use surfmap::fsutil::write_atomically;
-use surfmap::measure::{DistortionReport, MeasureOptions, distortion_report_per_vertex, corner_uvs_from_vertex_uvs, per_triangle_measure, Measure};
-use surfmap::mesh::validate::{Defect, validate};
 use surfmap::param::newton::IterationLog;
 use surfmap::render;
 use surfmap::{Topology, TriMesh, Uvs};
@@ -110,11 +113,15 @@ pub struct Args {
 pub fn parse_alpha(s: &str) -> Result<[f64; 3], String> {
     let parts: Vec<&str> = s.split(',').map(str::trim).collect();
     if parts.len() != 3 {
-        return Err(format!("expected three comma-separated numbers L,A,C (e.g. 1,1,1), got {s:?}"));
+        return Err(format!(
+            "expected three comma-separated numbers L,A,C (e.g. 1,1,1), got {s:?}"
+        ));
     }
     let mut out = [0.0; 3];
     for (o, p) in out.iter_mut().zip(&parts) {
-        *o = p.parse().map_err(|_| format!("{p:?} is not a number (in α = {s:?})"))?;
+        *o = p
+            .parse()
+            .map_err(|_| format!("{p:?} is not a number (in α = {s:?})"))?;
     }
     Ok(out)
 }
@@ -151,7 +158,7 @@ pub fn options(args: &Args) -> anyhow::Result<FlattenOptions> {
         },
         ..Default::default()
     };
-    if !(args.tolerance > 0.0) {
+    if args.tolerance.is_nan() || args.tolerance <= 0.0 {
         bail!("--tolerance must be positive, got {}", args.tolerance);
     }
     if !(args.armijo_c > 0.0 && args.armijo_c < 1.0) {
@@ -164,15 +171,25 @@ pub fn options(args: &Args) -> anyhow::Result<FlattenOptions> {
 }
 
 /// Runs the flattening with a progress spinner on a terminal.
-pub fn flatten_mesh(mesh: &TriMesh, opts: &FlattenOptions, quiet: bool) -> anyhow::Result<Flattening> {
-    let bar = (!quiet && std::io::stderr().is_terminal() && mesh.triangles.len() > 20_000).then(|| {
-        let b = ProgressBar::new_spinner();
-        b.set_style(ProgressStyle::with_template("{spinner} {elapsed} {msg}").expect("valid template"));
-        b
-    });
+pub fn flatten_mesh(
+    mesh: &TriMesh,
+    opts: &FlattenOptions,
+    quiet: bool,
+) -> anyhow::Result<Flattening> {
+    let bar =
+        (!quiet && std::io::stderr().is_terminal() && mesh.triangles.len() > 20_000).then(|| {
+            let b = ProgressBar::new_spinner();
+            b.set_style(
+                ProgressStyle::with_template("{spinner} {elapsed} {msg}").expect("valid template"),
+            );
+            b
+        });
     let result = flatten_with_progress(mesh, opts, &mut |it| {
         if let Some(b) = &bar {
-            b.set_message(format!("stage {} iteration {}: energy {:.6}", it.stage, it.iteration, it.energy));
+            b.set_message(format!(
+                "stage {} iteration {}: energy {:.6}",
+                it.stage, it.iteration, it.energy
+            ));
             b.tick();
         }
     });
@@ -218,7 +235,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut result = if args.fill_holes {
         let (filled, holes) = surfmap::mesh::repair::fill_holes(&mesh);
         if !args.quiet {
-            eprintln!("repair: filled {holes} holes for the flattening (the output keeps them open)");
+            eprintln!(
+                "repair: filled {holes} holes for the flattening (the output keeps them open)"
+            );
         }
         flatten_mesh(&filled, &opts, args.quiet)
     } else {
@@ -232,14 +251,23 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         normalize_uvs(&mut uvs);
     }
     let out = output_mesh(&mesh, &uvs, args.uv_as_positions);
-    let material = args.texture.as_ref().map(|t| surfmap::mesh::io::ObjMaterial { texture: t.clone() });
+    let material = args
+        .texture
+        .as_ref()
+        .map(|t| surfmap::mesh::io::ObjMaterial { texture: t.clone() });
     write_obj(&args.output, &out, material.as_ref())
         .with_context(|| format!("cannot write {}", args.output.display()))?;
-    let measures = distortion_report_per_vertex(&mesh.positions, &mesh.triangles, &result.uvs, &MeasureOptions::default())?;
+    let measures = distortion_report_per_vertex(
+        &mesh.positions,
+        &mesh.triangles,
+        &result.uvs,
+        &MeasureOptions::default(),
+    )?;
     if let Some(path) = &args.report {
         let report = FlattenReport::new(&args.input, &mesh, &result, measures.clone(), &defects);
         let json = serde_json::to_vec_pretty(&report)?;
-        write_atomically(path, |w| w.write_all(&json)).with_context(|| format!("cannot write {}", path.display()))?;
+        write_atomically(path, |w| w.write_all(&json))
+            .with_context(|| format!("cannot write {}", path.display()))?;
     }
     if let Some(dir) = &args.pictures {
         let written = write_pictures(dir, &mesh, &result)?;
@@ -259,7 +287,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                     format!("mean-value (LSCM flipped {})", result.lscm_flipped),
             },
             result.iterations,
-            if result.converged { "converged" } else { "NOT converged" },
+            if result.converged {
+                "converged"
+            } else {
+                "NOT converged"
+            },
             result.energy,
             result.flipped_triangles,
             result.time_total,
@@ -344,13 +376,34 @@ pub fn write_pictures(dir: &Path, mesh: &TriMesh, r: &Flattening) -> anyhow::Res
     };
     save(
         "uv_layout.png",
-        render::uv_layout(&mesh.triangles, &corners, Some((&angle, "angle")), "UV layout", (900, 900)),
+        render::uv_layout(
+            &mesh.triangles,
+            &corners,
+            Some((&angle, "angle")),
+            "UV layout",
+            (900, 900),
+        ),
     )?;
     save(
         "checker.png",
-        render::checker_render(&mesh.positions, &mesh.triangles, &corners, 16, "checkerboard through the UVs", (900, 900)),
+        render::checker_render(
+            &mesh.positions,
+            &mesh.triangles,
+            &corners,
+            16,
+            "checkerboard through the UVs",
+            (900, 900),
+        ),
     )?;
-    let history: Vec<(f64, f64)> = r.log.iter().filter(|l| l.iteration > 0).map(|l| (l.energy, l.gradient_norm)).collect();
-    save("convergence.png", render::convergence_plot(&history, (900, 600)))?;
+    let history: Vec<(f64, f64)> = r
+        .log
+        .iter()
+        .filter(|l| l.iteration > 0)
+        .map(|l| (l.energy, l.gradient_norm))
+        .collect();
+    save(
+        "convergence.png",
+        render::convergence_plot(&history, (900, 600)),
+    )?;
     Ok(written)
 }

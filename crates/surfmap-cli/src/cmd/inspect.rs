@@ -42,9 +42,18 @@ pub struct InspectReport {
     pub defects: Vec<Defect>,
 }
 
-pub fn report(path: &std::path::Path, format: String, stored_faces: usize, mesh: &TriMesh) -> InspectReport {
+pub fn report(
+    path: &std::path::Path,
+    format: String,
+    stored_faces: usize,
+    mesh: &TriMesh,
+) -> InspectReport {
     let topo = Topology::new(mesh);
-    let mut loop_lengths: Vec<usize> = topo.boundary_loops.iter().map(|l| l.vertices.len()).collect();
+    let mut loop_lengths: Vec<usize> = topo
+        .boundary_loops
+        .iter()
+        .map(|l| l.vertices.len())
+        .collect();
     loop_lengths.sort_unstable_by(|a, b| b.cmp(a));
     let bbox = mesh.bounding_box();
     InspectReport {
@@ -72,7 +81,12 @@ pub fn report(path: &std::path::Path, format: String, stored_faces: usize, mesh:
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     let file = load_mesh(&args.mesh)?;
-    let r = report(&args.mesh, format!("{:?}", file.format), file.stored_faces, &file.mesh);
+    let r = report(
+        &args.mesh,
+        format!("{:?}", file.format),
+        file.stored_faces,
+        &file.mesh,
+    );
     if args.json {
         println!("{}", serde_json::to_string_pretty(&r)?);
         return Ok(());
@@ -102,19 +116,35 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         r.boundary_loops,
         r.euler_characteristic,
         r.genus.map_or("undefined".to_string(), |g| g.to_string()),
-        if r.manifold { "manifold" } else { "NON-MANIFOLD" },
-        if r.orientable { "orientable" } else { "NOT orientable" },
+        if r.manifold {
+            "manifold"
+        } else {
+            "NON-MANIFOLD"
+        },
+        if r.orientable {
+            "orientable"
+        } else {
+            "NOT orientable"
+        },
     );
     println!(
         "  disc       {}",
-        if r.disc { "yes: ready to flatten" } else { "no: see the defects below" }
+        if r.disc {
+            "yes: ready to flatten"
+        } else {
+            "no: see the defects below"
+        }
     );
     if r.defects.is_empty() {
         println!("  defects    none");
     } else {
         println!("  defects    {}", r.defects.len());
         for d in &r.defects {
-            println!("    - [{}] {}", serde_json::to_value(d.kind)?.as_str().unwrap_or("?"), d.message);
+            println!(
+                "    - [{}] {}",
+                serde_json::to_value(d.kind)?.as_str().unwrap_or("?"),
+                d.message
+            );
         }
     }
     Ok(())

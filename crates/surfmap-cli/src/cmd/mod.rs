@@ -1,8 +1,8 @@
 pub mod demo;
 pub mod flatten;
 pub mod inspect;
-pub mod tradeoff;
 pub mod measure;
+pub mod tradeoff;
 
 use std::path::Path;
 use surfmap::mesh::io::{MeshFile, read_mesh};
@@ -37,7 +37,11 @@ pub struct RepairArgs {
 }
 
 impl RepairArgs {
-    pub fn apply(&self, mut mesh: surfmap::TriMesh, quiet: bool) -> anyhow::Result<surfmap::TriMesh> {
+    pub fn apply(
+        &self,
+        mut mesh: surfmap::TriMesh,
+        quiet: bool,
+    ) -> anyhow::Result<surfmap::TriMesh> {
         use surfmap::mesh::repair;
         let say = |s: String| {
             if !quiet {
@@ -45,7 +49,7 @@ impl RepairArgs {
             }
         };
         if let Some(tol) = self.weld {
-            if !(tol >= 0.0) {
+            if tol.is_nan() || tol < 0.0 {
                 anyhow::bail!("--weld tolerance must be ≥ 0, got {tol}");
             }
             let (m, n) = repair::weld(&mesh, tol);
@@ -76,7 +80,9 @@ impl RepairArgs {
                     surfmap::Topology::new(&mesh).num_components
                 )
             })?;
-            say(format!("kept one component, dropped {n} faces of the others"));
+            say(format!(
+                "kept one component, dropped {n} faces of the others"
+            ));
             mesh = m;
         }
         if self.drop_unreferenced {

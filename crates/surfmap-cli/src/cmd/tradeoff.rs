@@ -30,7 +30,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mesh = args.repair.apply(load_mesh(&args.input)?.mesh, false)?;
     let size = args.size;
     let alphas: Vec<Litke> = if args.alphas.is_empty() {
-        vec![Litke::conformal(), Litke::length(), Litke::balanced(), Litke::area()]
+        vec![
+            Litke::conformal(),
+            Litke::length(),
+            Litke::balanced(),
+            Litke::area(),
+        ]
     } else {
         args.alphas
             .iter()
@@ -39,7 +44,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let mut maps = Vec::new();
     for alpha in &alphas {
-        let opts = FlattenOptions { energy: EnergyKind::Litke(*alpha), ..Default::default() };
+        let opts = FlattenOptions {
+            energy: EnergyKind::Litke(*alpha),
+            ..Default::default()
+        };
         let r = super::flatten::flatten_mesh(&mesh, &opts, false)
             .with_context(|| format!("cannot flatten {}", args.input.display()))?;
         let a = alpha.alphas();

@@ -24,7 +24,9 @@ pub fn manifest() -> Option<(PathBuf, Vec<serde_json::Value>)> {
 
 /// Disc meshes of the manifest: one boundary loop, genus 0.
 pub fn disc_meshes() -> Vec<PathBuf> {
-    let Some((d, files)) = manifest() else { return Vec::new() };
+    let Some((d, files)) = manifest() else {
+        return Vec::new();
+    };
     files
         .iter()
         .filter(|f| f["boundary_loops"] == 1 && f["genus"] == 0)

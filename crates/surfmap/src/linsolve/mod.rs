@@ -334,7 +334,8 @@ impl SpdSystem {
     /// (unprojected) Hessian is usable before falling back to a projected one.
     pub fn factorize_unshifted(&mut self) -> Result<(), SolveError> {
         self.factorized = false;
-        if let Some((index, &value)) = self.values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        if let Some((index, &value)) = self.values.iter().enumerate().find(|(_, v)| !v.is_finite())
+        {
             return Err(SolveError::NonFiniteValue { index, value });
         }
         match self.factorize_numeric() {
@@ -399,7 +400,11 @@ impl SpdSystem {
 /// Threads for a factorization of dimension `n`: one below 100k unknowns (measured:
 /// no gain there on 2 cores), all of rayon's above.
 fn parallelism(n: usize) -> Par {
-    if n >= 100_000 { Par::rayon(0) } else { Par::Seq }
+    if n >= 100_000 {
+        Par::rayon(0)
+    } else {
+        Par::Seq
+    }
 }
 
 fn check_len(expected: usize, got: usize) -> Result<(), SolveError> {

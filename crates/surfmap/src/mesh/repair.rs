@@ -15,17 +15,27 @@ fn retain_vertices(mesh: &TriMesh, keep: &[bool]) -> TriMesh {
             positions.push(*p);
         }
     }
-    let kept_faces: Vec<usize> =
-        (0..mesh.triangles.len()).filter(|&t| mesh.triangles[t].iter().all(|&v| keep[v as usize])).collect();
-    let triangles = kept_faces.iter().map(|&t| mesh.triangles[t].map(|v| new_id[v as usize])).collect();
+    let kept_faces: Vec<usize> = (0..mesh.triangles.len())
+        .filter(|&t| mesh.triangles[t].iter().all(|&v| keep[v as usize]))
+        .collect();
+    let triangles = kept_faces
+        .iter()
+        .map(|&t| mesh.triangles[t].map(|v| new_id[v as usize]))
+        .collect();
     let uvs = mesh.uvs.as_ref().map(|uv| match uv {
-        Uvs::PerVertex(uv) => Uvs::PerVertex((0..uv.len()).filter(|&v| keep[v]).map(|v| uv[v]).collect()),
+        Uvs::PerVertex(uv) => {
+            Uvs::PerVertex((0..uv.len()).filter(|&v| keep[v]).map(|v| uv[v]).collect())
+        }
         Uvs::PerCorner { coords, indices } => Uvs::PerCorner {
             coords: coords.clone(),
             indices: kept_faces.iter().map(|&t| indices[t]).collect(),
         },
     });
-    TriMesh { positions, triangles, uvs }
+    TriMesh {
+        positions,
+        triangles,
+        uvs,
+    }
 }
 
 /// Keeps the faces where `keep` is true (UV corner indices follow their face).
@@ -60,7 +70,10 @@ pub fn drop_unreferenced(mesh: &TriMesh) -> (TriMesh, usize) {
 /// [`super::validate::zero_area_faces`]). Returns the mesh and how many were removed.
 pub fn drop_degenerate(mesh: &TriMesh) -> (TriMesh, usize) {
     let mut bad = vec![false; mesh.triangles.len()];
-    for t in super::validate::repeated_index_faces(mesh).into_iter().chain(super::validate::zero_area_faces(mesh)) {
+    for t in super::validate::repeated_index_faces(mesh)
+        .into_iter()
+        .chain(super::validate::zero_area_faces(mesh))
+    {
         bad[t as usize] = true;
     }
     let removed = bad.iter().filter(|&&b| b).count();
@@ -76,12 +89,15 @@ pub fn weld(mesh: &TriMesh, tolerance: f64) -> (TriMesh, usize) {
     let n = mesh.positions.len();
     let mut target: Vec<u32> = (0..n as u32).collect();
     let cell = |p: &[f64; 3]| -> [i64; 3] {
-        if tol > 0.0 { p.map(|x| (x / tol).floor() as i64) } else { p.map(|x| x.to_bits() as i64) }
+        if tol > 0.0 {
+            p.map(|x| (x / tol).floor() as i64)
+        } else {
+            p.map(|x| x.to_bits() as i64)
+        }
     };
     let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::with_capacity(n);
     let mut merged = 0;
-    for v in 0..n {
-        let p = mesh.positions[v];
+    for (v, &p) in mesh.positions.iter().enumerate() {
         if p.iter().any(|x| !x.is_finite()) {
             continue;
         }
@@ -114,7 +130,11 @@ pub fn weld(mesh: &TriMesh, tolerance: f64) -> (TriMesh, usize) {
     }
     let welded = TriMesh {
         positions: mesh.positions.clone(),
-        triangles: mesh.triangles.iter().map(|t| t.map(|v| target[v as usize])).collect(),
+        triangles: mesh
+            .triangles
+            .iter()
+            .map(|t| t.map(|v| target[v as usize]))
+            .collect(),
         uvs: match &mesh.uvs {
             // Merged vertices share one UV; keep per-corner UVs as they were.
             Some(Uvs::PerVertex(uv)) => Some(Uvs::PerCorner {
@@ -130,7 +150,11 @@ pub fn weld(mesh: &TriMesh, tolerance: f64) -> (TriMesh, usize) {
 }
 
 fn drop_degenerate_indices(mesh: &TriMesh) -> (TriMesh, usize) {
-    let bad: Vec<bool> = mesh.triangles.iter().map(|&[a, b, c]| a == b || b == c || a == c).collect();
+    let bad: Vec<bool> = mesh
+        .triangles
+        .iter()
+        .map(|&[a, b, c]| a == b || b == c || a == c)
+        .collect();
     let removed = bad.iter().filter(|&&b| b).count();
     (retain_faces(mesh, |t| !bad[t]), removed)
 }
@@ -210,7 +234,9 @@ pub fn keep_component(mesh: &TriMesh, choice: ComponentChoice) -> Option<(TriMes
         sizes[c as usize] += 1;
     }
     let chosen = match choice {
-        ComponentChoice::Largest => (0..sizes.len()).max_by_key(|&c| (sizes[c], std::cmp::Reverse(c)))?,
+        ComponentChoice::Largest => {
+            (0..sizes.len()).max_by_key(|&c| (sizes[c], std::cmp::Reverse(c)))?
+        }
         ComponentChoice::Index(i) if i < sizes.len() => i,
         ComponentChoice::Index(_) => return None,
     };
@@ -227,9 +253,16 @@ pub fn keep_component(mesh: &TriMesh, choice: ComponentChoice) -> Option<(TriMes
 /// walked. UVs are dropped.
 pub fn fill_holes(mesh: &TriMesh) -> (TriMesh, usize) {
     let topo = Topology::new(mesh);
-    let mut loops: Vec<&[u32]> = topo.boundary_loops.iter().map(|l| l.vertices.as_slice()).collect();
+    let mut loops: Vec<&[u32]> = topo
+        .boundary_loops
+        .iter()
+        .map(|l| l.vertices.as_slice())
+        .collect();
     if loops.len() <= 1 {
-        return (TriMesh::new(mesh.positions.clone(), mesh.triangles.clone()), 0);
+        return (
+            TriMesh::new(mesh.positions.clone(), mesh.triangles.clone()),
+            0,
+        );
     }
     loops.sort_by_key(|l| std::cmp::Reverse(l.len()));
     let mut out = TriMesh::new(mesh.positions.clone(), mesh.triangles.clone());
@@ -237,8 +270,8 @@ pub fn fill_holes(mesh: &TriMesh) -> (TriMesh, usize) {
         let n = hole.len() as f64;
         let mut c = [0.0; 3];
         for &v in *hole {
-            for k in 0..3 {
-                c[k] += mesh.positions[v as usize][k] / n;
+            for (ck, pk) in c.iter_mut().zip(mesh.positions[v as usize]) {
+                *ck += pk / n;
             }
         }
         let centre = out.positions.len() as u32;
@@ -259,7 +292,12 @@ mod tests {
 
     fn square() -> TriMesh {
         TriMesh::new(
-            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]],
+            vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [1.0, 1.0, 0.0],
+                [0.0, 1.0, 0.0],
+            ],
             vec![[0, 1, 2], [0, 2, 3]],
         )
     }
@@ -304,7 +342,12 @@ mod tests {
     #[test]
     fn keep_largest_and_drop_unreferenced() {
         let mut m = square();
-        m.positions.extend([[5.0, 0.0, 0.0], [6.0, 0.0, 0.0], [5.0, 1.0, 0.0], [9.0, 9.0, 9.0]]);
+        m.positions.extend([
+            [5.0, 0.0, 0.0],
+            [6.0, 0.0, 0.0],
+            [5.0, 1.0, 0.0],
+            [9.0, 9.0, 9.0],
+        ]);
         m.triangles.push([4, 5, 6]);
         let (k, removed) = keep_component(&m, ComponentChoice::Largest).unwrap();
         assert_eq!(removed, 1);
@@ -321,9 +364,25 @@ mod tests {
         // A square with a square hole: 8 vertices, 8 triangles, 2 boundary loops.
         let p = |x: f64, y: f64| [x, y, 0.0];
         let m = TriMesh::new(
-            vec![p(0., 0.), p(3., 0.), p(3., 3.), p(0., 3.), p(1., 1.), p(2., 1.), p(2., 2.), p(1., 2.)],
             vec![
-                [0, 1, 5], [0, 5, 4], [1, 2, 6], [1, 6, 5], [2, 3, 7], [2, 7, 6], [3, 0, 4], [3, 4, 7],
+                p(0., 0.),
+                p(3., 0.),
+                p(3., 3.),
+                p(0., 3.),
+                p(1., 1.),
+                p(2., 1.),
+                p(2., 2.),
+                p(1., 2.),
+            ],
+            vec![
+                [0, 1, 5],
+                [0, 5, 4],
+                [1, 2, 6],
+                [1, 6, 5],
+                [2, 3, 7],
+                [2, 7, 6],
+                [3, 0, 4],
+                [3, 4, 7],
             ],
         );
         let t = Topology::new(&m);
@@ -332,7 +391,10 @@ mod tests {
         assert_eq!(n, 1);
         let t = Topology::new(&f);
         assert!(t.is_disc(), "filled mesh is a disc");
-        assert!(t.inconsistent_edges.is_empty(), "fill is oriented like the surface");
+        assert!(
+            t.inconsistent_edges.is_empty(),
+            "fill is oriented like the surface"
+        );
         assert_eq!(f.positions[8], [1.5, 1.5, 0.0]);
         assert!((f.area() - 9.0).abs() < 1e-12);
         assert_eq!(&f.triangles[..8], &m.triangles[..]);

@@ -10,12 +10,17 @@ use std::collections::HashMap;
 /// index; the new vertices follow. UVs are dropped.
 pub fn subdivide_midpoint(mesh: &TriMesh) -> TriMesh {
     let mut positions = mesh.positions.clone();
-    let mut midpoint: HashMap<(u32, u32), u32> = HashMap::with_capacity(mesh.triangles.len() * 3 / 2);
+    let mut midpoint: HashMap<(u32, u32), u32> =
+        HashMap::with_capacity(mesh.triangles.len() * 3 / 2);
     let mut mid = |a: u32, b: u32, positions: &mut Vec<[f64; 3]>| -> u32 {
         let key = (a.min(b), a.max(b));
         *midpoint.entry(key).or_insert_with(|| {
             let (p, q) = (positions[a as usize], positions[b as usize]);
-            positions.push([(p[0] + q[0]) / 2.0, (p[1] + q[1]) / 2.0, (p[2] + q[2]) / 2.0]);
+            positions.push([
+                (p[0] + q[0]) / 2.0,
+                (p[1] + q[1]) / 2.0,
+                (p[2] + q[2]) / 2.0,
+            ]);
             (positions.len() - 1) as u32
         })
     };
@@ -43,6 +48,9 @@ mod tests {
         let (t0, t1) = (Topology::new(&m), Topology::new(&s));
         assert_eq!(t1.euler_characteristic(), t0.euler_characteristic());
         assert!(t1.is_disc() && t1.inconsistent_edges.is_empty());
-        assert_eq!(t1.boundary_loops[0].vertices.len(), 2 * t0.boundary_loops[0].vertices.len());
+        assert_eq!(
+            t1.boundary_loops[0].vertices.len(),
+            2 * t0.boundary_loops[0].vertices.len()
+        );
     }
 }

@@ -138,12 +138,18 @@ impl Topology {
             .collect();
 
         // Orientation: propagate a flip bit across manifold edges (breadth-first).
-        let (orientable, faces_to_flip) =
-            orient_faces(mesh, &edges, &face_edges, &faces_of, &direction, num_components, &face_component);
+        let (orientable, faces_to_flip) = orient_faces(
+            mesh,
+            &edges,
+            &face_edges,
+            &faces_of,
+            &direction,
+            num_components,
+            &face_component,
+        );
 
         let boundary_loops = boundary_loops(mesh, &edges, &faces_of, nv);
-        let non_manifold_vertices =
-            non_manifold_vertices(mesh, &edges, &face_edges, &faces_of, nv);
+        let non_manifold_vertices = non_manifold_vertices(mesh, &edges, &face_edges, &faces_of, nv);
 
         Topology {
             edges,
@@ -243,7 +249,8 @@ fn boundary_loops<'a>(
         while let Some(ei) = next_edge.take() {
             let (a, b) = bedges[ei as usize];
             current = if a == current { b } else { a };
-            let adj_range = out_start[current as usize] as usize..out_start[current as usize + 1] as usize;
+            let adj_range =
+                out_start[current as usize] as usize..out_start[current as usize + 1] as usize;
             for &cand in &adj[adj_range] {
                 if !used[cand as usize] {
                     used[cand as usize] = true;
@@ -320,7 +327,9 @@ fn non_manifold_vertices<'a>(
             let around = &incident[start[v] as usize..start[v + 1] as usize];
             !touches_nm[v]
                 && around.len() > 1
-                && several_fans(mesh, face_edges, faces_of, around, v as u32, &mut seen, &mut stack)
+                && several_fans(
+                    mesh, face_edges, faces_of, around, v as u32, &mut seen, &mut stack,
+                )
         })
         .map(|v| v as u32)
         .collect()
@@ -349,11 +358,11 @@ fn several_fans<'a>(
                 continue; // edge opposite v
             }
             for &u in faces_of(face_edges[t][k] as usize) {
-                if let Some(j) = around.iter().position(|&x| x == u) {
-                    if !seen[j] {
-                        seen[j] = true;
-                        stack.push(j);
-                    }
+                if let Some(j) = around.iter().position(|&x| x == u)
+                    && !seen[j]
+                {
+                    seen[j] = true;
+                    stack.push(j);
                 }
             }
         }
@@ -388,8 +397,8 @@ fn orient_faces<'a>(
         while let Some(t) = queue.pop_front() {
             comp_size[face_component[t] as usize] += 1;
             flipped_count[face_component[t] as usize] += flip[t] as usize;
-            for k in 0..3 {
-                let e = face_edges[t][k] as usize;
+            for &e in &face_edges[t] {
+                let e = e as usize;
                 let fs = faces_of(e);
                 if fs.len() != 2 {
                     continue;
@@ -413,7 +422,9 @@ fn orient_faces<'a>(
     if !orientable {
         return (false, None);
     }
-    let total = (0..num_components).map(|c| flipped_count[c].min(comp_size[c] - flipped_count[c])).sum();
+    let total = (0..num_components)
+        .map(|c| flipped_count[c].min(comp_size[c] - flipped_count[c]))
+        .sum();
     (true, Some(total))
 }
 
@@ -425,7 +436,10 @@ struct UnionFind {
 
 impl UnionFind {
     fn new(n: usize) -> Self {
-        Self { parent: (0..n as u32).collect(), size: vec![1; n] }
+        Self {
+            parent: (0..n as u32).collect(),
+            size: vec![1; n],
+        }
     }
     fn find(&mut self, mut x: u32) -> u32 {
         while self.parent[x as usize] != x {
@@ -453,7 +467,10 @@ mod tests {
     use super::*;
 
     fn mesh(tris: &[[u32; 3]], nv: usize) -> TriMesh {
-        TriMesh::new((0..nv).map(|i| [i as f64, (i * i) as f64, 0.0]).collect(), tris.to_vec())
+        TriMesh::new(
+            (0..nv).map(|i| [i as f64, (i * i) as f64, 0.0]).collect(),
+            tris.to_vec(),
+        )
     }
 
     /// An n×n grid of quads split into triangles: a disc with V − E + F = 1.
@@ -482,7 +499,11 @@ mod tests {
         // consecutive loop vertices share a boundary edge
         for k in 0..lp.len() {
             let (a, b) = (lp[k], lp[(k + 1) % lp.len()]);
-            let e = t.edges.iter().position(|&e| e == [a.min(b), a.max(b)]).expect("edge");
+            let e = t
+                .edges
+                .iter()
+                .position(|&e| e == [a.min(b), a.max(b)])
+                .expect("edge");
             assert_eq!(t.faces_of_edge(e).len(), 1);
         }
     }
@@ -531,7 +552,11 @@ mod tests {
         let mut tris = Vec::new();
         for i in 0..n {
             let (a, b) = (2 * i, 2 * i + 1);
-            let (c, d) = if i + 1 == n { (1, 0) } else { (2 * i + 2, 2 * i + 3) };
+            let (c, d) = if i + 1 == n {
+                (1, 0)
+            } else {
+                (2 * i + 2, 2 * i + 3)
+            };
             tris.push([a, c, b]);
             tris.push([b, c, d]);
         }

@@ -46,7 +46,10 @@ fn fmt_examples(ex: &[Vec<u64>]) -> String {
     ex.iter()
         .map(|e| match e.len() {
             1 => e[0].to_string(),
-            _ => format!("({})", e.iter().map(u64::to_string).collect::<Vec<_>>().join(", ")),
+            _ => format!(
+                "({})",
+                e.iter().map(u64::to_string).collect::<Vec<_>>().join(", ")
+            ),
         })
         .collect::<Vec<_>>()
         .join(", ")
@@ -75,7 +78,7 @@ pub fn zero_area_faces(mesh: &TriMesh) -> Vec<u32> {
             let d2 = |x: [f64; 3], y: [f64; 3]| (0..3).map(|k| (x[k] - y[k]).powi(2)).sum::<f64>();
             let longest = d2(p[0], p[1]).max(d2(p[1], p[2])).max(d2(p[2], p[0]));
             let area = mesh.triangle_area(t as usize);
-            !(area > 1e-12 * longest) && area.is_finite()
+            area.is_finite() && area <= 1e-12 * longest
         })
         .collect()
 }
@@ -106,7 +109,9 @@ pub fn unreferenced_vertices(mesh: &TriMesh) -> Vec<u32> {
             used[v as usize] = true;
         }
     }
-    (0..used.len() as u32).filter(|&v| !used[v as usize]).collect()
+    (0..used.len() as u32)
+        .filter(|&v| !used[v as usize])
+        .collect()
 }
 
 /// Finds every defect of `mesh` (with its topology `topo`).
@@ -114,10 +119,21 @@ pub fn validate(mesh: &TriMesh, topo: &Topology) -> Vec<Defect> {
     let mut out = Vec::new();
     let mut push = |kind, count: usize, examples: Vec<Vec<u64>>, message: String, blocks| {
         if count > 0 {
-            out.push(Defect { kind, count, examples, message, blocks_flattening: blocks });
+            out.push(Defect {
+                kind,
+                count,
+                examples,
+                message,
+                blocks_flattening: blocks,
+            });
         }
     };
-    let one = |v: &[u32]| v.iter().take(EXAMPLES).map(|&x| vec![x as u64]).collect::<Vec<_>>();
+    let one = |v: &[u32]| {
+        v.iter()
+            .take(EXAMPLES)
+            .map(|&x| vec![x as u64])
+            .collect::<Vec<_>>()
+    };
 
     let non_finite: Vec<u32> = (0..mesh.positions.len() as u32)
         .filter(|&v| mesh.positions[v as usize].iter().any(|x| !x.is_finite()))
@@ -136,7 +152,13 @@ pub fn validate(mesh: &TriMesh, topo: &Topology) -> Vec<Defect> {
         true,
     );
     if mesh.triangles.is_empty() {
-        push(DefectKind::NoFaces, 1, vec![], "the mesh has no faces: there is nothing to flatten (is it a point cloud?)".into(), true);
+        push(
+            DefectKind::NoFaces,
+            1,
+            vec![],
+            "the mesh has no faces: there is nothing to flatten (is it a point cloud?)".into(),
+            true,
+        );
         return out;
     }
 
@@ -184,7 +206,11 @@ pub fn validate(mesh: &TriMesh, topo: &Topology) -> Vec<Defect> {
         false,
     );
     let dups = duplicate_vertices(mesh);
-    let ex: Vec<Vec<u64>> = dups.iter().take(EXAMPLES).map(|&(a, b)| vec![a as u64, b as u64]).collect();
+    let ex: Vec<Vec<u64>> = dups
+        .iter()
+        .take(EXAMPLES)
+        .map(|&(a, b)| vec![a as u64, b as u64])
+        .collect();
     push(
         DefectKind::DuplicateVertices,
         dups.len(),
@@ -205,18 +231,29 @@ pub fn validate(mesh: &TriMesh, topo: &Topology) -> Vec<Defect> {
         }
         let mut order: Vec<usize> = (0..sizes.len()).collect();
         order.sort_by_key(|&c| std::cmp::Reverse(sizes[c]));
-        let listed: Vec<String> =
-            order.iter().take(EXAMPLES).map(|&c| format!("#{c}: {} faces", sizes[c])).collect();
+        let listed: Vec<String> = order
+            .iter()
+            .take(EXAMPLES)
+            .map(|&c| format!("#{c}: {} faces", sizes[c]))
+            .collect();
         push(
             DefectKind::SeveralComponents,
             topo.num_components,
-            order.iter().take(EXAMPLES).map(|&c| vec![c as u64, sizes[c] as u64]).collect(),
+            order
+                .iter()
+                .take(EXAMPLES)
+                .map(|&c| vec![c as u64, sizes[c] as u64])
+                .collect(),
             format!(
                 "the mesh has {} connected components ({}{}); a flattening maps one piece. \
                  Use --keep-largest, or --component N to choose one.",
                 topo.num_components,
                 listed.join(", "),
-                if topo.num_components > EXAMPLES { ", …" } else { "" }
+                if topo.num_components > EXAMPLES {
+                    ", …"
+                } else {
+                    ""
+                }
             ),
             true,
         );
@@ -314,17 +351,28 @@ pub fn validate(mesh: &TriMesh, topo: &Topology) -> Vec<Defect> {
         }
     }
     if loops > 1 {
-        let mut lens: Vec<(usize, usize)> =
-            topo.boundary_loops.iter().enumerate().map(|(i, l)| (l.vertices.len(), i)).collect();
+        let mut lens: Vec<(usize, usize)> = topo
+            .boundary_loops
+            .iter()
+            .enumerate()
+            .map(|(i, l)| (l.vertices.len(), i))
+            .collect();
         lens.sort_by_key(|&(n, _)| std::cmp::Reverse(n));
         push(
             DefectKind::SeveralBoundaryLoops,
             loops,
-            lens.iter().take(EXAMPLES).map(|&(n, i)| vec![i as u64, n as u64]).collect(),
+            lens.iter()
+                .take(EXAMPLES)
+                .map(|&(n, i)| vec![i as u64, n as u64])
+                .collect(),
             format!(
                 "found {loops} boundary loops (edge counts: {}{}); a disc has exactly one. The others are holes \
                  (eyes, mouth, scan gaps): fill them, or cut from each hole to the outer boundary, before flattening.",
-                lens.iter().take(EXAMPLES).map(|(n, _)| n.to_string()).collect::<Vec<_>>().join(", "),
+                lens.iter()
+                    .take(EXAMPLES)
+                    .map(|(n, _)| n.to_string())
+                    .collect::<Vec<_>>()
+                    .join(", "),
                 if loops > EXAMPLES { ", …" } else { "" }
             ),
             true,
@@ -338,12 +386,20 @@ mod tests {
     use super::*;
 
     fn kinds(m: &TriMesh) -> Vec<DefectKind> {
-        validate(m, &Topology::new(m)).iter().map(|d| d.kind).collect()
+        validate(m, &Topology::new(m))
+            .iter()
+            .map(|d| d.kind)
+            .collect()
     }
 
     fn square() -> TriMesh {
         TriMesh::new(
-            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]],
+            vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [1.0, 1.0, 0.0],
+                [0.0, 1.0, 0.0],
+            ],
             vec![[0, 1, 2], [0, 2, 3]],
         )
     }
@@ -381,7 +437,8 @@ mod tests {
         assert!(kinds(&m).contains(&DefectKind::InconsistentOrientation));
 
         let mut m = square();
-        m.positions.extend([[5.0, 0.0, 0.0], [6.0, 0.0, 0.0], [5.0, 1.0, 0.0]]);
+        m.positions
+            .extend([[5.0, 0.0, 0.0], [6.0, 0.0, 0.0], [5.0, 1.0, 0.0]]);
         m.triangles.push([4, 5, 6]);
         let k = kinds(&m);
         assert!(k.contains(&DefectKind::SeveralComponents));
@@ -390,11 +447,19 @@ mod tests {
     #[test]
     fn messages_say_what_to_do() {
         let mut m = square();
-        m.positions.extend([[5.0, 0.0, 0.0], [6.0, 0.0, 0.0], [5.0, 1.0, 0.0]]);
+        m.positions
+            .extend([[5.0, 0.0, 0.0], [6.0, 0.0, 0.0], [5.0, 1.0, 0.0]]);
         m.triangles.push([4, 5, 6]);
         let d = validate(&m, &Topology::new(&m));
-        let comp = d.iter().find(|d| d.kind == DefectKind::SeveralComponents).unwrap();
+        let comp = d
+            .iter()
+            .find(|d| d.kind == DefectKind::SeveralComponents)
+            .unwrap();
         assert!(comp.message.contains("--keep-largest"), "{}", comp.message);
-        assert!(comp.message.contains("2 connected components"), "{}", comp.message);
+        assert!(
+            comp.message.contains("2 connected components"),
+            "{}",
+            comp.message
+        );
     }
 }

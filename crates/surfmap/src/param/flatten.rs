@@ -95,11 +95,15 @@ pub enum FlattenError {
     Degenerate(#[from] RestTriangleError),
     #[error("linear solve failed: {0}")]
     Solve(#[from] SolveError),
-    #[error("continuation (--from-alpha) blends Litke α values; it needs the Litke energy as the target")]
+    #[error(
+        "continuation (--from-alpha) blends Litke α values; it needs the Litke energy as the target"
+    )]
     ContinuationNeedsLitke,
     #[error("initial map: {0}")]
     InitialMap(#[from] InitialMapError),
-    #[error("both initial maps flipped triangles (LSCM: {lscm}, mean-value: {mean_value}); the mesh geometry is probably broken (non-finite or coincident vertices)")]
+    #[error(
+        "both initial maps flipped triangles (LSCM: {lscm}, mean-value: {mean_value}); the mesh geometry is probably broken (non-finite or coincident vertices)"
+    )]
     NoAdmissibleStart { lscm: usize, mean_value: usize },
     #[error("internal error: the result has {0} flipped triangles; please report this mesh")]
     FlippedResult(usize),
@@ -134,9 +138,16 @@ pub fn flatten_with_progress(
         return Ok(result);
     }
     let topo = Topology::new(mesh);
-    if !topo.is_disc() || mesh.positions.iter().any(|p| p.iter().any(|x| !x.is_finite())) {
-        let defects: Vec<Defect> =
-            validate(mesh, &topo).into_iter().filter(|d| d.blocks_flattening).collect();
+    if !topo.is_disc()
+        || mesh
+            .positions
+            .iter()
+            .any(|p| p.iter().any(|x| !x.is_finite()))
+    {
+        let defects: Vec<Defect> = validate(mesh, &topo)
+            .into_iter()
+            .filter(|d| d.blocks_flattening)
+            .collect();
         if !defects.is_empty() || !topo.is_disc() {
             return Err(FlattenError::NotADisc(defects));
         }
@@ -145,7 +156,11 @@ pub fn flatten_with_progress(
     // tolerances are scale-free; the UVs are scaled back at the end.
     let area = mesh.area();
     let scale = area.sqrt();
-    let positions: Vec<[f64; 3]> = mesh.positions.iter().map(|p| p.map(|x| x / scale)).collect();
+    let positions: Vec<[f64; 3]> = mesh
+        .positions
+        .iter()
+        .map(|p| p.map(|x| x / scale))
+        .collect();
     let rest = rest_triangles(&positions, &mesh.triangles)?;
     let boundary = &topo.boundary_loops[0].vertices;
 
@@ -155,7 +170,9 @@ pub fn flatten_with_progress(
         let negative = mesh
             .triangles
             .iter()
-            .filter(|t| signed_uv_area([uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]]) < 0.0)
+            .filter(|t| {
+                signed_uv_area([uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]]) < 0.0
+            })
             .count();
         if 2 * negative > mesh.triangles.len() {
             uv.iter_mut().for_each(|p| p[1] = -p[1]);
@@ -164,20 +181,29 @@ pub fn flatten_with_progress(
     };
     let mut lscm_flipped = 0;
     let (mut uv, start) = match options.start {
-        StartChoice::MeanValue => (tutte::mean_value(&positions, &mesh.triangles, boundary)?, StartMap::MeanValue),
+        StartChoice::MeanValue => (
+            tutte::mean_value(&positions, &mesh.triangles, boundary)?,
+            StartMap::MeanValue,
+        ),
         StartChoice::Auto | StartChoice::Lscm => {
             let mut uv = lscm::lscm(&positions, &mesh.triangles, boundary)?.uv;
             lscm_flipped = admissible(&mut uv);
             if lscm_flipped == 0 || options.start == StartChoice::Lscm {
                 (uv, StartMap::Lscm)
             } else {
-                (tutte::mean_value(&positions, &mesh.triangles, boundary)?, StartMap::MeanValue)
+                (
+                    tutte::mean_value(&positions, &mesh.triangles, boundary)?,
+                    StartMap::MeanValue,
+                )
             }
         }
     };
     let start_flipped = admissible(&mut uv);
     if start_flipped > 0 {
-        return Err(FlattenError::NoAdmissibleStart { lscm: lscm_flipped, mean_value: start_flipped });
+        return Err(FlattenError::NoAdmissibleStart {
+            lscm: lscm_flipped,
+            mean_value: start_flipped,
+        });
     }
     // Scale the start so its area matches the (unit) surface area: lengths scale by
     // √(area3D / areaUV) (NOTES.md §1).
@@ -190,7 +216,10 @@ pub fn flatten_with_progress(
     // Rigid-motion pins: the two boundary vertices farthest apart in the start map,
     // rotated onto the u axis.
     let (p0, p1) = farthest_pair(&uv, boundary);
-    let (dx, dy) = (uv[p1 as usize][0] - uv[p0 as usize][0], uv[p1 as usize][1] - uv[p0 as usize][1]);
+    let (dx, dy) = (
+        uv[p1 as usize][0] - uv[p0 as usize][0],
+        uv[p1 as usize][1] - uv[p0 as usize][1],
+    );
     let len = dx.hypot(dy).max(f64::MIN_POSITIVE);
     let (c, sn) = (dx / len, dy / len);
     let origin = uv[p0 as usize];
@@ -200,7 +229,12 @@ pub fn flatten_with_progress(
     }
     let time_start = clock.elapsed().as_secs_f64();
 
-    let mut solver = NewtonSolver::new(mesh.positions.len(), &mesh.triangles, rest, &[(p0, 0), (p0, 1), (p1, 1)])?;
+    let mut solver = NewtonSolver::new(
+        mesh.positions.len(),
+        &mesh.triangles,
+        rest,
+        &[(p0, 0), (p0, 1), (p1, 1)],
+    )?;
     let mut log = Vec::new();
     let mut record = |entry: IterationLog| {
         progress(&entry);
@@ -223,8 +257,14 @@ pub fn flatten_with_progress(
                 let next = (theta + dtheta).min(1.0);
                 let alpha = from.blend(target, next);
                 let mut trial = uv.clone();
-                let (stop, it, e) =
-                    solver.minimize(&mut trial, &alpha, &options.newton, stage, clock, &mut record)?;
+                let (stop, it, e) = solver.minimize(
+                    &mut trial,
+                    &alpha,
+                    &options.newton,
+                    stage,
+                    clock,
+                    &mut record,
+                )?;
                 iterations += it;
                 stage += 1;
                 if stop == StopReason::Locked && dtheta > 1.0 / 64.0 {
@@ -240,7 +280,8 @@ pub fn flatten_with_progress(
             last
         }
         (energy, _) => {
-            let (stop, it, e) = solver.minimize(&mut uv, energy, &options.newton, 0, clock, &mut record)?;
+            let (stop, it, e) =
+                solver.minimize(&mut uv, energy, &options.newton, 0, clock, &mut record)?;
             iterations += it;
             (stop, e)
         }
@@ -300,7 +341,9 @@ fn without_unreferenced(mesh: &TriMesh) -> (Option<TriMesh>, Vec<u32>) {
     if used.iter().all(|&u| u) {
         return (None, Vec::new());
     }
-    let old_of_new: Vec<u32> = (0..used.len() as u32).filter(|&v| used[v as usize]).collect();
+    let old_of_new: Vec<u32> = (0..used.len() as u32)
+        .filter(|&v| used[v as usize])
+        .collect();
     let (compact, _) = crate::mesh::repair::drop_unreferenced(mesh);
     (Some(compact), old_of_new)
 }

@@ -69,7 +69,12 @@ pub struct NewtonSettings {
 
 impl Default for NewtonSettings {
     fn default() -> Self {
-        Self { armijo_c: 0.5, armijo_rho: 0.8, tolerance: 1e-12, max_iterations: 200 }
+        Self {
+            armijo_c: 0.5,
+            armijo_rho: 0.8,
+            tolerance: 1e-12,
+            max_iterations: 200,
+        }
     }
 }
 
@@ -203,14 +208,21 @@ impl<'m> NewtonSolver<'m> {
             direction: vec![[0.0; 2]; nv],
             trial: vec![[0.0; 2]; nv],
             best: vec![[0.0; 2]; nv],
-            timings: NewtonTimings { symbolic: symbolic_time, ..Default::default() },
+            timings: NewtonTimings {
+                symbolic: symbolic_time,
+                ..Default::default()
+            },
         })
     }
 
     #[inline]
     fn corners(&self, uv: &[[f64; 2]], t: usize) -> [[f64; 2]; 3] {
         let tri = self.triangles[t];
-        [uv[tri[0] as usize], uv[tri[1] as usize], uv[tri[2] as usize]]
+        [
+            uv[tri[0] as usize],
+            uv[tri[1] as usize],
+            uv[tri[2] as usize],
+        ]
     }
 
     /// `E(u) = Σ_T area(T)·W` (thesis (2.5) summed per triangle); `+∞` if any
@@ -251,7 +263,8 @@ impl<'m> NewtonSolver<'m> {
         let mut exact_blocked_until = 0;
         let mut decrement_prev = f64::INFINITY;
         for it in 1..=settings.max_iterations {
-            let try_exact = it >= exact_blocked_until && decrement_prev < EXACT_SWITCH * energy.abs().max(1.0);
+            let try_exact =
+                it >= exact_blocked_until && decrement_prev < EXACT_SWITCH * energy.abs().max(1.0);
             let mut p = Vec::new();
             let mut solved = false;
             if try_exact {
@@ -284,7 +297,12 @@ impl<'m> NewtonSolver<'m> {
                 self.timings.solve += t2.elapsed().as_secs_f64();
             }
             let gradient_norm = self.gradient.iter().map(|g| g * g).sum::<f64>().sqrt();
-            let decrement = -self.gradient.iter().zip(&p).map(|(g, p)| g * p).sum::<f64>();
+            let decrement = -self
+                .gradient
+                .iter()
+                .zip(&p)
+                .map(|(g, p)| g * p)
+                .sum::<f64>();
             decrement_prev = decrement;
             if !(decrement.is_finite()) || decrement <= 0.0 {
                 // The matrix is positive definite, so p is a descent direction unless
@@ -295,9 +313,9 @@ impl<'m> NewtonSolver<'m> {
                 return Ok((StopReason::Converged, it - 1, energy));
             }
             for (v, d) in self.direction.iter_mut().enumerate() {
-                for c in 0..2 {
+                for (c, dc) in d.iter_mut().enumerate() {
                     let k = self.dof[2 * v + c];
-                    d[c] = if k == u32::MAX { 0.0 } else { p[k as usize] };
+                    *dc = if k == u32::MAX { 0.0 } else { p[k as usize] };
                 }
             }
             let t_search = Instant::now();
@@ -316,7 +334,10 @@ impl<'m> NewtonSolver<'m> {
                 }
                 let e = self.energy(&self.trial, density);
                 // Sufficient decrease (thesis fig. 3.3), but never an increase.
-                if e.is_finite() && e < energy && e <= energy + settings.armijo_c * step * slope + slack {
+                if e.is_finite()
+                    && e < energy
+                    && e <= energy + settings.armijo_c * step * slope + slack
+                {
                     accepted = Some(e);
                     break;
                 }
@@ -331,7 +352,11 @@ impl<'m> NewtonSolver<'m> {
                 }
             }
             let Some(mut e_new) = accepted else {
-                let reason = if at_rounding_floor { StopReason::Converged } else { StopReason::Locked };
+                let reason = if at_rounding_floor {
+                    StopReason::Converged
+                } else {
+                    StopReason::Locked
+                };
                 return Ok((reason, it - 1, energy));
             };
             // Barrier-dominated regions (triangles the start map shrank a lot) take
@@ -346,7 +371,7 @@ impl<'m> NewtonSolver<'m> {
                         *tr = [u[0] + t * d[0], u[1] + t * d[1]];
                     }
                     let e = self.energy(&self.trial, density);
-                    if !(e < e_new) {
+                    if e.is_nan() || e >= e_new {
                         break;
                     }
                     e_new = e;
@@ -385,13 +410,19 @@ impl<'m> NewtonSolver<'m> {
             .with_min_len(1024)
             .for_each(|(t, ((g, h), e))| {
                 let tri = triangles[t];
-                let corners = [uv[tri[0] as usize], uv[tri[1] as usize], uv[tri[2] as usize]];
+                let corners = [
+                    uv[tri[0] as usize],
+                    uv[tri[1] as usize],
+                    uv[tri[2] as usize],
+                ];
                 let mut hess = [[0.0; 6]; 6];
                 *e = match kind {
-                    HessianKind::Projected => {
-                        element::gradient_and_projected_hessian(&rest[t], &corners, density, g, &mut hess)
+                    HessianKind::Projected => element::gradient_and_projected_hessian(
+                        &rest[t], &corners, density, g, &mut hess,
+                    ),
+                    HessianKind::Exact => {
+                        element::exact_hessian(&rest[t], &corners, density, g, &mut hess)
                     }
-                    HessianKind::Exact => element::exact_hessian(&rest[t], &corners, density, g, &mut hess),
                 };
                 for (p, &(i, j)) in LOWER_PAIRS.iter().enumerate() {
                     h[p] = hess[i][j];

@@ -11,10 +11,10 @@ pub mod surface;
 pub mod tradeoff;
 pub mod uv_layout;
 
+pub use image::RgbImage;
 pub use plot::convergence_plot;
 pub use surface::{automatic_view, checker_render};
 pub use tradeoff::{TradeoffPanel, tradeoff_sheet};
-pub use image::RgbImage;
 pub use uv_layout::uv_layout;
 
 use std::path::Path;
