@@ -114,6 +114,10 @@ pub struct NewtonTimings {
     pub solve: f64,
     /// Flip-free bound and Armijo backtracking (energy evaluations).
     pub line_search: f64,
+    /// Numeric factorizations, and how many of them were exact-Hessian attempts that
+    /// failed (not positive definite) and were redone with the projected Hessian.
+    pub factorizations: usize,
+    pub exact_failures: usize,
 }
 
 /// Which element Hessian to assemble.
@@ -272,6 +276,8 @@ impl<'m> NewtonSolver<'m> {
                 self.assemble(uv, density, HessianKind::Exact);
                 let t1 = Instant::now();
                 let ok = self.system.factorize_unshifted().is_ok();
+                self.timings.factorizations += 1;
+                self.timings.exact_failures += usize::from(!ok);
                 self.timings.assemble += (t1 - t0).as_secs_f64();
                 self.timings.factorize += t1.elapsed().as_secs_f64();
                 if ok {
@@ -289,6 +295,7 @@ impl<'m> NewtonSolver<'m> {
                 self.assemble(uv, density, HessianKind::Projected);
                 let t1 = Instant::now();
                 self.system.factorize()?;
+                self.timings.factorizations += 1;
                 let t2 = Instant::now();
                 p = self.gradient.iter().map(|g| -g).collect();
                 self.system.solve_in_place(&mut p)?;
