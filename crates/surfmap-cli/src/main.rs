@@ -22,6 +22,12 @@ enum Command {
     Inspect(cmd::inspect::Args),
     /// Flatten a disc-topology mesh to the plane without flipped triangles.
     Flatten(cmd::flatten::Args),
+    /// Flatten one mesh at several α and draw the results side by side (thesis fig. 4.4).
+    Tradeoff(cmd::tradeoff::Args),
+    /// Generate a curved surface, flatten it with two presets, write results and pictures.
+    Demo(cmd::demo::Args),
+    /// Score a map: distortion measures, flips and overlap of a mesh's texture coordinates.
+    Measure(cmd::measure::Args),
 }
 
 fn main() {
@@ -29,9 +35,20 @@ fn main() {
     let result = match cli.command {
         Command::Inspect(a) => cmd::inspect::run(a),
         Command::Flatten(a) => cmd::flatten::run(a),
+        Command::Tradeoff(a) => cmd::tradeoff::run(a),
+        Command::Demo(a) => cmd::demo::run(a),
+        Command::Measure(a) => cmd::measure::run(a),
     };
     if let Err(e) = result {
-        eprintln!("error: {e:#}");
+        // Print the chain of causes, skipping a cause its parent already quotes.
+        let mut message = e.to_string();
+        for cause in e.chain().skip(1) {
+            let c = cause.to_string();
+            if !message.contains(&c) {
+                message = format!("{message}: {c}");
+            }
+        }
+        eprintln!("error: {message}");
         std::process::exit(1);
     }
 }

@@ -8,7 +8,14 @@ use std::path::PathBuf;
 use surfmap::mesh::io::write_obj;
 use surfmap::param::density::{EnergyKind, Litke};
 use surfmap::param::flatten::{FlattenOptions, Flattening, StartChoice, flatten_with_progress};
-use surfmap::{TriMesh, Uvs};
+use serde::Serialize;
+use std::path::Path;
+use surfmap::fsutil::write_atomically;
+use surfmap::measure::{DistortionReport, MeasureOptions, distortion_report_per_vertex, corner_uvs_from_vertex_uvs, per_triangle_measure, Measure};
+use surfmap::mesh::validate::{Defect, validate};
+use surfmap::param::newton::IterationLog;
+use surfmap::render;
+use surfmap::{Topology, TriMesh, Uvs};
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 pub enum Preset {
@@ -85,6 +92,10 @@ pub struct Args {
     /// Write a JSON report (measures, solver log, timings) here.
     #[arg(long)]
     pub report: Option<PathBuf>,
+    /// Write pictures into this folder: UV layout coloured by distortion, checkerboard
+    /// render, energy/gradient decay plot.
+    #[arg(long)]
+    pub pictures: Option<PathBuf>,
     /// Do not print the summary line or progress.
     #[arg(short, long)]
     pub quiet: bool,
@@ -92,7 +103,7 @@ pub struct Args {
     pub repair: RepairArgs,
 }
 
-fn parse_alpha(s: &str) -> Result<[f64; 3], String> {
+pub fn parse_alpha(s: &str) -> Result<[f64; 3], String> {
     let parts: Vec<&str> = s.split(',').map(str::trim).collect();
     if parts.len() != 3 {
         return Err(format!("expected three comma-separated numbers L,A,C (e.g. 1,1,1), got {s:?}"));
@@ -199,6 +210,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let file = load_mesh(&args.input)?;
     let opts = options(&args)?;
     let mesh = args.repair.apply(file.mesh, args.quiet)?;
+    let defects = validate(&mesh, &Topology::new(&mesh));
     let result = flatten_mesh(&mesh, &opts, args.quiet)
         .with_context(|| format!("cannot flatten {}", args.input.display()))?;
     let mut uvs = result.uvs.clone();
@@ -209,6 +221,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let material = args.texture.as_ref().map(|t| surfmap::mesh::io::ObjMaterial { texture: t.clone() });
     write_obj(&args.output, &out, material.as_ref())
         .with_context(|| format!("cannot write {}", args.output.display()))?;
+    let measures = distortion_report_per_vertex(&mesh.positions, &mesh.triangles, &result.uvs, &MeasureOptions::default())?;
+    if let Some(path) = &args.report {
+        let report = FlattenReport::new(&args.input, &mesh, &result, measures.clone(), &defects);
+        let json = serde_json::to_vec_pretty(&report)?;
+        write_atomically(path, |w| w.write_all(&json)).with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    if let Some(dir) = &args.pictures {
+        let written = write_pictures(dir, &mesh, &result)?;
+        if !args.quiet {
+            for p in written {
+                eprintln!("wrote {}", p.display());
+            }
+        }
+    }
     if !args.quiet {
         println!(
             "{}: start {}, {} iterations, {}, energy {:.6}, flipped triangles {}, {:.3} s → {}",
@@ -227,4 +253,90 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// The JSON report of `surfmap flatten --report`.
+#[derive(Serialize)]
+pub struct FlattenReport<'a> {
+    pub input: String,
+    pub vertices: usize,
+    pub triangles: usize,
+    /// Initial map used: `lscm` or `mean_value`.
+    pub start: surfmap::param::flatten::StartMap,
+    pub lscm_flipped_triangles: usize,
+    pub iterations: usize,
+    pub converged: bool,
+    pub stop_reason: surfmap::param::newton::StopReason,
+    /// Final energy per unit 3D area.
+    pub energy: f64,
+    pub continuation: &'a [[f64; 3]],
+    /// Flipped triangles of the output, counted on the output (always 0).
+    pub flipped_triangles: usize,
+    /// Symmetric Dirichlet energy, area-weighted mean (isometry = 4).
+    pub symmetric_dirichlet: f64,
+    pub boundary_overlap: serde_json::Value,
+    pub measures: DistortionReport,
+    pub input_defects: &'a [Defect],
+    pub time_start_s: f64,
+    pub time_newton_s: f64,
+    pub time_total_s: f64,
+    pub log: &'a [IterationLog],
+}
+
+impl<'a> FlattenReport<'a> {
+    pub fn new(
+        input: &Path,
+        mesh: &TriMesh,
+        r: &'a Flattening,
+        measures: DistortionReport,
+        defects: &'a [Defect],
+    ) -> Self {
+        Self {
+            input: input.display().to_string(),
+            vertices: mesh.positions.len(),
+            triangles: mesh.triangles.len(),
+            start: r.start,
+            lscm_flipped_triangles: r.lscm_flipped,
+            iterations: r.iterations,
+            converged: r.converged,
+            stop_reason: r.stop_reason,
+            energy: r.energy,
+            continuation: &r.continuation,
+            flipped_triangles: measures.flipped_triangles,
+            symmetric_dirichlet: measures.symmetric_dirichlet,
+            boundary_overlap: serde_json::to_value(&measures.boundary_overlap).unwrap_or_default(),
+            measures,
+            input_defects: defects,
+            time_start_s: r.time_start,
+            time_newton_s: r.time_newton,
+            time_total_s: r.time_total,
+            log: &r.log,
+        }
+    }
+}
+
+/// Writes the UV layout (coloured by angle distortion), the checkerboard render and
+/// the convergence plot into `dir`; returns the paths written.
+pub fn write_pictures(dir: &Path, mesh: &TriMesh, r: &Flattening) -> anyhow::Result<Vec<PathBuf>> {
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let corners = corner_uvs_from_vertex_uvs(&mesh.triangles, &r.uvs)?;
+    let angle = per_triangle_measure(&mesh.positions, &mesh.triangles, &corners, Measure::Angle)?;
+    let mut written = Vec::new();
+    let mut save = |name: &str, img: render::RgbImage| -> anyhow::Result<()> {
+        let p = dir.join(name);
+        render::save_png(&p, &img).with_context(|| format!("cannot write {}", p.display()))?;
+        written.push(p);
+        Ok(())
+    };
+    save(
+        "uv_layout.png",
+        render::uv_layout(&mesh.triangles, &corners, Some((&angle, "angle")), "UV layout", (900, 900)),
+    )?;
+    save(
+        "checker.png",
+        render::checker_render(&mesh.positions, &mesh.triangles, &corners, 16, "checkerboard through the UVs", (900, 900)),
+    )?;
+    let history: Vec<(f64, f64)> = r.log.iter().filter(|l| l.iteration > 0).map(|l| (l.energy, l.gradient_norm)).collect();
+    save("convergence.png", render::convergence_plot(&history, (900, 600)))?;
+    Ok(written)
 }

@@ -1,13 +1,15 @@
+pub mod demo;
 pub mod flatten;
 pub mod inspect;
+pub mod tradeoff;
+pub mod measure;
 
-use anyhow::Context;
 use std::path::Path;
 use surfmap::mesh::io::{MeshFile, read_mesh};
 
-/// Reads a mesh, turning the reader's error into a message that names the file.
+/// Reads a mesh; the reader's errors already name the file and the position.
 pub fn load_mesh(path: &Path) -> anyhow::Result<MeshFile> {
-    read_mesh(path).with_context(|| format!("cannot read mesh {}", path.display()))
+    Ok(read_mesh(path)?)
 }
 
 /// Opt-in repairs shared by the commands that read a mesh; each one applied is

@@ -1,6 +1,7 @@
 //! Triangle meshes: positions and triangles (connectivity kept apart from derived
 //! topology), file input/output, validation and opt-in repairs.
 
+pub mod generate;
 pub mod io;
 pub mod repair;
 pub mod topology;

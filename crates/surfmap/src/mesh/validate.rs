@@ -299,7 +299,8 @@ pub fn validate(mesh: &TriMesh, topo: &Topology) -> Vec<Defect> {
                 ),
                 true,
             );
-        } else if let Some(g) = topo.genus().filter(|&g| g > 0) {
+        }
+        if let Some(g) = topo.genus().filter(|&g| g > 0) {
             push(
                 DefectKind::PositiveGenus,
                 g as usize,

@@ -3,10 +3,10 @@
 //! projected Newton (with optional α-continuation), verifies the result has no
 //! flipped triangle, and returns UVs in the mesh's own units.
 
-use super::density::{Density, EnergyKind, Litke};
-use super::element::RestTriangle;
+use super::density::{EnergyKind, Litke};
+use super::element::{RestTriangleError, rest_triangles};
 use super::newton::{IterationLog, NewtonSettings, NewtonSolver, StopReason};
-use super::{count_flipped, lscm, signed_uv_area, tutte};
+use super::{InitialMapError, count_flipped, lscm, signed_uv_area, tutte};
 use crate::linsolve::SolveError;
 use crate::mesh::validate::{Defect, validate};
 use crate::mesh::{Topology, TriMesh};
@@ -89,10 +89,12 @@ pub struct Flattening {
 pub enum FlattenError {
     #[error("the mesh is not a disc, so it cannot be flattened:\n{}", .0.iter().map(|d| format!("  - {}", d.message)).collect::<Vec<_>>().join("\n"))]
     NotADisc(Vec<Defect>),
-    #[error("triangle {0} has zero area (its corners are collinear): run with --drop-degenerate or fix the mesh")]
-    DegenerateTriangle(usize),
+    #[error("{0}; run with --drop-degenerate or fix the mesh")]
+    Degenerate(#[from] RestTriangleError),
     #[error("linear solve failed: {0}")]
     Solve(#[from] SolveError),
+    #[error("initial map: {0}")]
+    InitialMap(#[from] InitialMapError),
     #[error("both initial maps flipped triangles (LSCM: {lscm}, mean-value: {mean_value}); the mesh geometry is probably broken (non-finite or coincident vertices)")]
     NoAdmissibleStart { lscm: usize, mean_value: usize },
     #[error("internal error: the result has {0} flipped triangles; please report this mesh")]
@@ -137,15 +139,7 @@ pub fn flatten_with_progress(
     let area = mesh.area();
     let scale = area.sqrt();
     let positions: Vec<[f64; 3]> = mesh.positions.iter().map(|p| p.map(|x| x / scale)).collect();
-    let rest: Vec<RestTriangle> = mesh
-        .triangles
-        .iter()
-        .enumerate()
-        .map(|(t, tri)| {
-            RestTriangle::new(positions[tri[0] as usize], positions[tri[1] as usize], positions[tri[2] as usize])
-                .ok_or(FlattenError::DegenerateTriangle(t))
-        })
-        .collect::<Result<_, _>>()?;
+    let rest = rest_triangles(&positions, &mesh.triangles)?;
     let boundary = &topo.boundary_loops[0].vertices;
 
     // Initial map (§3.1.1), checked: any flipped or degenerate triangle → fallback.
@@ -165,7 +159,7 @@ pub fn flatten_with_progress(
     let (mut uv, start) = match options.start {
         StartChoice::MeanValue => (tutte::mean_value(&positions, &mesh.triangles, boundary)?, StartMap::MeanValue),
         StartChoice::Auto | StartChoice::Lscm => {
-            let mut uv = lscm::lscm(&positions, &mesh.triangles, boundary)?.uvs;
+            let mut uv = lscm::lscm(&positions, &mesh.triangles, boundary)?.uv;
             lscm_flipped = admissible(&mut uv);
             if lscm_flipped == 0 || options.start == StartChoice::Lscm {
                 (uv, StartMap::Lscm)
@@ -213,14 +207,14 @@ pub fn flatten_with_progress(
             let (stop0, it0, _) =
                 solver.minimize(&mut uv, from, &options.newton, 0, clock, &mut record)?;
             iterations += it0;
-            continuation.push(from.alpha());
+            continuation.push(from.alphas());
             let _ = stop0;
             let (mut theta, mut dtheta) = (0.0f64, 1.0f64);
             let mut stage = 1;
             let mut last = (StopReason::Converged, f64::NAN);
             while theta < 1.0 {
                 let next = (theta + dtheta).min(1.0);
-                let alpha = Litke::blend(from, target, next);
+                let alpha = from.blend(target, next);
                 let mut trial = uv.clone();
                 let (stop, it, e) =
                     solver.minimize(&mut trial, &alpha, &options.newton, stage, clock, &mut record)?;
@@ -232,7 +226,7 @@ pub fn flatten_with_progress(
                 }
                 uv = trial;
                 theta = next;
-                continuation.push(alpha.alpha());
+                continuation.push(alpha.alphas());
                 last = (stop, e);
                 dtheta = (2.0 * dtheta).min(1.0);
             }

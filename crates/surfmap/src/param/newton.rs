@@ -91,7 +91,20 @@ pub struct NewtonSolver<'m> {
     gradient: Vec<f64>,
     direction: Vec<[f64; 2]>,
     trial: Vec<[f64; 2]>,
+    best: Vec<[f64; 2]>,
 }
+
+/// Which element Hessian to assemble.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum HessianKind {
+    /// Projected to positive semi-definite per element: always a descent direction.
+    Projected,
+    /// The exact Hessian: quadratic convergence near a minimum, if positive definite.
+    Exact,
+}
+
+/// Try the exact Hessian once the Newton decrement is below this fraction of the energy.
+const EXACT_SWITCH: f64 = 1e-3;
 
 /// Local pairs `(i, j)` with `j ≤ i` of a 6×6 element matrix, in a fixed order.
 const LOWER_PAIRS: [(usize, usize); 21] = {
@@ -170,6 +183,7 @@ impl<'m> NewtonSolver<'m> {
             gradient: vec![0.0; n as usize],
             direction: vec![[0.0; 2]; nv],
             trial: vec![[0.0; 2]; nv],
+            best: vec![[0.0; 2]; nv],
         })
     }
 
@@ -181,20 +195,20 @@ impl<'m> NewtonSolver<'m> {
 
     /// `E(u) = Σ_T area(T)·W` (thesis (2.5) summed per triangle); `+∞` if any
     /// triangle is flipped or degenerate.
-    pub fn energy(&self, uv: &[[f64; 2]], density: &dyn Density) -> f64 {
+    pub fn energy<D: Density + ?Sized>(&self, uv: &[[f64; 2]], density: &D) -> f64 {
         (0..self.triangles.len())
             .into_par_iter()
             .with_min_len(4096)
-            .map(|t| element::energy(&self.rest[t], self.corners(uv, t), density))
+            .map(|t| element::energy(&self.rest[t], &self.corners(uv, t), density))
             .sum()
     }
 
     /// Runs Newton iterations from `uv` (modified in place) until convergence, the
     /// iteration cap or locking. `log` receives one entry per iteration.
-    pub fn minimize(
+    pub fn minimize<D: Density + ?Sized>(
         &mut self,
         uv: &mut [[f64; 2]],
-        density: &dyn Density,
+        density: &D,
         settings: &NewtonSettings,
         stage: usize,
         clock: Instant,
@@ -211,15 +225,36 @@ impl<'m> NewtonSolver<'m> {
             flip_free_step: f64::NAN,
             time: clock.elapsed().as_secs_f64(),
         });
+        // Projected Hessians guarantee descent but converge only linearly where element
+        // Hessians are indefinite at the minimum; close to it we try the exact Hessian
+        // (quadratic convergence) and keep it while its Cholesky succeeds.
+        let mut exact_blocked_until = 0;
+        let mut decrement_prev = f64::INFINITY;
         for it in 1..=settings.max_iterations {
-            self.assemble(uv, density);
+            let try_exact = it >= exact_blocked_until && decrement_prev < EXACT_SWITCH * energy.abs().max(1.0);
+            let mut p = Vec::new();
+            let mut solved = false;
+            if try_exact {
+                self.assemble(uv, density, HessianKind::Exact);
+                if self.system.factorize_unshifted().is_ok() {
+                    p = self.gradient.iter().map(|g| -g).collect();
+                    self.system.solve_in_place(&mut p)?;
+                    solved = true;
+                } else {
+                    exact_blocked_until = it + 3;
+                }
+            }
+            if !solved {
+                self.assemble(uv, density, HessianKind::Projected);
+                self.system.factorize()?;
+                p = self.gradient.iter().map(|g| -g).collect();
+                self.system.solve_in_place(&mut p)?;
+            }
             let gradient_norm = self.gradient.iter().map(|g| g * g).sum::<f64>().sqrt();
-            self.system.factorize()?;
-            let mut p: Vec<f64> = self.gradient.iter().map(|g| -g).collect();
-            self.system.solve_in_place(&mut p)?;
             let decrement = -self.gradient.iter().zip(&p).map(|(g, p)| g * p).sum::<f64>();
+            decrement_prev = decrement;
             if !(decrement.is_finite()) || decrement <= 0.0 {
-                // The projected Hessian is PSD, so p is a descent direction unless
+                // The matrix is positive definite, so p is a descent direction unless
                 // the gradient vanished to rounding: we are at the minimum.
                 return Ok((StopReason::Converged, it - 1, energy));
             }
@@ -254,9 +289,31 @@ impl<'m> NewtonSolver<'m> {
                     break;
                 }
             }
-            let Some(e_new) = accepted else {
+            let Some(mut e_new) = accepted else {
                 return Ok((StopReason::Locked, it - 1, energy));
             };
+            // Barrier-dominated regions (triangles the start map shrank a lot) take
+            // Newton steps that are far too short (a 1/d barrier grows a shrunk
+            // triangle by only ~20% per full step): when the full step was accepted and
+            // the flip-free bound allows, try doubling it while the energy still drops.
+            if step == 1.0 && 0.9 * t_max > 2.0 {
+                std::mem::swap(&mut self.trial, &mut self.best);
+                let mut t = 2.0;
+                while t <= 0.9 * t_max {
+                    for (tr, (u, d)) in self.trial.iter_mut().zip(uv.iter().zip(&self.direction)) {
+                        *tr = [u[0] + t * d[0], u[1] + t * d[1]];
+                    }
+                    let e = self.energy(&self.trial, density);
+                    if !(e < e_new) {
+                        break;
+                    }
+                    e_new = e;
+                    step = t;
+                    std::mem::swap(&mut self.trial, &mut self.best);
+                    t *= 2.0;
+                }
+                std::mem::swap(&mut self.trial, &mut self.best);
+            }
             uv.copy_from_slice(&self.trial);
             energy = e_new;
             log(IterationLog {
@@ -274,7 +331,7 @@ impl<'m> NewtonSolver<'m> {
     }
 
     /// Fills the gradient and the projected Hessian values for the current `uv`.
-    fn assemble(&mut self, uv: &[[f64; 2]], density: &dyn Density) {
+    fn assemble<D: Density + ?Sized>(&mut self, uv: &[[f64; 2]], density: &D, kind: HessianKind) {
         let triangles = self.triangles;
         let rest = &self.rest;
         self.elem_grad
@@ -287,7 +344,12 @@ impl<'m> NewtonSolver<'m> {
                 let tri = triangles[t];
                 let corners = [uv[tri[0] as usize], uv[tri[1] as usize], uv[tri[2] as usize]];
                 let mut hess = [[0.0; 6]; 6];
-                *e = element::gradient_and_projected_hessian(&rest[t], corners, density, g, &mut hess);
+                *e = match kind {
+                    HessianKind::Projected => {
+                        element::gradient_and_projected_hessian(&rest[t], &corners, density, g, &mut hess)
+                    }
+                    HessianKind::Exact => element::exact_hessian(&rest[t], &corners, density, g, &mut hess),
+                };
                 for (p, &(i, j)) in LOWER_PAIRS.iter().enumerate() {
                     h[p] = hess[i][j];
                 }

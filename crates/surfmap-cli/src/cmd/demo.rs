@@ -1,0 +1,105 @@
+//! `surfmap demo`: the README's first command. Generates a curved disc surface in code
+//! (no external data), flattens it with the conformal and balanced presets, and writes
+//! meshes with UVs, reports, pictures and a trade-off sheet into a folder.
+
+use anyhow::Context;
+use std::path::PathBuf;
+use surfmap::fsutil::write_atomically;
+use surfmap::measure::{MeasureOptions, distortion_report_per_vertex};
+use surfmap::mesh::generate::bumpy_disc;
+use surfmap::mesh::io::{write_mesh, write_obj};
+use surfmap::mesh::validate::validate;
+use surfmap::param::density::{EnergyKind, Litke};
+use surfmap::param::flatten::{FlattenOptions, StartMap};
+use surfmap::render::{TradeoffPanel, save_png, tradeoff_sheet};
+use surfmap::Topology;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Output folder (created if missing).
+    #[arg(short, long, default_value = "surfmap-demo")]
+    pub output: PathBuf,
+    /// Rings of the generated disc (about 6·rings² triangles).
+    #[arg(long, default_value_t = 60)]
+    pub rings: usize,
+    /// Height of the bumps relative to the disc radius.
+    #[arg(long, default_value_t = 0.6)]
+    pub amplitude: f64,
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    if args.rings < 2 || args.rings > 2000 {
+        anyhow::bail!("--rings must be between 2 and 2000, got {}", args.rings);
+    }
+    if !args.amplitude.is_finite() {
+        anyhow::bail!("--amplitude must be a finite number");
+    }
+    let dir = &args.output;
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let mesh = bumpy_disc(args.rings, args.amplitude);
+    let mut written = Vec::new();
+    let input = dir.join("surface.obj");
+    write_mesh(&input, &mesh)?;
+    written.push(input);
+    println!(
+        "generated a bumpy disc: {} vertices, {} triangles (z = {}·(1 − r²)·(sin 4x·cos 3y + ½ cos 5r))",
+        mesh.positions.len(),
+        mesh.triangles.len(),
+        args.amplitude
+    );
+    let defects = validate(&mesh, &Topology::new(&mesh));
+    let mut maps = Vec::new();
+    for (name, alpha) in [("conformal", Litke::conformal()), ("balanced", Litke::balanced())] {
+        let opts = FlattenOptions { energy: EnergyKind::Litke(alpha), ..Default::default() };
+        let r = super::flatten::flatten_mesh(&mesh, &opts, false)?;
+        let out = super::flatten::output_mesh(&mesh, &r.uvs, false);
+        let obj = dir.join(format!("{name}.obj"));
+        write_obj(&obj, &out, None)?;
+        written.push(obj);
+        let measures = distortion_report_per_vertex(&mesh.positions, &mesh.triangles, &r.uvs, &MeasureOptions::default())?;
+        let report = super::flatten::FlattenReport::new(
+            &dir.join("surface.obj"),
+            &mesh,
+            &r,
+            measures.clone(),
+            &defects,
+        );
+        let json = serde_json::to_vec_pretty(&report)?;
+        let report_path = dir.join(format!("{name}.json"));
+        write_atomically(&report_path, |w| w.write_all(&json))?;
+        written.push(report_path);
+        written.extend(super::flatten::write_pictures(&dir.join(name), &mesh, &r)?);
+        println!(
+            "{name:>9}: start {}, {} iterations, {}, energy {:.5}, flipped triangles {}, angle distortion mean {:.4} max {:.4}, {:.3} s",
+            match r.start {
+                StartMap::Lscm => "lscm",
+                StartMap::MeanValue => "mean-value",
+            },
+            r.iterations,
+            if r.converged { "converged" } else { "NOT converged" },
+            r.energy,
+            measures.flipped_triangles,
+            measures.measures.angle.mean,
+            measures.measures.angle.max,
+            r.time_total
+        );
+        maps.push((name, r.uvs));
+    }
+    let panels: Vec<TradeoffPanel> = maps
+        .iter()
+        .map(|(name, uvs)| TradeoffPanel {
+            title: name.to_uppercase(),
+            positions: &mesh.positions,
+            triangles: &mesh.triangles,
+            uvs,
+        })
+        .collect();
+    let sheet = dir.join("tradeoff.png");
+    save_png(&sheet, &tradeoff_sheet(&panels, (1000, 620)))?;
+    written.push(sheet);
+    println!("wrote:");
+    for p in &written {
+        println!("  {}", p.display());
+    }
+    Ok(())
+}

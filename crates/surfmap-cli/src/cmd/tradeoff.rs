@@ -1,0 +1,65 @@
+//! `surfmap tradeoff MESH -o sheet.png`: one mesh flattened at several α, side by
+//! side, with min / mean / max of the thesis's angle, area and length distortion under
+//! each (thesis fig. 4.4).
+
+use super::{RepairArgs, load_mesh};
+use anyhow::Context;
+use std::path::PathBuf;
+use surfmap::param::density::{EnergyKind, Litke};
+use surfmap::param::flatten::FlattenOptions;
+use surfmap::render::{TradeoffPanel, save_png, tradeoff_sheet};
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Input mesh with disc topology.
+    pub input: PathBuf,
+    /// Output PNG.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// α values to compare, each L,A,C; default: conformal, length, balanced, area presets.
+    #[arg(long = "alpha", value_parser = super::flatten::parse_alpha)]
+    pub alphas: Vec<[f64; 3]>,
+    /// Sheet size in pixels, WIDTHxHEIGHT.
+    #[arg(long, default_value = "1600x700", value_parser = super::measure::parse_size)]
+    pub size: (u32, u32),
+    #[command(flatten)]
+    pub repair: RepairArgs,
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let mesh = args.repair.apply(load_mesh(&args.input)?.mesh, false)?;
+    let size = args.size;
+    let alphas: Vec<Litke> = if args.alphas.is_empty() {
+        vec![Litke::conformal(), Litke::length(), Litke::balanced(), Litke::area()]
+    } else {
+        args.alphas
+            .iter()
+            .map(|a| Litke::new(a[0], a[1], a[2]).context("invalid α"))
+            .collect::<anyhow::Result<_>>()?
+    };
+    let mut maps = Vec::new();
+    for alpha in &alphas {
+        let opts = FlattenOptions { energy: EnergyKind::Litke(*alpha), ..Default::default() };
+        let r = super::flatten::flatten_mesh(&mesh, &opts, false)
+            .with_context(|| format!("cannot flatten {}", args.input.display()))?;
+        let a = alpha.alphas();
+        eprintln!(
+            "α = ({:.3}, {:.3}, {:.3}): {} iterations, energy {:.6}, flipped triangles {}",
+            a[0], a[1], a[2], r.iterations, r.energy, r.flipped_triangles
+        );
+        maps.push((a, r.uvs));
+    }
+    let panels: Vec<TradeoffPanel> = maps
+        .iter()
+        .map(|(a, uvs)| TradeoffPanel {
+            title: format!("A = {:.2} {:.2} {:.2}", a[0], a[1], a[2]),
+            positions: &mesh.positions,
+            triangles: &mesh.triangles,
+            uvs,
+        })
+        .collect();
+    save_png(&args.output, &tradeoff_sheet(&panels, size))
+        .with_context(|| format!("cannot write {}", args.output.display()))?;
+    println!("wrote {}", args.output.display());
+    Ok(())
+}

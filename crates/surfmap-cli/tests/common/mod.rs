@@ -1,0 +1,44 @@
+//! Shared helpers for the end-to-end tests: the `surfmap` binary and the real meshes
+//! in `../shared/data` (tests skip with a note when that folder is absent).
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+use std::process::Command;
+
+pub fn data_dir() -> Option<PathBuf> {
+    let d = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data"));
+    if d.join("manifest.json").exists() {
+        Some(d)
+    } else {
+        eprintln!("note: ../shared/data not found; skipping tests on real meshes");
+        None
+    }
+}
+
+pub fn manifest() -> Option<(PathBuf, Vec<serde_json::Value>)> {
+    let d = data_dir()?;
+    let m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("manifest.json")).unwrap()).unwrap();
+    Some((d, m["files"].as_array().unwrap().clone()))
+}
+
+/// Disc meshes of the manifest: one boundary loop, genus 0.
+pub fn disc_meshes() -> Vec<PathBuf> {
+    let Some((d, files)) = manifest() else { return Vec::new() };
+    files
+        .iter()
+        .filter(|f| f["boundary_loops"] == 1 && f["genus"] == 0)
+        .map(|f| d.join(f["file"].as_str().unwrap()))
+        .collect()
+}
+
+pub fn surfmap() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_surfmap"))
+}
+
+pub fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("surfmap-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}

@@ -1,0 +1,130 @@
+//! `surfmap flatten` end to end on every disc mesh in `../shared/data`: presets
+//! conformal and balanced converge, and the written OBJ — read back and checked here
+//! with our own signed areas — has no flipped or degenerate triangle.
+
+mod common;
+use common::*;
+use surfmap::mesh::io::read_mesh;
+
+/// Signed area of every UV triangle of an OBJ written by `flatten`, computed here.
+fn min_signed_uv_area(path: &std::path::Path) -> (f64, usize) {
+    let file = read_mesh(path).expect("our own output reads back");
+    let mesh = file.mesh;
+    let uv = mesh.vertex_uvs().expect("per-vertex UVs").to_vec();
+    let mut min = f64::INFINITY;
+    for t in &mesh.triangles {
+        let [a, b, c] = t.map(|v| uv[v as usize]);
+        let area = 0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]));
+        min = min.min(area);
+    }
+    (min, mesh.triangles.len())
+}
+
+#[test]
+fn every_disc_mesh_flattens_without_flips_at_both_presets() {
+    let meshes = disc_meshes();
+    if meshes.is_empty() {
+        return;
+    }
+    let dir = temp_dir("flatten-all");
+    for mesh in &meshes {
+        for preset in ["conformal", "balanced"] {
+            let name = mesh.file_stem().unwrap().to_string_lossy();
+            let out = dir.join(format!("{name}-{preset}.obj"));
+            let report = dir.join(format!("{name}-{preset}.json"));
+            let run = surfmap()
+                .arg("flatten")
+                .arg(mesh)
+                .arg("-o")
+                .arg(&out)
+                .arg("--preset")
+                .arg(preset)
+                .arg("--report")
+                .arg(&report)
+                .output()
+                .unwrap();
+            assert!(run.status.success(), "{name} {preset}: {}", String::from_utf8_lossy(&run.stderr));
+            let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+            assert_eq!(r["converged"], true, "{name} {preset}: not converged ({})", r["stop_reason"]);
+            assert_eq!(r["flipped_triangles"], 0, "{name} {preset}");
+            for key in ["symmetric_dirichlet", "iterations", "boundary_overlap", "measures", "log"] {
+                assert!(!r[key].is_null(), "{name} {preset}: report lacks {key}");
+            }
+            assert_eq!(r["boundary_overlap"]["self_intersecting"], false, "{name} {preset}: boundary overlaps");
+            let (min_area, n) = min_signed_uv_area(&out);
+            assert!(min_area > 0.0, "{name} {preset}: a UV triangle of {n} has signed area {min_area}");
+            let summary = String::from_utf8_lossy(&run.stdout);
+            assert!(summary.contains("flipped triangles 0"), "{summary}");
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn non_disc_inputs_get_a_clear_error() {
+    let Some(data) = data_dir() else { return };
+    let dir = temp_dir("flatten-nondisc");
+    for (file, says) in [
+        ("bunny.off", "closed"),
+        ("punctured_torus.obj", "genus 1"),
+        ("holes.off", "found 7 boundary loops"),
+        ("mask_cone.off", "--keep-largest"),
+        ("moebius.obj", "not orientable"),
+        ("beetle_messy.obj", "shared by more than two faces"),
+    ] {
+        let run = surfmap().arg("flatten").arg(data.join(file)).arg("-o").arg(dir.join("x.obj")).output().unwrap();
+        assert_eq!(run.status.code(), Some(1), "{file}");
+        let err = String::from_utf8_lossy(&run.stderr);
+        assert!(err.contains(says), "{file}: expected {says:?} in: {err}");
+        assert!(!dir.join("x.obj").exists(), "{file}: no output may be written on failure");
+    }
+    // A repair that makes it a disc: the mask without the cone.
+    let out = dir.join("mask.obj");
+    let run = surfmap()
+        .arg("flatten")
+        .arg(data.join("mask_cone.off"))
+        .args(["--keep-largest", "-o"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    assert!(String::from_utf8_lossy(&run.stderr).contains("repair: kept one component"));
+    assert!(min_signed_uv_area(&out).0 > 0.0);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn demo_writes_what_it_says() {
+    let dir = temp_dir("demo");
+    let run = surfmap().arg("demo").arg("-o").arg(&dir).args(["--rings", "20"]).output().unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let text = String::from_utf8_lossy(&run.stdout);
+    let listed: Vec<&str> = text.lines().filter(|l| l.starts_with("  ")).map(str::trim).collect();
+    assert!(listed.len() >= 10, "{text}");
+    for p in listed {
+        let meta = std::fs::metadata(p).unwrap_or_else(|_| panic!("listed {p} missing"));
+        assert!(meta.len() > 0, "{p} empty");
+    }
+    for preset in ["conformal", "balanced"] {
+        assert!(min_signed_uv_area(&dir.join(format!("{preset}.obj"))).0 > 0.0);
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn invalid_alpha_is_rejected_with_a_reason() {
+    let dir = temp_dir("alpha");
+    let run = surfmap().arg("demo").arg("-o").arg(&dir).args(["--rings", "4"]).output().unwrap();
+    assert!(run.status.success());
+    let run = surfmap()
+        .arg("flatten")
+        .arg(dir.join("surface.obj"))
+        .args(["--alpha", "0,1,1", "-o"])
+        .arg(dir.join("x.obj"))
+        .output()
+        .unwrap();
+    assert_eq!(run.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(err.contains("α"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

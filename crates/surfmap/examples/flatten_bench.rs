@@ -1,0 +1,81 @@
+//! Flattening benchmark over every disc mesh in `../shared/data` (one boundary loop,
+//! genus 0): start map used, iterations, median wall time, final energy and flipped
+//! triangles, for the conformal and balanced presets (and symmetric Dirichlet).
+//!
+//! `cargo run --release -p surfmap --example flatten_bench [-- --repeat 3] [-- MESH...]`
+
+use std::path::PathBuf;
+use std::time::Instant;
+use surfmap::mesh::io::read_mesh;
+use surfmap::param::count_flipped;
+use surfmap::param::density::{EnergyKind, Litke};
+use surfmap::param::flatten::{FlattenOptions, StartMap, flatten};
+
+fn main() {
+    let mut args: Vec<String> = std::env::args().skip(1).collect();
+    let mut repeat = 3;
+    if let Some(i) = args.iter().position(|a| a == "--repeat") {
+        repeat = args[i + 1].parse().expect("--repeat N");
+        args.drain(i..i + 2);
+    }
+    let data = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data"));
+    let meshes: Vec<PathBuf> = if args.is_empty() {
+        let m: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(data.join("manifest.json")).expect("../shared/data"))
+                .unwrap();
+        m["files"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|f| f["boundary_loops"] == 1 && f["genus"] == 0)
+            .map(|f| data.join(f["file"].as_str().unwrap()))
+            .collect()
+    } else {
+        args.iter().map(PathBuf::from).collect()
+    };
+    println!(
+        "{:<24} {:>7} {:>7} {:<10} {:<10} {:>5} {:>9} {:>9} {:>12} {:>5}",
+        "mesh", "V", "F", "energy", "start", "iters", "median_s", "min_s", "E/area", "flips"
+    );
+    for path in meshes {
+        let file = read_mesh(&path).expect("readable");
+        let mesh = file.mesh;
+        for (label, energy) in [
+            ("conformal", EnergyKind::Litke(Litke::conformal())),
+            ("balanced", EnergyKind::Litke(Litke::balanced())),
+            ("sd", EnergyKind::SymmetricDirichlet),
+        ] {
+            let opts = FlattenOptions { energy, ..Default::default() };
+            let mut times = Vec::new();
+            let mut last = None;
+            for _ in 0..repeat {
+                let t = Instant::now();
+                let r = flatten(&mesh, &opts);
+                times.push(t.elapsed().as_secs_f64());
+                last = Some(r);
+            }
+            times.sort_by(f64::total_cmp);
+            let name = path.file_name().unwrap().to_string_lossy();
+            match last.unwrap() {
+                Ok(r) => println!(
+                    "{:<24} {:>7} {:>7} {:<10} {:<10} {:>5} {:>9.3} {:>9.3} {:>12.6} {:>5}{}",
+                    name,
+                    mesh.positions.len(),
+                    mesh.triangles.len(),
+                    label,
+                    match r.start {
+                        StartMap::Lscm => "lscm".into(),
+                        StartMap::MeanValue => format!("mvc({})", r.lscm_flipped),
+                    },
+                    r.iterations,
+                    times[times.len() / 2],
+                    times[0],
+                    r.energy,
+                    count_flipped(&r.uvs, &mesh.triangles),
+                    if r.converged { "" } else { "  NOT CONVERGED" }
+                ),
+                Err(e) => println!("{name:<24} {label:<10} error: {e}"),
+            }
+        }
+    }
+}

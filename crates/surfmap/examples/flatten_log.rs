@@ -1,0 +1,23 @@
+//! Prints the per-iteration Newton log of one flattening (thesis fig. 4.1 data).
+//! `cargo run --release -p surfmap --example flatten_log -- MESH [conformal|balanced|sd]`
+use surfmap::param::density::{EnergyKind, Litke};
+use surfmap::param::flatten::{FlattenOptions, flatten};
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let mesh = surfmap::mesh::io::read_mesh(std::path::Path::new(&args[0])).expect("readable").mesh;
+    let energy = match args.get(1).map(String::as_str) {
+        Some("conformal") => EnergyKind::Litke(Litke::conformal()),
+        Some("sd") => EnergyKind::SymmetricDirichlet,
+        _ => EnergyKind::Litke(Litke::balanced()),
+    };
+    let r = flatten(&mesh, &FlattenOptions { energy, ..Default::default() }).expect("flattened");
+    println!("start {:?}, {} iterations, stop {:?}", r.start, r.iterations, r.stop_reason);
+    println!("{:>4} {:>14} {:>10} {:>10} {:>8} {:>10} {:>7}", "it", "energy", "|grad|", "decrement", "step", "flipfree", "time");
+    for l in &r.log {
+        println!(
+            "{:>4} {:>14.8} {:>10.3e} {:>10.3e} {:>8.4} {:>10.3e} {:>7.3}",
+            l.iteration, l.energy, l.gradient_norm, l.newton_decrement, l.step, l.flip_free_step, l.time
+        );
+    }
+}

@@ -1,0 +1,323 @@
+//! Deterministic generated meshes for tests, examples and benchmarks.
+//!
+//! Every generator returns a [`TriMesh`] with counter-clockwise triangles (normals
+//! pointing to +z for the planar and bumpy discs, outward for the cap and the cylinder)
+//! and is a disc topologically. Same arguments, same mesh, bit for bit.
+//!
+//! Vertex order: discs and caps are built ring by ring from the center (vertex 0), so
+//! the last ring is the boundary; grids are row-major.
+
+use super::TriMesh;
+use std::f64::consts::TAU;
+
+/// Planar `n × n` grid of squares on `[0, 1]² × {0}`: `(n + 1)²` vertices, vertex
+/// `(i, j)` (row `j`, column `i`) at `(i/n, j/n, 0)` has index `j·(n + 1) + i`. Each
+/// square is split along the diagonal from `(i, j)` to `(i + 1, j + 1)`. `n ≥ 1`
+/// (`n = 0` is treated as 1).
+pub fn grid_disc(n: usize) -> TriMesh {
+    let n = n.max(1);
+    let mut positions = Vec::with_capacity((n + 1) * (n + 1));
+    for j in 0..=n {
+        for i in 0..=n {
+            positions.push([i as f64 / n as f64, j as f64 / n as f64, 0.0]);
+        }
+    }
+    TriMesh::new(positions, grid_triangles(n, n))
+}
+
+/// Triangles of a row-major `(cols + 1) × (rows + 1)` vertex grid, counter-clockwise
+/// when column index grows along x and row index along y.
+fn grid_triangles(cols: usize, rows: usize) -> Vec<[u32; 3]> {
+    let id = |i: usize, j: usize| (j * (cols + 1) + i) as u32;
+    let mut triangles = Vec::with_capacity(2 * cols * rows);
+    for j in 0..rows {
+        for i in 0..cols {
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            triangles.push([a, b, c]);
+            triangles.push([a, c, d]);
+        }
+    }
+    triangles
+}
+
+/// Connectivity of a disc built from concentric rings: vertex 0 is the center, ring
+/// `k = 1..=rings` has `ring_len(k)` vertices at angles `2π m / ring_len(k)`,
+/// `m = 0..ring_len(k)`, stored consecutively. Consecutive rings are stitched by
+/// merging their angle sequences, so any ring sizes ≥ 3 work.
+///
+/// Returns `(ring_of_vertex, fraction_of_turn, triangles)`.
+fn ring_disc(
+    rings: usize,
+    ring_len: impl Fn(usize) -> usize,
+) -> (Vec<(usize, f64)>, Vec<[u32; 3]>) {
+    let mut vertices = vec![(0usize, 0.0f64)];
+    let mut ring_start = vec![0usize];
+    for k in 1..=rings {
+        ring_start.push(vertices.len());
+        let len = ring_len(k).max(3);
+        for m in 0..len {
+            vertices.push((k, m as f64 / len as f64));
+        }
+    }
+    ring_start.push(vertices.len());
+    let ring = |k: usize| {
+        (ring_start[k]..ring_start[k + 1])
+            .map(|v| v as u32)
+            .collect::<Vec<_>>()
+    };
+    let mut triangles = Vec::new();
+    // Center fan.
+    if rings >= 1 {
+        let r1 = ring(1);
+        for m in 0..r1.len() {
+            triangles.push([0, r1[m], r1[(m + 1) % r1.len()]]);
+        }
+    }
+    // Stitch ring k−1 (inner, a vertices) to ring k (outer, b vertices): a + b triangles.
+    for k in 2..=rings {
+        let (inner, outer) = (ring(k - 1), ring(k));
+        let (a, b) = (inner.len(), outer.len());
+        let (mut i, mut j) = (0usize, 0usize);
+        while i < a || j < b {
+            // Advance the ring whose next vertex comes first in angle ((i+1)/a vs (j+1)/b).
+            let advance_inner = j == b || (i < a && (i + 1) * b < (j + 1) * a);
+            if advance_inner {
+                triangles.push([inner[i % a], outer[j % b], inner[(i + 1) % a]]);
+                i += 1;
+            } else {
+                triangles.push([inner[i % a], outer[j % b], outer[(j + 1) % b]]);
+                j += 1;
+            }
+        }
+    }
+    (vertices, triangles)
+}
+
+/// Planar unit disc from a polar grid: the center plus `rings` circles of radius
+/// `k / rings`, each with `segments` vertices (`segments ≥ 3`, `rings ≥ 1`). Vertex
+/// `1 + (k − 1)·segments + m` is at radius `k / rings`, angle `2π m / segments`.
+pub fn polar_disc(rings: usize, segments: usize) -> TriMesh {
+    let rings = rings.max(1);
+    let (vertices, triangles) = ring_disc(rings, |_| segments);
+    let positions = vertices
+        .iter()
+        .map(|&(k, t)| {
+            let r = k as f64 / rings as f64;
+            [r * (TAU * t).cos(), r * (TAU * t).sin(), 0.0]
+        })
+        .collect();
+    TriMesh::new(positions, triangles)
+}
+
+/// Cap of the sphere of radius `radius` centered at the origin around the pole
+/// `(0, 0, radius)`: all points with polar angle `θ ≤ opening_angle` (`π/2` gives a
+/// hemisphere; must be `< π` to stay a disc). Ring `k` lies at `θ = opening_angle·k/rings`
+/// with `segments` vertices at azimuth `2π m / segments`; vertex 0 is the pole.
+/// Normals point outward.
+pub fn spherical_cap(radius: f64, opening_angle: f64, rings: usize, segments: usize) -> TriMesh {
+    let rings = rings.max(1);
+    let (vertices, triangles) = ring_disc(rings, |_| segments);
+    let positions = vertices
+        .iter()
+        .map(|&(k, t)| {
+            let theta = opening_angle * k as f64 / rings as f64;
+            let phi = TAU * t;
+            [
+                radius * theta.sin() * phi.cos(),
+                radius * theta.sin() * phi.sin(),
+                radius * theta.cos(),
+            ]
+        })
+        .collect();
+    TriMesh::new(positions, triangles)
+}
+
+/// Patch of the cylinder of radius `radius` around the z axis: azimuth `φ ∈ [0, angle]`
+/// in `n` steps, height `z ∈ [0, height]` in `m` steps; `(n + 1)(m + 1)` vertices, vertex
+/// `(i, j)` at `(R cos φ_i, R sin φ_i, z_j)` with index `j·(n + 1) + i`. Every grid quad is
+/// a planar rectangle, so the triangulated patch is exactly developable: it unrolls
+/// isometrically onto a `n·2R sin(angle/2n) × height` rectangle. Normals point outward.
+pub fn cylinder_patch(radius: f64, angle: f64, height: f64, n: usize, m: usize) -> TriMesh {
+    let (n, m) = (n.max(1), m.max(1));
+    let mut positions = Vec::with_capacity((n + 1) * (m + 1));
+    for j in 0..=m {
+        for i in 0..=n {
+            let phi = angle * i as f64 / n as f64;
+            let z = height * j as f64 / m as f64;
+            positions.push([radius * phi.cos(), radius * phi.sin(), z]);
+        }
+    }
+    TriMesh::new(positions, grid_triangles(n, m))
+}
+
+/// Unit disc with `n` rings of nearly equilateral triangles (ring `k` has `6k` vertices
+/// at radius `k/n`, as in a hexagonal disc) lifted to the height field
+/// `z = amplitude · (1 − r²) · (sin 4x · cos 3y + ½ cos 5r)`, which is smooth, not
+/// rotationally symmetric, and has several bumps and dips.
+pub fn bumpy_disc(n: usize, amplitude: f64) -> TriMesh {
+    let n = n.max(1);
+    let (vertices, triangles) = ring_disc(n, |k| 6 * k);
+    let positions = vertices
+        .iter()
+        .map(|&(k, t)| {
+            let r = k as f64 / n as f64;
+            let (x, y) = (r * (TAU * t).cos(), r * (TAU * t).sin());
+            let z = amplitude
+                * (1.0 - r * r)
+                * ((4.0 * x).sin() * (3.0 * y).cos() + 0.5 * (5.0 * r).cos());
+            [x, y, z]
+        })
+        .collect();
+    TriMesh::new(positions, triangles)
+}
+
+/// The boundary loop of a generated disc, surface on the left (counter-clockwise when
+/// seen from the normal side), starting at its smallest vertex index. For tests that
+/// must not depend on [`super::Topology`]; `None` if the boundary is not one loop.
+pub fn disc_boundary(triangles: &[[u32; 3]]) -> Option<Vec<u32>> {
+    use std::collections::{HashMap, HashSet};
+    let directed: HashSet<(u32, u32)> = triangles
+        .iter()
+        .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+        .collect();
+    let next: HashMap<u32, u32> = directed
+        .iter()
+        .filter(|&&(a, b)| !directed.contains(&(b, a)))
+        .map(|&(a, b)| (a, b))
+        .collect();
+    let start = *next.keys().min()?;
+    let mut boundary = vec![start];
+    let mut v = next[&start];
+    while v != start {
+        if boundary.len() > next.len() {
+            return None;
+        }
+        boundary.push(v);
+        v = *next.get(&v)?;
+    }
+    (boundary.len() == next.len()).then_some(boundary)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+        [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+    }
+    fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    }
+    fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+        a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+    }
+
+    /// Disc checks: Euler characteristic 1, one boundary loop, every triangle
+    /// non-degenerate with its normal on the side given by `outward(centroid)`.
+    fn check_disc(mesh: &TriMesh, outward: impl Fn([f64; 3]) -> [f64; 3]) -> Vec<u32> {
+        let mut edges = std::collections::HashSet::new();
+        for t in &mesh.triangles {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                edges.insert((a.min(b), a.max(b)));
+            }
+        }
+        let chi = mesh.positions.len() as i64 - edges.len() as i64 + mesh.triangles.len() as i64;
+        assert_eq!(chi, 1, "a disc has Euler characteristic 1");
+        for t in 0..mesh.num_triangles() {
+            let [a, b, c] = mesh.triangle_positions(t);
+            let nrm = cross(sub(b, a), sub(c, a));
+            let centroid = [
+                (a[0] + b[0] + c[0]) / 3.0,
+                (a[1] + b[1] + c[1]) / 3.0,
+                (a[2] + b[2] + c[2]) / 3.0,
+            ];
+            assert!(mesh.triangle_area(t) > 1e-6, "degenerate triangle {t}");
+            assert!(
+                dot(nrm, outward(centroid)) > 0.0,
+                "triangle {t} is oriented inward"
+            );
+        }
+        disc_boundary(&mesh.triangles).expect("one boundary loop")
+    }
+
+    #[test]
+    fn grid_disc_is_the_unit_square() {
+        let mesh = grid_disc(4);
+        assert_eq!(mesh.num_vertices(), 25);
+        assert_eq!(mesh.num_triangles(), 32);
+        assert!((mesh.area() - 1.0).abs() < 1e-14);
+        let boundary = check_disc(&mesh, |_| [0.0, 0.0, 1.0]);
+        assert_eq!(boundary.len(), 16);
+        assert_eq!(
+            &boundary[..3],
+            &[0, 1, 2],
+            "counter-clockwise from the origin"
+        );
+    }
+
+    #[test]
+    fn polar_and_bumpy_discs_are_discs() {
+        let mesh = polar_disc(5, 12);
+        assert_eq!(mesh.num_vertices(), 1 + 5 * 12);
+        let boundary = check_disc(&mesh, |_| [0.0, 0.0, 1.0]);
+        assert_eq!(boundary.len(), 12);
+        // Area of the inscribed 12-gon of the unit circle: 12·½·sin(2π/12) = 3.
+        assert!((mesh.area() - 3.0).abs() < 1e-12);
+        let bumpy = bumpy_disc(6, 0.3);
+        assert_eq!(bumpy.num_vertices(), 1 + 3 * 6 * 7);
+        assert_eq!(bumpy.num_triangles(), 6 * 36);
+        let boundary = check_disc(&bumpy, |_| [0.0, 0.0, 1.0]);
+        assert_eq!(boundary.len(), 36);
+        assert!(bumpy.positions.iter().any(|p| p[2].abs() > 0.05));
+        assert_eq!(bumpy, bumpy_disc(6, 0.3), "deterministic");
+    }
+
+    #[test]
+    fn spherical_cap_lies_on_the_sphere() {
+        let (r, opening) = (2.0, 0.8 * std::f64::consts::PI);
+        let mesh = spherical_cap(r, opening, 8, 24);
+        for p in &mesh.positions {
+            assert!((dot(*p, *p).sqrt() - r).abs() < 1e-12);
+        }
+        let boundary = check_disc(&mesh, |c| c);
+        assert_eq!(boundary.len(), 24);
+        for &v in &boundary {
+            assert!((mesh.positions[v as usize][2] - r * opening.cos()).abs() < 1e-12);
+        }
+        // Polyhedral area approaches the cap area 2πr²(1 − cos θ) from below.
+        let exact = TAU * r * r * (1.0 - opening.cos());
+        let fine = spherical_cap(r, opening, 40, 160).area();
+        assert!(mesh.area() < fine && fine < exact && (exact - fine) / exact < 2e-3);
+    }
+
+    #[test]
+    fn cylinder_patch_is_developable() {
+        let (r, angle, h, n, m) = (1.5, 2.0, 3.0, 10, 4);
+        let mesh = cylinder_patch(r, angle, h, n, m);
+        let boundary = check_disc(&mesh, |c| [c[0], c[1], 0.0]);
+        assert_eq!(boundary.len(), 2 * (n + m));
+        let width = n as f64 * 2.0 * r * (angle / (2.0 * n as f64)).sin();
+        assert!((mesh.area() - width * h).abs() < 1e-12);
+        // Interior vertex angle sums are 2π (zero Gaussian curvature).
+        let mut angle_sum = vec![0.0; mesh.num_vertices()];
+        for t in &mesh.triangles {
+            for k in 0..3 {
+                let p = mesh.positions[t[k] as usize];
+                let e1 = sub(mesh.positions[t[(k + 1) % 3] as usize], p);
+                let e2 = sub(mesh.positions[t[(k + 2) % 3] as usize], p);
+                angle_sum[t[k] as usize] +=
+                    dot(cross(e1, e2), cross(e1, e2)).sqrt().atan2(dot(e1, e2));
+            }
+        }
+        for (v, sum) in angle_sum.iter().enumerate() {
+            if !boundary.contains(&(v as u32)) {
+                assert!((sum - TAU).abs() < 1e-12);
+            }
+        }
+    }
+}

@@ -1,0 +1,431 @@
+//! Fixed-boundary initial maps onto a convex polygon: mean-value coordinates
+//! (M. Floater, *Mean value coordinates*, CAGD 2003) and the uniform Tutte embedding.
+//!
+//! Every interior vertex `i` is placed at a convex combination of its neighbours,
+//! `Σ_j w_ij (u_i − u_j) = 0` with `w_ij > 0`, while the boundary loop is fixed on a
+//! convex curve. By Tutte's and Floater's theorems the result is injective (no flipped
+//! triangles) for any disc mesh when the boundary polygon is convex and (strictly)
+//! every interior vertex has positive weights — which both weightings guarantee.
+//! These are the fallback when the free-boundary conformal map of thesis §3.1.1
+//! ([`super::lscm`]) is not admissible (NOTES.md §1).
+
+use super::{InitialMapError, check_disc_input};
+use crate::linsolve::{solve_general, solve_spd};
+use std::f64::consts::TAU;
+
+/// Boundary fixed on the unit circle by arc length: boundary vertex `k` goes to angle
+/// `2π s_k / L`, where `s_k` is the 3D length of the loop from `boundary[0]` to
+/// `boundary[k]` and `L` the total length. The circle is run counter-clockwise when the
+/// loop has the surface on its left (the orientation of the triangles), clockwise
+/// otherwise, so the resulting map preserves orientation either way.
+pub fn boundary_on_circle(
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    boundary: &[u32],
+) -> Result<Vec<[f64; 2]>, InitialMapError> {
+    let counter_clockwise = check_disc_input(positions, triangles, boundary)?;
+    circle_by_arc_length(positions, boundary, counter_clockwise)
+}
+
+fn circle_by_arc_length(
+    positions: &[[f64; 3]],
+    boundary: &[u32],
+    counter_clockwise: bool,
+) -> Result<Vec<[f64; 2]>, InitialMapError> {
+    let b = boundary.len();
+    let mut arc = Vec::with_capacity(b + 1);
+    arc.push(0.0);
+    for k in 0..b {
+        let (p, q) = (
+            positions[boundary[k] as usize],
+            positions[boundary[(k + 1) % b] as usize],
+        );
+        let len = ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt();
+        arc.push(arc[k] + len);
+    }
+    let total = arc[b];
+    if total <= 0.0 || !total.is_finite() {
+        return Err(InitialMapError::DegenerateBoundary);
+    }
+    let sign = if counter_clockwise { 1.0 } else { -1.0 };
+    Ok(arc[..b]
+        .iter()
+        .map(|s| {
+            let angle = sign * TAU * s / total;
+            [angle.cos(), angle.sin()]
+        })
+        .collect())
+}
+
+/// Mean-value map with the boundary on the unit circle by arc length
+/// ([`boundary_on_circle`]); see [`mean_value_with_boundary`].
+pub fn mean_value(
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    boundary: &[u32],
+) -> Result<Vec<[f64; 2]>, InitialMapError> {
+    let counter_clockwise = check_disc_input(positions, triangles, boundary)?;
+    let boundary_uv = circle_by_arc_length(positions, boundary, counter_clockwise)?;
+    solve_fixed_boundary(
+        positions,
+        triangles,
+        boundary,
+        &boundary_uv,
+        Weights::MeanValue,
+    )
+}
+
+/// Mean-value coordinates (Floater 2003, eq. 5.1) with the boundary loop fixed at
+/// `boundary_uv[k]` for `boundary[k]`:
+///
+/// `w_ij = (tan(δ_ij / 2) + tan(γ_ij / 2)) / ‖x_j − x_i‖`, where `δ_ij, γ_ij` are the 3D
+/// angles at `x_i` of the two triangles sharing the edge `ij`, and every interior vertex
+/// satisfies `Σ_j w_ij (u_i − u_j) = 0`. The weights are not symmetric, so the system is
+/// solved by sparse LU ([`solve_general`]). `tan(α/2)` is evaluated as
+/// `‖e1 × e2‖ / (‖e1‖‖e2‖ + e1·e2)`.
+///
+/// Linear precision: a planar mesh whose boundary is fixed at its own positions is
+/// reproduced exactly. Injective when `boundary_uv` is a convex polygon.
+pub fn mean_value_with_boundary(
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    boundary: &[u32],
+    boundary_uv: &[[f64; 2]],
+) -> Result<Vec<[f64; 2]>, InitialMapError> {
+    check_disc_input(positions, triangles, boundary)?;
+    solve_fixed_boundary(
+        positions,
+        triangles,
+        boundary,
+        boundary_uv,
+        Weights::MeanValue,
+    )
+}
+
+/// Uniform Tutte embedding (Tutte 1963): `w_ij = 1` for every edge, boundary on the unit
+/// circle by arc length. The system is the graph Laplacian restricted to the interior
+/// vertices: symmetric positive definite, solved by sparse Cholesky ([`solve_spd`]).
+pub fn tutte_uniform(
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    boundary: &[u32],
+) -> Result<Vec<[f64; 2]>, InitialMapError> {
+    let counter_clockwise = check_disc_input(positions, triangles, boundary)?;
+    let boundary_uv = circle_by_arc_length(positions, boundary, counter_clockwise)?;
+    solve_fixed_boundary(
+        positions,
+        triangles,
+        boundary,
+        &boundary_uv,
+        Weights::Uniform,
+    )
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum Weights {
+    Uniform,
+    MeanValue,
+}
+
+/// `tan(α/2)` for the angle `α` between `e1` and `e2`, or `None` if it is undefined
+/// (zero-length edge or `α = π`).
+fn tan_half_angle(e1: [f64; 3], e2: [f64; 3]) -> Option<f64> {
+    let cross = [
+        e1[1] * e2[2] - e1[2] * e2[1],
+        e1[2] * e2[0] - e1[0] * e2[2],
+        e1[0] * e2[1] - e1[1] * e2[0],
+    ];
+    let sin_part = (cross[0].powi(2) + cross[1].powi(2) + cross[2].powi(2)).sqrt();
+    let l1 = (e1[0].powi(2) + e1[1].powi(2) + e1[2].powi(2)).sqrt();
+    let l2 = (e2[0].powi(2) + e2[1].powi(2) + e2[2].powi(2)).sqrt();
+    let denom = l1 * l2 + e1[0] * e2[0] + e1[1] * e2[1] + e1[2] * e2[2];
+    let t = sin_part / denom;
+    (l1 > 0.0 && l2 > 0.0 && denom > 0.0 && t.is_finite()).then_some(t)
+}
+
+/// Assembles and solves `Σ_j w_ij (u_i − u_j) = 0` for the interior vertices with the
+/// boundary fixed; inputs already checked.
+fn solve_fixed_boundary(
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    boundary: &[u32],
+    boundary_uv: &[[f64; 2]],
+    weights: Weights,
+) -> Result<Vec<[f64; 2]>, InitialMapError> {
+    if boundary_uv.len() != boundary.len() {
+        return Err(InitialMapError::BoundaryUvCount {
+            expected: boundary.len(),
+            got: boundary_uv.len(),
+        });
+    }
+    let n = positions.len();
+    let mut uv = vec![[0.0; 2]; n];
+    const FIXED: u32 = u32::MAX;
+    let mut index = vec![0u32; n];
+    for (&v, &p) in boundary.iter().zip(boundary_uv) {
+        index[v as usize] = FIXED;
+        uv[v as usize] = p;
+    }
+    let mut free = 0u32;
+    for slot in index.iter_mut().filter(|s| **s != FIXED) {
+        *slot = free;
+        free += 1;
+    }
+    let m = free as usize;
+    if m == 0 {
+        return Ok(uv);
+    }
+    let mut triplets: Vec<(u32, u32, f64)> = Vec::with_capacity(9 * triangles.len());
+    let (mut rhs_u, mut rhs_v) = (vec![0.0; m], vec![0.0; m]);
+    for (t, tri) in triangles.iter().enumerate() {
+        for k in 0..3 {
+            let (i, j, l) = (tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]);
+            match weights {
+                Weights::Uniform => {
+                    // Each edge (i, j) is seen from both of its triangles (it touches an
+                    // interior vertex, so it is an interior edge): ½ per triangle sums to 1.
+                    let w = 0.5;
+                    let (fi, fj) = (index[i as usize], index[j as usize]);
+                    for (f, other) in [(fi, j), (fj, i)] {
+                        if f != FIXED {
+                            triplets.push((f, f, w));
+                            let fo = index[other as usize];
+                            if fo == FIXED {
+                                rhs_u[f as usize] += w * uv[other as usize][0];
+                                rhs_v[f as usize] += w * uv[other as usize][1];
+                            }
+                        }
+                    }
+                    if fi != FIXED && fj != FIXED {
+                        triplets.push((fi, fj, -w));
+                    }
+                }
+                Weights::MeanValue => {
+                    let fi = index[i as usize];
+                    if fi == FIXED {
+                        continue;
+                    }
+                    let x = positions[i as usize];
+                    let ej = sub(positions[j as usize], x);
+                    let el = sub(positions[l as usize], x);
+                    let tan_half = tan_half_angle(ej, el)
+                        .ok_or(InitialMapError::DegenerateTriangle { triangle: t })?;
+                    for (other, e) in [(j, ej), (l, el)] {
+                        let w = tan_half / norm(e);
+                        triplets.push((fi, fi, w));
+                        let fo = index[other as usize];
+                        if fo == FIXED {
+                            rhs_u[fi as usize] += w * uv[other as usize][0];
+                            rhs_v[fi as usize] += w * uv[other as usize][1];
+                        } else {
+                            triplets.push((fi, fo, -w));
+                        }
+                    }
+                }
+            }
+        }
+    }
+    match weights {
+        Weights::Uniform => solve_spd(m, &triplets, &mut [&mut rhs_u, &mut rhs_v])?,
+        Weights::MeanValue => solve_general(m, &triplets, &mut [&mut rhs_u, &mut rhs_v])?,
+    }
+    for (v, &f) in index.iter().enumerate() {
+        if f != FIXED {
+            uv[v] = [rhs_u[f as usize], rhs_v[f as usize]];
+        }
+    }
+    Ok(uv)
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn norm(a: [f64; 3]) -> f64 {
+    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::TriMesh;
+    use crate::mesh::generate::{bumpy_disc, disc_boundary, grid_disc, polar_disc, spherical_cap};
+    use crate::param::count_flipped;
+
+    fn boundary(mesh: &TriMesh) -> Vec<u32> {
+        disc_boundary(&mesh.triangles).unwrap()
+    }
+
+    /// Checks injectivity (all UV triangles positive) and the boundary on the unit circle.
+    fn check_embedding(mesh: &TriMesh, uv: &[[f64; 2]], boundary: &[u32]) {
+        assert_eq!(count_flipped(uv, &mesh.triangles), 0);
+        for &v in boundary {
+            let [x, y] = uv[v as usize];
+            assert!(((x * x + y * y).sqrt() - 1.0).abs() < 1e-12);
+        }
+        // Positive triangles inside a circle tile the disc polygon: their areas sum to it.
+        let polygon: f64 = (0..boundary.len())
+            .map(|k| {
+                let (a, b) = (
+                    uv[boundary[k] as usize],
+                    uv[boundary[(k + 1) % boundary.len()] as usize],
+                );
+                0.5 * (a[0] * b[1] - a[1] * b[0])
+            })
+            .sum();
+        let total: f64 = mesh
+            .triangles
+            .iter()
+            .map(|t| crate::param::signed_uv_area(t.map(|v| uv[v as usize])))
+            .sum();
+        assert!((polygon.abs() - total).abs() < 1e-10);
+    }
+
+    #[test]
+    fn mean_value_and_uniform_are_injective_on_curved_discs() {
+        let meshes = [
+            bumpy_disc(8, 0.6),
+            spherical_cap(1.0, 0.9 * std::f64::consts::PI, 12, 30),
+            spherical_cap(3.0, std::f64::consts::FRAC_PI_2, 6, 7),
+        ];
+        for mesh in &meshes {
+            let b = boundary(mesh);
+            let mv = mean_value(&mesh.positions, &mesh.triangles, &b).unwrap();
+            check_embedding(mesh, &mv, &b);
+            let un = tutte_uniform(&mesh.positions, &mesh.triangles, &b).unwrap();
+            check_embedding(mesh, &un, &b);
+        }
+    }
+
+    #[test]
+    fn reversed_boundary_loop_still_gives_positive_triangles() {
+        let mesh = bumpy_disc(4, 0.3);
+        let b: Vec<u32> = boundary(&mesh).into_iter().rev().collect();
+        let uv = mean_value(&mesh.positions, &mesh.triangles, &b).unwrap();
+        check_embedding(&mesh, &uv, &b);
+    }
+
+    #[test]
+    fn boundary_placement_follows_arc_length() {
+        // Unit square boundary of a 2×2 grid: 8 edges of length ½, so angles step by π/4.
+        let mesh = grid_disc(2);
+        let b = boundary(&mesh);
+        let circle = boundary_on_circle(&mesh.positions, &mesh.triangles, &b).unwrap();
+        for (k, p) in circle.iter().enumerate() {
+            let angle = TAU * k as f64 / 8.0;
+            assert!((p[0] - angle.cos()).abs() < 1e-14 && (p[1] - angle.sin()).abs() < 1e-14);
+        }
+    }
+
+    #[test]
+    fn mean_value_has_linear_precision() {
+        // A planar convex mesh, jittered, in a tilted plane; boundary fixed at its own
+        // in-plane coordinates must reproduce every interior vertex.
+        let mut mesh = polar_disc(6, 14);
+        for (v, p) in mesh.positions.iter_mut().enumerate().skip(1) {
+            if v <= 5 * 14 {
+                let s = (v as f64 * 12.9898).sin() * 43_758.545;
+                let j = 0.03 * (s - s.floor() - 0.5);
+                p[0] += j;
+                p[1] -= 0.7 * j;
+            }
+        }
+        let planar: Vec<[f64; 2]> = mesh.positions.iter().map(|p| [p[0], p[1]]).collect();
+        let (c, s) = (0.6f64, 0.8f64); // rotate the plane about the x axis
+        let lifted: Vec<[f64; 3]> = mesh
+            .positions
+            .iter()
+            .map(|p| [p[0] + 2.0, c * p[1], s * p[1] - 1.0])
+            .collect();
+        let b = boundary(&mesh);
+        let b_uv: Vec<[f64; 2]> = b.iter().map(|&v| planar[v as usize]).collect();
+        let uv = mean_value_with_boundary(&lifted, &mesh.triangles, &b, &b_uv).unwrap();
+        for (p, q) in uv.iter().zip(&planar) {
+            assert!(
+                (p[0] - q[0]).abs() < 1e-12 && (p[1] - q[1]).abs() < 1e-12,
+                "{p:?} vs {q:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn uniform_tutte_places_interior_vertex_at_neighbour_average() {
+        // One interior vertex (center of polar_disc(1, 5)): it must land at the mean of the
+        // five boundary positions, which are equally spaced, i.e. at the origin.
+        let mesh = polar_disc(1, 5);
+        let b = boundary(&mesh);
+        let uv = tutte_uniform(&mesh.positions, &mesh.triangles, &b).unwrap();
+        assert!(uv[0][0].abs() < 1e-14 && uv[0][1].abs() < 1e-14);
+        // Uniform weights on a 2-ring polar disc: each interior vertex is the average of its
+        // neighbours (checked directly on the result).
+        let mesh = polar_disc(3, 9);
+        let b = boundary(&mesh);
+        let uv = tutte_uniform(&mesh.positions, &mesh.triangles, &b).unwrap();
+        let mut nbrs = vec![std::collections::BTreeSet::new(); mesh.num_vertices()];
+        for t in &mesh.triangles {
+            for k in 0..3 {
+                nbrs[t[k] as usize].insert(t[(k + 1) % 3]);
+                nbrs[t[(k + 1) % 3] as usize].insert(t[k]);
+            }
+        }
+        for v in 0..mesh.num_vertices() {
+            if b.contains(&(v as u32)) {
+                continue;
+            }
+            let k = nbrs[v].len() as f64;
+            let avg = nbrs[v].iter().fold([0.0, 0.0], |a, &u| {
+                [a[0] + uv[u as usize][0] / k, a[1] + uv[u as usize][1] / k]
+            });
+            assert!((avg[0] - uv[v][0]).abs() < 1e-12 && (avg[1] - uv[v][1]).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn degenerate_input_is_an_error() {
+        let mut mesh = polar_disc(2, 6);
+        mesh.positions[1] = mesh.positions[0]; // zero-length edge at the center
+        let b = boundary(&mesh);
+        assert!(matches!(
+            mean_value(&mesh.positions, &mesh.triangles, &b),
+            Err(InitialMapError::DegenerateTriangle { .. })
+        ));
+        let mesh = polar_disc(2, 6);
+        let b_uv = vec![[0.0, 0.0]; 3];
+        assert!(matches!(
+            mean_value_with_boundary(&mesh.positions, &mesh.triangles, &boundary(&mesh), &b_uv),
+            Err(InitialMapError::BoundaryUvCount {
+                expected: 6,
+                got: 3
+            })
+        ));
+    }
+}
+
+#[cfg(test)]
+mod real_mesh_tests {
+    use super::*;
+    use crate::mesh::generate::disc_boundary;
+    use crate::param::{count_flipped, lscm::lscm, test_meshes};
+
+    /// Floater's theorem on real scans: mean-value and uniform maps onto a circle are
+    /// injective. LSCM flips are printed (no guarantee), and must be 0 on the hemisphere.
+    #[test]
+    fn fixed_boundary_maps_of_real_discs_are_injective() {
+        for name in ["nefertiti_small.off", "three_peaks.off", "hemisphere.obj"] {
+            let Some(mesh) = test_meshes::read(name) else {
+                return;
+            };
+            let b = disc_boundary(&mesh.triangles).expect("a disc");
+            let mv = mean_value(&mesh.positions, &mesh.triangles, &b).unwrap();
+            assert_eq!(count_flipped(&mv, &mesh.triangles), 0, "{name}: mean value");
+            let un = tutte_uniform(&mesh.positions, &mesh.triangles, &b).unwrap();
+            assert_eq!(count_flipped(&un, &mesh.triangles), 0, "{name}: uniform");
+            let conformal = lscm(&mesh.positions, &mesh.triangles, &b).unwrap();
+            let flips = count_flipped(&conformal.uv, &mesh.triangles);
+            eprintln!("{name}: LSCM flipped triangles: {flips}");
+            if name == "hemisphere.obj" {
+                assert_eq!(flips, 0);
+            }
+        }
+    }
+}

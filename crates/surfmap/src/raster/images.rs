@@ -1,0 +1,607 @@
+//! The full set of geometry images of one flattened surface (thesis §3.2.1–§3.2.4).
+//!
+//! Units. Positions keep the mesh's units, so every node maps back to the surface. All
+//! other quantities use the length unit `ℓ` ([`GeometryImages::length_unit`]): with
+//! [`SurfaceScale::UnitArea`] (the default) `ℓ = √(surface area)`, so two surfaces of
+//! different size are compared at the same scale (NOTES §2); with
+//! [`SurfaceScale::Original`], `ℓ` = 1 mesh unit. Mean curvature `h` is in `1/ℓ`, the
+//! metric `g` in `ℓ²` per domain unit², feature distances in `ℓ`; the boundary distance
+//! is in domain units of ω (it feeds `χ^ε` of (2.14), defined on ω).
+
+use rayon::prelude::*;
+
+use super::RasterError;
+use super::boundary::boundary_edges;
+use super::boundary_distance::signed_boundary_distance;
+use super::curvature::vertex_mean_curvature;
+use super::domain::{DomainTransform, grid_level};
+use super::eikonal::{seed_polyline, seed_region_boundary, solve_eikonal};
+use super::extend::harmonic_extension;
+use super::features::{FeatureSource, colour_name};
+use super::metric::triangle_metrics;
+use super::pyramid::Pyramid;
+use super::rasterize::{OUTSIDE, Rasterization};
+use crate::mesh::{TriMesh, Uvs};
+
+/// Which length unit the images use (see the module docs).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SurfaceScale {
+    /// `ℓ = √(surface area)`.
+    #[default]
+    UnitArea,
+    /// `ℓ` = one mesh unit.
+    Original,
+}
+
+/// Options for [`GeometryImages::compute`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct GeometryImagesOptions {
+    /// Grid nodes per side, `2^k + 1`.
+    pub size: usize,
+    /// Free border around the flattening, in domain units (room for the extension).
+    pub margin: f64,
+    pub scale: SurfaceScale,
+    /// Build the Gaussian pyramid of `h` and `g`.
+    pub pyramid: bool,
+}
+
+impl Default for GeometryImagesOptions {
+    fn default() -> Self {
+        Self {
+            size: 257,
+            margin: 1.0 / 32.0,
+            scale: SurfaceScale::UnitArea,
+            pyramid: true,
+        }
+    }
+}
+
+/// An RGB texture; row 0 is the top of the image (texture `v = 1`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextureImage {
+    pub width: u32,
+    pub height: u32,
+    pub rgb: Vec<[u8; 3]>,
+}
+
+impl TextureImage {
+    /// Bilinear lookup at texture coordinates `(u, v)`, `v` up, clamped to the edge.
+    pub fn sample(&self, uv: [f64; 2]) -> [u8; 3] {
+        let (w, h) = (self.width as usize, self.height as usize);
+        let x = (uv[0] * w as f64 - 0.5).clamp(0.0, (w - 1) as f64);
+        let y = ((1.0 - uv[1]) * h as f64 - 0.5).clamp(0.0, (h - 1) as f64);
+        let (x0, y0) = (x.floor() as usize, y.floor() as usize);
+        let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
+        let (fx, fy) = (x - x0 as f64, y - y0 as f64);
+        let p = |x: usize, y: usize| self.rgb[y * w + x];
+        std::array::from_fn(|c| {
+            let top = p(x0, y0)[c] as f64 * (1.0 - fx) + p(x1, y0)[c] as f64 * fx;
+            let bot = p(x0, y1)[c] as f64 * (1.0 - fx) + p(x1, y1)[c] as f64 * fx;
+            (top * (1.0 - fy) + bot * fy).round() as u8
+        })
+    }
+}
+
+/// The distance map of one named feature.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FeatureDistance {
+    pub name: String,
+    /// Distance on the surface in the metric `g` (units `ℓ`); continued outside the
+    /// domain with the extended metric; `∞` where unreachable.
+    pub distance: Vec<f64>,
+}
+
+/// All images of one surface on a `size × size` grid (node `(i, j)` at index `i·size + j`,
+/// `ξ = (j, i)/(size − 1)`). Values outside the surface are `NaN` unless stated.
+#[derive(Clone, Debug)]
+pub struct GeometryImages {
+    pub size: usize,
+    pub transform: DomainTransform,
+    pub scale: SurfaceScale,
+    /// `ℓ` in mesh units.
+    pub length_unit: f64,
+    pub raster: Rasterization,
+    /// 3D position (mesh units).
+    pub position: Vec<[f64; 3]>,
+    /// `[g11, g12, g22]` of `g = DxᵀDx` (constant per triangle).
+    pub metric: Vec<[f64; 3]>,
+    /// Signed mean curvature `h` (interpolated from vertices).
+    pub mean_curvature: Vec<f64>,
+    /// `g` harmonically extended to all of ω (SPD everywhere).
+    pub metric_extended: Vec<[f64; 3]>,
+    /// `h` harmonically extended to all of ω.
+    pub mean_curvature_extended: Vec<f64>,
+    /// Signed distance to ∂ω_A in domain units, negative inside.
+    pub boundary_distance: Vec<f64>,
+    pub features: Vec<FeatureDistance>,
+    /// Distance to the nearest feature (thesis §3.2.2), when there are features.
+    pub feature_distance: Option<Vec<f64>>,
+    /// Texture colour (black outside), when a texture was given.
+    pub texture: Option<Vec<[u8; 3]>>,
+    /// Pyramid of `h`, `g11`, `g12`, `g22` (extended), when requested.
+    pub pyramid: Option<Pyramid>,
+    /// Wall-clock seconds per stage, in order.
+    pub timings: Vec<(&'static str, f64)>,
+}
+
+impl GeometryImages {
+    /// Computes every image of `mesh` flattened to `uvs` (one per vertex, flip-free).
+    /// `texture` and mask features are looked up through the mesh's own texture
+    /// coordinates `mesh.uvs`.
+    pub fn compute(
+        mesh: &TriMesh,
+        uvs: &[[f64; 2]],
+        features: FeatureSource<'_>,
+        texture_image: Option<&TextureImage>,
+        options: &GeometryImagesOptions,
+    ) -> Result<Self, RasterError> {
+        let n = options.size;
+        grid_level(n)?;
+        let mut timings = vec![];
+        let mut clock = std::time::Instant::now();
+        let mut lap = |name: &'static str, timings: &mut Vec<(&'static str, f64)>| {
+            timings.push((name, clock.elapsed().as_secs_f64()));
+            clock = std::time::Instant::now();
+        };
+        if uvs.len() != mesh.num_vertices() {
+            return Err(RasterError::UvCount {
+                count: uvs.len(),
+                num_vertices: mesh.num_vertices(),
+            });
+        }
+        let transform = DomainTransform::fit(uvs, options.margin)?;
+        let xi: Vec<[f64; 2]> = uvs.iter().map(|&p| transform.to_domain(p)).collect();
+        let raster = Rasterization::new(&xi, &mesh.triangles, n)?;
+        lap("rasterize", &mut timings);
+        let inside = raster.inside_mask();
+        if !inside.iter().any(|&b| b) {
+            return Err(RasterError::EmptyDomain);
+        }
+        let length_unit = match options.scale {
+            SurfaceScale::Original => 1.0,
+            SurfaceScale::UnitArea => mesh.area().sqrt(),
+        };
+        if !(length_unit.is_finite() && length_unit > 0.0) {
+            return Err(RasterError::DegenerateDomain);
+        }
+        let scaled: Vec<[f64; 3]> = mesh
+            .positions
+            .iter()
+            .map(|p| p.map(|c| c / length_unit))
+            .collect();
+
+        let position = raster.sample_vertex_field(&mesh.triangles, &mesh.positions);
+        let metric = raster.sample_triangle_field(&triangle_metrics(&scaled, &xi, &mesh.triangles));
+        let h_vertex: Vec<[f64; 1]> = vertex_mean_curvature(&scaled, &mesh.triangles)
+            .into_iter()
+            .map(|h| [h])
+            .collect();
+        let mean_curvature: Vec<f64> = raster
+            .sample_vertex_field(&mesh.triangles, &h_vertex)
+            .into_iter()
+            .map(|v| v[0])
+            .collect();
+        lap("sample position, metric, curvature", &mut timings);
+
+        // Harmonic extension of h and g (one solve, four right-hand sides).
+        let mut hx = mean_curvature.clone();
+        let mut g11: Vec<f64> = metric.iter().map(|g| g[0]).collect();
+        let mut g12: Vec<f64> = metric.iter().map(|g| g[1]).collect();
+        let mut g22: Vec<f64> = metric.iter().map(|g| g[2]).collect();
+        harmonic_extension(n, &inside, &mut [&mut hx, &mut g11, &mut g12, &mut g22])?;
+        let metric_extended: Vec<[f64; 3]> = (0..n * n).map(|k| [g11[k], g12[k], g22[k]]).collect();
+        lap("harmonic extension", &mut timings);
+
+        let segments: Vec<[[f64; 2]; 2]> = boundary_edges(&mesh.triangles)
+            .iter()
+            .map(|e| [xi[e[0] as usize], xi[e[1] as usize]])
+            .collect();
+        let boundary_distance = signed_boundary_distance(&raster, &segments);
+        lap("boundary distance", &mut timings);
+
+        // Texture coordinates of every inside node (for texture and mask lookups).
+        let needs_tex = texture_image.is_some() || matches!(features, FeatureSource::Mask(_));
+        let tex_uv = if needs_tex {
+            Some(node_texture_coordinates(mesh, &raster)?)
+        } else {
+            None
+        };
+        let texture = texture_image.map(|t| {
+            let tex_uv = tex_uv.as_ref().unwrap();
+            (0..n * n)
+                .into_par_iter()
+                .map(|k| {
+                    if inside[k] {
+                        t.sample(tex_uv[k])
+                    } else {
+                        [0, 0, 0]
+                    }
+                })
+                .collect()
+        });
+
+        // Seeds per feature, then the Eikonal solves in parallel (features are independent):
+        // first on the surface, then continued outside with the extended metric.
+        let mut seeds: Vec<(String, Vec<f64>)> = vec![];
+        match features {
+            FeatureSource::None => {}
+            FeatureSource::Curves(file) => {
+                file.validate(mesh.num_vertices())?;
+                for f in &file.features {
+                    let pts: Vec<[f64; 2]> = f.vertices.iter().map(|&v| xi[v as usize]).collect();
+                    let mut d = vec![f64::INFINITY; n * n];
+                    seed_polyline(n, &metric_extended, &inside, &pts, f.closed, &mut d);
+                    seeds.push((f.name.clone(), d));
+                }
+            }
+            FeatureSource::Mask(mask) => {
+                mask.validate(texture_image.map(|t| (t.width, t.height)))?;
+                let tex_uv = tex_uv.as_ref().unwrap();
+                let labels: Vec<[u8; 3]> = (0..n * n)
+                    .map(|k| {
+                        if inside[k] {
+                            mask.lookup(tex_uv[k])
+                        } else {
+                            [0, 0, 0]
+                        }
+                    })
+                    .collect();
+                for c in mask.region_colours() {
+                    let region: Vec<bool> = labels.iter().map(|&l| l == c).collect();
+                    let mut d = vec![f64::INFINITY; n * n];
+                    seed_region_boundary(n, &metric_extended, &inside, &region, &mut d);
+                    seeds.push((colour_name(c), d));
+                }
+            }
+        }
+        if let Some((name, _)) = seeds.iter().find(|(_, d)| !d.iter().any(|v| v.is_finite())) {
+            return Err(RasterError::Feature {
+                name: name.clone(),
+                problem: "it covers no grid node inside the surface; raise the grid size".into(),
+            });
+        }
+        let outside: Vec<bool> = inside.iter().map(|&b| !b).collect();
+        let features_out: Vec<FeatureDistance> = seeds
+            .into_par_iter()
+            .map(|(name, mut d)| {
+                solve_eikonal(n, &metric_extended, &inside, &mut d)?;
+                solve_eikonal(n, &metric_extended, &outside, &mut d)?;
+                Ok(FeatureDistance { name, distance: d })
+            })
+            .collect::<Result<_, RasterError>>()?;
+        let feature_distance = (!features_out.is_empty()).then(|| {
+            (0..n * n)
+                .map(|k| {
+                    features_out
+                        .iter()
+                        .map(|f| f.distance[k])
+                        .fold(f64::INFINITY, f64::min)
+                })
+                .collect()
+        });
+
+        lap("texture and feature distances", &mut timings);
+        let pyramid = options.pyramid.then(|| {
+            Pyramid::build(
+                n,
+                ["h", "g11", "g12", "g22"].map(String::from).to_vec(),
+                vec![hx.clone(), g11, g12, g22],
+            )
+        });
+        lap("pyramid", &mut timings);
+        Ok(Self {
+            size: n,
+            transform,
+            scale: options.scale,
+            length_unit,
+            raster,
+            position,
+            metric,
+            mean_curvature,
+            metric_extended,
+            mean_curvature_extended: hx,
+            boundary_distance,
+            features: features_out,
+            feature_distance,
+            texture,
+            pyramid,
+            timings,
+        })
+    }
+}
+
+/// Corner `k` of triangle `t` in the mesh's own texture coordinates.
+fn node_texture_coordinates(
+    mesh: &TriMesh,
+    raster: &Rasterization,
+) -> Result<Vec<[f64; 2]>, RasterError> {
+    let corner = |t: usize, k: usize| -> Option<[f64; 2]> {
+        match mesh.uvs.as_ref()? {
+            Uvs::PerVertex(uv) => uv.get(mesh.triangles[t][k] as usize).copied(),
+            Uvs::PerCorner { coords, indices } => {
+                coords.get(*indices.get(t)?.get(k)? as usize).copied()
+            }
+        }
+    };
+    if mesh.uvs.is_none() {
+        return Err(RasterError::NoTextureCoordinates);
+    }
+    // Validate once per triangle so the per-node loop cannot fail.
+    for t in 0..mesh.num_triangles() {
+        for k in 0..3 {
+            if corner(t, k).is_none() {
+                return Err(RasterError::NoTextureCoordinates);
+            }
+        }
+    }
+    Ok(raster
+        .triangle
+        .par_iter()
+        .zip(raster.bary.par_iter())
+        .map(|(&t, b)| {
+            if t == OUTSIDE {
+                return [f64::NAN; 2];
+            }
+            let c = [0, 1, 2].map(|k| corner(t as usize, k).unwrap());
+            std::array::from_fn(|d| {
+                b[0] as f64 * c[0][d] + b[1] as f64 * c[1][d] + b[2] as f64 * c[2][d]
+            })
+        })
+        .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::raster::features::{FeatureCurve, FeatureFile, FeatureMask};
+    use crate::raster::testmesh;
+
+    fn images(
+        (x, uv, tris): testmesh::TestMesh,
+        size: usize,
+        features: FeatureSource<'_>,
+    ) -> GeometryImages {
+        let mesh = TriMesh::new(x, tris);
+        let options = GeometryImagesOptions {
+            size,
+            margin: 0.05,
+            scale: SurfaceScale::Original,
+            pyramid: false,
+        };
+        GeometryImages::compute(&mesh, &uv, features, None, &options).unwrap()
+    }
+
+    fn max_inside_error(img: &GeometryImages, f: impl Fn(usize) -> f64) -> f64 {
+        (0..img.size * img.size)
+            .filter(|&k| img.raster.is_inside(k))
+            .map(f)
+            .fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn rasterized_mean_curvature_matches_sphere_cylinder_plane() {
+        let r = 2.0;
+        let mut errs = vec![];
+        for (m, size) in [(8, 65), (16, 129), (32, 257)] {
+            let img = images(testmesh::sphere_cap(m, r, 1.0), size, FeatureSource::None);
+            errs.push(max_inside_error(&img, |k| {
+                (img.mean_curvature[k] - 1.0 / r).abs()
+            }));
+        }
+        assert!(
+            errs[1] < errs[0] && errs[2] < errs[1] && errs[2] < 2e-3,
+            "sphere {errs:?}"
+        );
+
+        let img = images(testmesh::cylinder_patch(16, 1.5), 129, FeatureSource::None);
+        let e = max_inside_error(&img, |k| (img.mean_curvature[k] - 1.0 / 3.0).abs());
+        assert!(e < 1e-6, "cylinder {e}");
+
+        let img = images(
+            testmesh::grid(8, 1.0, |u, v| [u, v, 0.3 * u - 0.2 * v]),
+            65,
+            FeatureSource::None,
+        );
+        let e = max_inside_error(&img, |k| img.mean_curvature[k].abs());
+        assert!(e < 1e-6, "plane {e}");
+        // Outside the surface the raw images are NaN, the extended ones finite.
+        let k_out = 0;
+        assert!(!img.raster.is_inside(k_out) && img.mean_curvature[k_out].is_nan());
+        assert!(img.mean_curvature_extended.iter().all(|v| v.is_finite()));
+    }
+
+    #[test]
+    fn metric_of_the_orthographic_sphere_parameterization() {
+        // uv = (u, v), z = √(R² − u² − v²): g_uv = I + (u, v)(u, v)ᵀ / z²; ξ = s·uv + o
+        // scales it by 1/s².
+        let r = 2.0;
+        let mut errs = vec![];
+        for m in [8, 16, 32] {
+            let img = images(testmesh::sphere_cap(m, r, 1.0), 129, FeatureSource::None);
+            let s2 = img.transform.scale.powi(2);
+            errs.push(max_inside_error(&img, |k| {
+                let [u, v, z] = img.position[k];
+                let exact = [
+                    (1.0 + u * u / (z * z)) / s2,
+                    u * v / (z * z) / s2,
+                    (1.0 + v * v / (z * z)) / s2,
+                ];
+                (0..3)
+                    .map(|c| (img.metric[k][c] - exact[c]).abs() * s2)
+                    .fold(0.0, f64::max)
+            }));
+        }
+        assert!(
+            errs[1] < 0.65 * errs[0] && errs[2] < 0.65 * errs[1] && errs[2] < 0.08,
+            "{errs:?}"
+        );
+        // The isometric cylinder parameterization has g = I / s²; the inscribed mesh's
+        // chords shorten the curved direction by O(h²): the error drops fourfold per halving.
+        let mut errs = vec![];
+        for m in [8, 16] {
+            let img = images(testmesh::cylinder_patch(m, 1.5), 65, FeatureSource::None);
+            let s2 = img.transform.scale.powi(2);
+            errs.push(max_inside_error(&img, |k| {
+                let g = img.metric[k];
+                (g[0] * s2 - 1.0)
+                    .abs()
+                    .max(g[1].abs() * s2)
+                    .max((g[2] * s2 - 1.0).abs())
+            }));
+        }
+        assert!(errs[1] < 0.3 * errs[0] && errs[1] < 1e-3, "{errs:?}");
+    }
+
+    #[test]
+    fn feature_distance_is_geodesic_distance_on_a_sphere_cap() {
+        // Point feature at the pole; geodesic distance R·acos(z/R).
+        let r = 2.0;
+        let mut errs = vec![];
+        for (m, size) in [(8, 65), (16, 129), (32, 257)] {
+            let pole = ((m / 2) * (m + 1) + m / 2) as u32;
+            let file = FeatureFile {
+                features: vec![FeatureCurve {
+                    name: "pole".into(),
+                    vertices: vec![pole],
+                    closed: false,
+                }],
+            };
+            let img = images(
+                testmesh::sphere_cap(m, r, 1.0),
+                size,
+                FeatureSource::Curves(&file),
+            );
+            let d = &img.features[0].distance;
+            assert_eq!(img.feature_distance.as_ref().unwrap(), d);
+            errs.push(max_inside_error(&img, |k| {
+                let exact = r * (img.position[k][2] / r).clamp(-1.0, 1.0).acos();
+                (d[k] - exact).abs() / r
+            }));
+            assert!(d.iter().all(|v| v.is_finite()));
+        }
+        assert!(
+            errs[1] < 0.6 * errs[0] && errs[2] < 0.6 * errs[1] && errs[2] < 0.015,
+            "{errs:?}"
+        );
+    }
+
+    #[test]
+    fn extension_is_continuous_across_the_boundary() {
+        let mut jumps = vec![];
+        for size in [65, 129, 257] {
+            // A surface with varying mean curvature.
+            let surface = testmesh::grid(16, 1.0, |u, v| {
+                [u, v, 0.4 * (u * u - v * v) + 0.3 * u * u * u]
+            });
+            let img = images(surface, size, FeatureSource::None);
+            let n = size;
+            let mut jump = 0.0f64;
+            for p in 0..n * n {
+                if img.raster.is_inside(p) {
+                    continue;
+                }
+                for q in [p.wrapping_sub(1), p + 1, p.wrapping_sub(n), p + n] {
+                    if q < n * n && img.raster.is_inside(q) && (q % n).abs_diff(p % n) <= 1 {
+                        jump = jump
+                            .max((img.mean_curvature_extended[p] - img.mean_curvature[q]).abs());
+                    }
+                }
+            }
+            jumps.push(jump);
+        }
+        assert!(
+            jumps[1] < 0.7 * jumps[0] && jumps[2] < 0.7 * jumps[1] && jumps[2] < 0.05,
+            "{jumps:?}"
+        );
+    }
+
+    #[test]
+    fn mask_features_and_texture_use_the_mesh_texture_coordinates() {
+        // Plane grid over [−1, 1]² with texture coordinates (u + 1)/2, (v + 1)/2.
+        let (x, uv, tris) = testmesh::grid(8, 1.0, |u, v| [u, v, 0.0]);
+        let mut mesh = TriMesh::new(x, tris);
+        mesh.uvs = Some(Uvs::PerVertex(
+            uv.iter()
+                .map(|p| [(p[0] + 1.0) / 2.0, (p[1] + 1.0) / 2.0])
+                .collect(),
+        ));
+        // Left half of the texture red.
+        let (w, h) = (16u32, 16u32);
+        let rgb: Vec<[u8; 3]> = (0..w * h)
+            .map(|k| if k % w < 8 { [255, 0, 0] } else { [0, 0, 0] })
+            .collect();
+        let mask = FeatureMask {
+            width: w,
+            height: h,
+            rgb: rgb.clone(),
+        };
+        let tex = TextureImage {
+            width: w,
+            height: h,
+            rgb,
+        };
+        let options = GeometryImagesOptions {
+            size: 65,
+            margin: 0.05,
+            scale: SurfaceScale::Original,
+            pyramid: true,
+        };
+        let img =
+            GeometryImages::compute(&mesh, &uv, FeatureSource::Mask(&mask), Some(&tex), &options)
+                .unwrap();
+        assert_eq!(img.features.len(), 1);
+        assert_eq!(img.features[0].name, "#ff0000");
+        // The feature is the line u = 0: distance |u| on the plane.
+        let e = max_inside_error(&img, |k| {
+            (img.features[0].distance[k] - img.position[k][0].abs()).abs()
+        });
+        assert!(e < 0.04, "{e}");
+        let t = img.texture.as_ref().unwrap();
+        let k = 32 * 65 + 10; // u < 0
+        assert!(img.raster.is_inside(k) && t[k] == [255, 0, 0]);
+        let p = img.pyramid.as_ref().unwrap();
+        assert_eq!(p.levels.len(), 7);
+        assert_eq!(p.levels[6].images[0], img.mean_curvature_extended);
+        // Wrong mask size, no texture coordinates.
+        let small = FeatureMask {
+            width: 8,
+            height: 16,
+            rgb: vec![[255, 0, 0]; 128],
+        };
+        let err = GeometryImages::compute(
+            &mesh,
+            &uv,
+            FeatureSource::Mask(&small),
+            Some(&tex),
+            &options,
+        )
+        .unwrap_err();
+        assert!(matches!(err, RasterError::MaskSize { .. }), "{err}");
+        mesh.uvs = None;
+        let err = GeometryImages::compute(&mesh, &uv, FeatureSource::Mask(&mask), None, &options)
+            .unwrap_err();
+        assert!(matches!(err, RasterError::NoTextureCoordinates), "{err}");
+    }
+
+    #[test]
+    fn unit_area_scale_normalizes_h() {
+        let r = 2.0;
+        let (x, uv, tris) = testmesh::sphere_cap(16, r, 1.0);
+        let mesh = TriMesh::new(x, tris);
+        let options = GeometryImagesOptions {
+            size: 65,
+            pyramid: false,
+            ..Default::default()
+        };
+        let img = GeometryImages::compute(&mesh, &uv, FeatureSource::None, None, &options).unwrap();
+        assert!((img.length_unit - mesh.area().sqrt()).abs() < 1e-12);
+        let e = max_inside_error(&img, |k| {
+            (img.mean_curvature[k] - img.length_unit / r).abs()
+        });
+        assert!(e < 0.01, "{e}");
+        assert!(
+            GeometryImages::compute(&mesh, &uv[1..], FeatureSource::None, None, &options).is_err()
+        );
+    }
+}

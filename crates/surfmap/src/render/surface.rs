@@ -1,0 +1,300 @@
+//! Picture (b): the surface in 3D with a checkerboard through its UVs (thesis
+//! Fig. 3.1 middle, Fig. 4.4 top), shaded, seen from an automatic view. A small
+//! software rasterizer: orthographic projection, z-buffer, smooth vertex normals,
+//! supersampling.
+//!
+//! **View**: along the area-weighted mean normal `Σ_T n_T` when it is at least 15 % of
+//! `Σ_T |n_T|` (a patch is seen from the side its normals face); otherwise along the
+//! axis of least spread of the triangle centroids (principal axes). **Up** is the world
+//! axis (Y, then Z, then X) most perpendicular to the view direction.
+
+use image::RgbImage;
+
+use super::canvas::{Canvas, rgb};
+use super::font::{draw_text, text_height};
+use super::uv_layout::Rect;
+use crate::measure::jacobian::{cross3, dot3, norm3, sub3};
+
+fn normalize(v: [f64; 3]) -> [f64; 3] {
+    let n = norm3(v);
+    if n > 0.0 {
+        v.map(|x| x / n)
+    } else {
+        [0.0, 0.0, 1.0]
+    }
+}
+
+fn valid_triangle(positions: &[[f64; 3]], t: &[u32; 3]) -> bool {
+    t.iter().all(|&v| {
+        (v as usize) < positions.len() && positions[v as usize].iter().all(|x| x.is_finite())
+    })
+}
+
+/// Eigenvector of the smallest eigenvalue of a symmetric 3×3 matrix (cyclic Jacobi).
+#[allow(clippy::needless_range_loop)]
+fn smallest_eigenvector(mut a: [[f64; 3]; 3]) -> [f64; 3] {
+    let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    for _ in 0..50 {
+        let off = a[0][1].abs() + a[0][2].abs() + a[1][2].abs();
+        if off < 1e-300 {
+            break;
+        }
+        for (p, q) in [(0, 1), (0, 2), (1, 2)] {
+            if a[p][q].abs() < 1e-300 {
+                continue;
+            }
+            let theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
+            let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
+            let t = if theta == 0.0 { 1.0 } else { t };
+            let c = 1.0 / (t * t + 1.0).sqrt();
+            let s = t * c;
+            for k in 0..3 {
+                let (akp, akq) = (a[k][p], a[k][q]);
+                a[k][p] = c * akp - s * akq;
+                a[k][q] = s * akp + c * akq;
+            }
+            for k in 0..3 {
+                let (apk, aqk) = (a[p][k], a[q][k]);
+                a[p][k] = c * apk - s * aqk;
+                a[q][k] = s * apk + c * aqk;
+            }
+            for row in &mut v {
+                let (vp, vq) = (row[p], row[q]);
+                row[p] = c * vp - s * vq;
+                row[q] = s * vp + c * vq;
+            }
+        }
+    }
+    let i = (0..3).min_by(|&i, &j| a[i][i].total_cmp(&a[j][j])).unwrap();
+    [v[0][i], v[1][i], v[2][i]]
+}
+
+/// Camera basis `(right, up, towards_viewer)` chosen as in the module docs.
+pub fn automatic_view(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> [[f64; 3]; 3] {
+    let mut sum = [0.0; 3];
+    let mut total = 0.0;
+    let mut centroid = [0.0; 3];
+    let mut cov = [[0.0; 3]; 3];
+    let tris: Vec<&[u32; 3]> = triangles
+        .iter()
+        .filter(|t| valid_triangle(positions, t))
+        .collect();
+    for t in &tris {
+        let p = t.map(|v| positions[v as usize]);
+        let n = cross3(sub3(p[1], p[0]), sub3(p[2], p[0]));
+        sum = [sum[0] + n[0], sum[1] + n[1], sum[2] + n[2]];
+        total += norm3(n);
+    }
+    let d = if total > 0.0 && norm3(sum) >= 0.15 * total {
+        normalize(sum)
+    } else {
+        for t in &tris {
+            for k in 0..3 {
+                centroid[k] += t.iter().map(|&v| positions[v as usize][k]).sum::<f64>() / 3.0;
+            }
+        }
+        let n = tris.len().max(1) as f64;
+        centroid = centroid.map(|x| x / n);
+        for t in &tris {
+            let c: [f64; 3] = [0, 1, 2].map(|k| {
+                t.iter().map(|&v| positions[v as usize][k]).sum::<f64>() / 3.0 - centroid[k]
+            });
+            for i in 0..3 {
+                for j in 0..3 {
+                    cov[i][j] += c[i] * c[j];
+                }
+            }
+        }
+        normalize(smallest_eigenvector(cov))
+    };
+    let axes = [[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]];
+    let up0 = axes
+        .iter()
+        .copied()
+        .find(|a| dot3(*a, d).abs() < 0.8)
+        .unwrap_or([0.0, 1.0, 0.0]);
+    let up_perp = normalize(sub3(up0, d.map(|x| x * dot3(up0, d))));
+    let right = normalize(cross3(up_perp, d));
+    let up = cross3(d, right);
+    [right, up, d]
+}
+
+/// Draws the shaded, checkered surface into `rect` of the canvas (depth test on).
+pub(crate) fn draw_surface(
+    canvas: &mut Canvas,
+    rect: Rect,
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    corner_uvs: &[[[f64; 2]; 3]],
+    checks: u32,
+) {
+    canvas.enable_depth();
+    let [r, u, d] = automatic_view(positions, triangles);
+    let ok: Vec<bool> = triangles
+        .iter()
+        .zip(corner_uvs)
+        .map(|(t, c)| valid_triangle(positions, t) && c.iter().flatten().all(|x| x.is_finite()))
+        .collect();
+    // Smooth vertex normals (area-weighted face normals), oriented per triangle later.
+    let mut vn = vec![[0.0f64; 3]; positions.len()];
+    let mut lo = [f64::INFINITY; 2];
+    let mut hi = [f64::NEG_INFINITY; 2];
+    let mut uvlo = [f64::INFINITY; 2];
+    let mut uvhi = [f64::NEG_INFINITY; 2];
+    for (t, tri) in triangles.iter().enumerate().filter(|(t, _)| ok[*t]) {
+        let p = tri.map(|v| positions[v as usize]);
+        let n = cross3(sub3(p[1], p[0]), sub3(p[2], p[0]));
+        for k in 0..3 {
+            let v = &mut vn[tri[k] as usize];
+            *v = [v[0] + n[0], v[1] + n[1], v[2] + n[2]];
+            let s = [dot3(p[k], r), dot3(p[k], u)];
+            lo = [lo[0].min(s[0]), lo[1].min(s[1])];
+            hi = [hi[0].max(s[0]), hi[1].max(s[1])];
+            let c = corner_uvs[t][k];
+            uvlo = [uvlo[0].min(c[0]), uvlo[1].min(c[1])];
+            uvhi = [uvhi[0].max(c[0]), uvhi[1].max(c[1])];
+        }
+    }
+    if lo[0].is_nan() || hi[0].is_nan() || lo[0] > hi[0] {
+        return;
+    }
+    let span = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1e-300);
+    let s = (rect.w / (hi[0] - lo[0]).max(span * 1e-9))
+        .min(rect.h / (hi[1] - lo[1]).max(span * 1e-9))
+        * 0.95;
+    let ox = rect.x + 0.5 * (rect.w - s * (hi[0] - lo[0]));
+    let oy = rect.y + 0.5 * (rect.h + s * (hi[1] - lo[1]));
+    let uv_span = (uvhi[0] - uvlo[0]).max(uvhi[1] - uvlo[1]).max(1e-300);
+    let check = checks.max(1) as f64 / uv_span;
+    let light = normalize([
+        d[0] + 0.35 * u[0] + 0.25 * r[0],
+        d[1] + 0.35 * u[1] + 0.25 * r[1],
+        d[2] + 0.35 * u[2] + 0.25 * r[2],
+    ]);
+    let (light_c, dark_c) = (rgb(245, 240, 230), rgb(215, 95, 35));
+    for (t, tri) in triangles.iter().enumerate().filter(|(t, _)| ok[*t]) {
+        let p = tri.map(|v| positions[v as usize]);
+        let scr = p.map(|q| [ox + s * (dot3(q, r) - lo[0]), oy - s * (dot3(q, u) - lo[1])]);
+        let depth = p.map(|q| dot3(q, d));
+        let n = tri.map(|v| normalize(vn[v as usize]));
+        let c = corner_uvs[t];
+        canvas.fill_triangle(scr, Some(depth), |b| {
+            let uv = [
+                b[0] * c[0][0] + b[1] * c[1][0] + b[2] * c[2][0],
+                b[0] * c[0][1] + b[1] * c[1][1] + b[2] * c[2][1],
+            ];
+            let cell = ((uv[0] - uvlo[0]) * check).floor() as i64
+                + ((uv[1] - uvlo[1]) * check).floor() as i64;
+            let base = if cell.rem_euclid(2) == 0 {
+                light_c
+            } else {
+                dark_c
+            };
+            let nn = [0, 1, 2].map(|k| b[0] * n[0][k] + b[1] * n[1][k] + b[2] * n[2][k]);
+            let lambert = (dot3(nn, light) / norm3(nn).max(1e-300)).abs();
+            let shade = (0.25 + 0.75 * lambert) as f32;
+            Some(base.map(|x| x * shade))
+        });
+    }
+}
+
+/// The surface rendered with a checkerboard of `checks` squares across the UV layout's
+/// longer side, `size = (width, height)`. Triangles with bad indices or non-finite
+/// coordinates are skipped.
+pub fn checker_render(
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    corner_uvs: &[[[f64; 2]; 3]],
+    checks: u32,
+    title: &str,
+    size: (u32, u32),
+) -> RgbImage {
+    let (w, h) = (size.0.clamp(64, 16384), size.1.clamp(64, 16384));
+    let font = if w.min(h) >= 600 { 2 } else { 1 };
+    let top = if title.is_empty() {
+        0.0
+    } else {
+        text_height(font) as f64 + 12.0
+    };
+    let mut canvas = Canvas::new(w, h, 3, [1.0; 3]);
+    if corner_uvs.len() == triangles.len() {
+        let m = 0.03 * w.min(h) as f64;
+        let rect = Rect {
+            x: m,
+            y: top + m,
+            w: w as f64 - 2.0 * m,
+            h: h as f64 - top - 2.0 * m,
+        };
+        draw_surface(&mut canvas, rect, positions, triangles, corner_uvs, checks);
+    }
+    let mut img = canvas.into_image();
+    draw_text(&mut img, 8, 6, title, font, [20, 20, 20]);
+    img
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::tests::{assert_not_blank, disc_map};
+
+    #[test]
+    fn view_of_a_tilted_plane_looks_along_its_normal() {
+        let (pos, tris, _) = disc_map(6);
+        let [r, u, d] = automatic_view(&pos, &tris);
+        // disc_map lifts the disc into the plane z = 0.5 x (normal ∝ (−0.5, 0, 1)).
+        let n = normalize([-0.5, 0.0, 1.0]);
+        assert!((dot3(d, n) - 1.0).abs() < 1e-9, "{d:?}");
+        assert!(dot3(r, u).abs() < 1e-12 && dot3(r, d).abs() < 1e-12 && dot3(u, d).abs() < 1e-12);
+        // Right-handed: r × u = d.
+        let c = cross3(r, u);
+        assert!((dot3(c, d) - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn closed_surface_falls_back_to_principal_axes() {
+        // A flat box (octahedron squashed along z): mean normal is zero; least spread is z.
+        let pos = [
+            [2.0, 0.0, 0.0],
+            [-2.0, 0.0, 0.0],
+            [0.0, 1.5, 0.0],
+            [0.0, -1.5, 0.0],
+            [0.0, 0.0, 0.3],
+            [0.0, 0.0, -0.3],
+        ];
+        let tris = [
+            [0, 2, 4],
+            [2, 1, 4],
+            [1, 3, 4],
+            [3, 0, 4],
+            [2, 0, 5],
+            [1, 2, 5],
+            [3, 1, 5],
+            [0, 3, 5],
+        ];
+        let [_, _, d] = automatic_view(&pos, &tris);
+        assert!(d[2].abs() > 0.99, "{d:?}");
+    }
+
+    #[test]
+    fn render_has_both_checker_colours_and_is_deterministic() {
+        let (pos, tris, uv) = disc_map(16);
+        let a = checker_render(&pos, &tris, &uv, 8, "CHECKER", (200, 160));
+        assert_eq!(a.dimensions(), (200, 160));
+        assert_not_blank(&a);
+        let orange = a
+            .pixels()
+            .filter(|p| p.0[0] as i32 > p.0[2] as i32 + 60)
+            .count();
+        let pale = a
+            .pixels()
+            .filter(|p| p.0[0] > 150 && p.0[2] > 140 && p.0[0] < 250)
+            .count();
+        assert!(orange > 500 && pale > 500, "orange {orange}, pale {pale}");
+        assert_eq!(
+            a,
+            checker_render(&pos, &tris, &uv, 8, "CHECKER", (200, 160))
+        );
+        // Bad input: no panic.
+        let _ = checker_render(&pos, &[[0, 1, 999]], &uv[..1], 8, "", (64, 64));
+    }
+}
