@@ -134,27 +134,32 @@ def tail(text, n=300):
 # --------------------------------------------------------------------------- #
 # Runners
 # --------------------------------------------------------------------------- #
-def run_peers(mesh, peers, work, repeat, timeout, extra):
-    """Run run_peers.py `repeat` times; returns rows with median times and the UV OBJ paths."""
-    base = os.path.splitext(os.path.basename(mesh))[0]
-    uvdir = os.path.join(work, "peers_uv")
-    per_peer = {p: {"method": [], "proc": [], "info": None, "error": None} for p in peers}
-    env = dict(os.environ, CGAL_PARAM=CGAL_DEFAULT)
-    for rep in range(repeat):
-        js = os.path.join(work, f"peers_rep{rep}.json")
-        cmd = [PEERS_PY, os.path.join(PEERS_DIR, "run_peers.py"), mesh, "--peers", ",".join(peers),
-               "--json", js, "--timeout", str(timeout), "--no-input-uv", "--columns", "brief"] + extra
-        if rep == 0:
-            cmd += ["--save-uv", uvdir]
-        p = subprocess.run(cmd, capture_output=True, text=True, env=env)
+class PeerRuns:
+    """Repeated runs of run_peers.py for one mesh; `once()` is one repeat of all peers."""
+
+    def __init__(self, mesh, peers, work, timeout, extra):
+        self.mesh, self.peers, self.work, self.timeout, self.extra = mesh, peers, work, timeout, extra
+        self.base = os.path.splitext(os.path.basename(mesh))[0]
+        self.uvdir = os.path.join(work, "peers_uv")
+        self.acc = {p: {"method": [], "proc": [], "info": None, "error": None} for p in peers}
+        self.rep = 0
+
+    def once(self):
+        js = os.path.join(self.work, f"peers_rep{self.rep}.json")
+        cmd = [PEERS_PY, os.path.join(PEERS_DIR, "run_peers.py"), self.mesh, "--peers", ",".join(self.peers),
+               "--json", js, "--timeout", str(self.timeout), "--no-input-uv", "--columns", "brief"] + self.extra
+        if self.rep == 0:
+            cmd += ["--save-uv", self.uvdir]
+        self.rep += 1
+        p = subprocess.run(cmd, capture_output=True, text=True, env=dict(os.environ, CGAL_PARAM=CGAL_DEFAULT))
         if p.returncode != 0 or not os.path.exists(js):
             raise RuntimeError(f"run_peers.py failed (exit {p.returncode}): {tail(p.stderr or p.stdout)}")
         with open(js) as fh:
             saved = json.load(fh)
         if saved[0].get("error"):
-            raise RuntimeError(f"run_peers.py could not load {mesh}: {saved[0]['error']}")
+            raise RuntimeError(f"run_peers.py could not load {self.mesh}: {saved[0]['error']}")
         for row in saved[0]["results"]:
-            st = per_peer[row["peer"]]
+            st = self.acc[row["peer"]]
             if row.get("error"):
                 st["error"] = st["error"] or row["error"]
                 continue
@@ -162,74 +167,91 @@ def run_peers(mesh, peers, work, repeat, timeout, extra):
             st["proc"].append(row.get("process_s"))
             if st["info"] is None:
                 st["info"] = row
-    rows = []
-    for name in peers:
-        st = per_peer[name]
-        row = {"tool": name, "kind": "peer"}
-        info = st["info"] or {}
-        for k in ("version", "iterations", "init", "boundary"):
-            if info.get(k) is not None:
-                row[k] = info[k]
-        row["runs"] = len(st["proc"])
-        row["proc_s"] = median(st["proc"])
-        row["method_s"] = median(st["method"])
-        if st["error"] and not st["proc"]:
-            row["error"] = st["error"]
-        else:
+
+    def rows(self):
+        """One row per peer: median times, the UV OBJ saved by the first repeat."""
+        rows = []
+        for name in self.peers:
+            st = self.acc[name]
+            row = {"tool": name, "kind": "peer"}
+            info = st["info"] or {}
+            for k in ("version", "iterations", "init", "boundary"):
+                if info.get(k) is not None:
+                    row[k] = info[k]
+            row["runs"] = len(st["proc"])
+            row["proc_s"] = median(st["proc"])
+            row["method_s"] = median(st["method"])
+            if st["error"] and not st["proc"]:
+                row["error"] = st["error"]
+            else:
+                if st["error"]:
+                    row["note"] = f"some repeats failed: {st['error']}"
+                row["uv_obj"] = os.path.join(self.uvdir, f"{self.base}__{name}.obj")
+            rows.append(row)
+        return rows
+
+
+class OurRuns:
+    """Repeated runs of `surfmap flatten` for one mesh; `once()` is one repeat of every configuration."""
+
+    def __init__(self, binary, mesh, work, timeout, configs):
+        self.binary, self.mesh, self.work, self.timeout = binary, mesh, work, timeout
+        self.acc = {c: {"proc": [], "method": [], "report": None, "error": None, "stdout": ""} for c in configs}
+
+    def paths(self, name):
+        return (os.path.join(self.work, f"surfmap_{name}.obj"),
+                os.path.join(self.work, f"surfmap_{name}.report.json"))
+
+    def once(self):
+        for name, st in self.acc.items():
             if st["error"]:
-                row["note"] = f"some repeats failed: {st['error']}"
-            row["uv_obj"] = os.path.join(uvdir, f"{base}__{name}.obj")
-        rows.append(row)
-    return rows
-
-
-def run_ours(binary, mesh, work, repeat, timeout, configs):
-    rows = []
-    for name in configs:
-        row = {"tool": f"surfmap {name}", "kind": "ours", "flags": OURS[name]}
-        out = os.path.join(work, f"surfmap_{name}.obj")
-        rep_path = os.path.join(work, f"surfmap_{name}.report.json")
-        proc, method, report = [], [], None
-        for _ in range(repeat):
+                continue                      # a configuration that failed once is not retried
+            out, rep_path = self.paths(name)
             for f in (out, rep_path):
                 if os.path.exists(f):
                     os.remove(f)
-            cmd = [binary, "flatten", mesh, "-o", out, "--report", rep_path] + OURS[name]
+            cmd = [self.binary, "flatten", self.mesh, "-o", out, "--report", rep_path] + OURS[name]
             t0 = time.perf_counter()
             try:
-                p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+                p = subprocess.run(cmd, capture_output=True, text=True, timeout=self.timeout)
             except subprocess.TimeoutExpired:
-                row["error"] = f"timeout after {timeout:.0f} s"
-                break
+                st["error"] = f"timeout after {self.timeout:.0f} s"
+                continue
             wall = time.perf_counter() - t0
             if p.returncode != 0:
-                row["error"] = f"exit {p.returncode}: {tail(p.stderr or p.stdout)}"
-                break
+                st["error"] = f"exit {p.returncode}: {tail(p.stderr or p.stdout)}"
+                continue
             if not os.path.exists(out):
-                row["error"] = f"wrote no {out}"
-                break
-            proc.append(wall)
-            report = None
+                st["error"] = f"wrote no {out}"
+                continue
+            st["proc"].append(wall)
+            st["stdout"] = p.stdout.strip()[-500:]
+            st["report"] = None
             if os.path.exists(rep_path):
                 with open(rep_path) as fh:
-                    report = json.load(fh)
-                method.append(_report_time(report))
-            row["stdout"] = p.stdout.strip()[-500:]
-        row["runs"] = len(proc)
-        row["proc_s"] = median(proc)
-        row["method_s"] = median(method)
-        if report is not None:
-            row["report"] = report
-            for k in ("iterations", "converged", "flipped_triangles", "symmetric_dirichlet"):
-                if k in report:
-                    row["self_" + k] = report[k]
-            row["iterations"] = report.get("iterations")
-        elif proc:
-            row["note"] = f"no report at {rep_path}"
-        if proc:
-            row["uv_obj"] = out
-        rows.append(row)
-    return rows
+                    st["report"] = json.load(fh)
+                st["method"].append(_report_time(st["report"]))
+
+    def rows(self):
+        rows = []
+        for name, st in self.acc.items():
+            row = {"tool": f"surfmap {name}", "kind": "ours", "flags": OURS[name], "stdout": st["stdout"],
+                   "runs": len(st["proc"]), "proc_s": median(st["proc"]), "method_s": median(st["method"])}
+            if st["error"]:
+                row["error"] = st["error"]
+            report = st["report"]
+            if report is not None and not st["error"]:
+                row["report"] = {k: v for k, v in report.items() if k != "log"}
+                for k in ("iterations", "converged", "flipped_triangles", "symmetric_dirichlet"):
+                    if k in report:
+                        row["self_" + k] = report[k]
+                row["iterations"] = report.get("iterations")
+            elif st["proc"] and not st["error"]:
+                row["note"] = "no report written"
+            if st["proc"] and not st["error"]:
+                row["uv_obj"] = self.paths(name)[0]
+            rows.append(row)
+        return rows
 
 
 def _report_time(report):
@@ -413,11 +435,17 @@ def main(argv):
             ctx = tempfile.TemporaryDirectory(prefix=f"compare_{base}_")
             work = ctx.name
         try:
-            print("    running peers ...", file=sys.stderr, flush=True)
-            rows = run_peers(mesh, peers, work, a.repeat, a.timeout, a.peer_args.split())
-            if binary:
-                print("    running surfmap ...", file=sys.stderr, flush=True)
-                rows = run_ours(binary, mesh, work, a.repeat, a.timeout, configs) + rows
+            # ours and the peers alternate, repeat by repeat, so that load from other processes
+            # on the machine affects both sides alike
+            pr = PeerRuns(mesh, peers, work, a.timeout, a.peer_args.split())
+            ours = OurRuns(binary, mesh, work, a.timeout, configs) if binary else None
+            for rep in range(a.repeat):
+                print(f"    repeat {rep + 1}/{a.repeat}: peers ...", file=sys.stderr, flush=True)
+                pr.once()
+                if ours:
+                    print(f"    repeat {rep + 1}/{a.repeat}: surfmap ...", file=sys.stderr, flush=True)
+                    ours.once()
+            rows = (ours.rows() if ours else []) + pr.rows()
             for r in rows:
                 if r.get("uv_obj") and not r.get("error"):
                     try:
