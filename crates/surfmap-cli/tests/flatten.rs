@@ -128,3 +128,31 @@ fn invalid_alpha_is_rejected_with_a_reason() {
     assert!(err.contains("α"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn face_scans_with_open_eyes_and_mouth_flatten_with_fill_holes() {
+    let Some(data) = data_dir() else { return };
+    let dir = temp_dir("fill-holes");
+    for (file, extra) in [("faces/ict/ict_neutral.obj", vec![]), ("faces/flame/flame_template.ply", vec!["--keep-largest"])] {
+        let out = dir.join("face.obj");
+        let run = surfmap()
+            .arg("flatten")
+            .arg(data.join(file))
+            .args(&extra)
+            .arg("--fill-holes")
+            .arg("-o")
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(run.status.success(), "{file}: {}", String::from_utf8_lossy(&run.stderr));
+        let back = read_mesh(&out).unwrap().mesh;
+        // The output is the input surface (holes open again), with a valid map.
+        let input = read_mesh(&data.join(file)).unwrap().mesh;
+        if extra.is_empty() {
+            assert_eq!(back.positions.len(), input.positions.len(), "{file}");
+            assert_eq!(back.triangles, input.triangles, "{file}");
+        }
+        assert!(min_signed_uv_area(&out).0 > 0.0, "{file}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -12,7 +12,8 @@ fn main() {
         _ => EnergyKind::Litke(Litke::balanced()),
     };
     let r = flatten(&mesh, &FlattenOptions { energy, ..Default::default() }).expect("flattened");
-    println!("start {:?}, {} iterations, stop {:?}", r.start, r.iterations, r.stop_reason);
+    println!("start {:?}, {} iterations, stop {:?}, total {:.3} s (start map {:.3} s)", r.start, r.iterations, r.stop_reason, r.time_total, r.time_start);
+    println!("{:?}", r.newton_timings);
     println!("{:>4} {:>14} {:>10} {:>10} {:>8} {:>10} {:>7}", "it", "energy", "|grad|", "decrement", "step", "flipfree", "time");
     for l in &r.log {
         println!(

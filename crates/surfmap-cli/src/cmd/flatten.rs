@@ -81,7 +81,7 @@ pub struct Args {
     #[arg(long, default_value_t = 200)]
     pub max_iters: usize,
     /// Stop when half the Newton decrement (energy per unit area) is below this.
-    #[arg(long, default_value_t = 1e-10)]
+    #[arg(long, default_value_t = 1e-12)]
     pub tolerance: f64,
     /// Armijo sufficient-decrease constant c (thesis: 0.5).
     #[arg(long, default_value_t = 0.5)]
@@ -99,6 +99,10 @@ pub struct Args {
     /// Do not print the summary line or progress.
     #[arg(short, long)]
     pub quiet: bool,
+    /// Fill every boundary loop but the longest (eyes, mouth, scan holes) with a fan for
+    /// the flattening; the output keeps the original faces, holes stay open in the UVs.
+    #[arg(long)]
+    pub fill_holes: bool,
     #[command(flatten)]
     pub repair: RepairArgs,
 }
@@ -211,8 +215,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let opts = options(&args)?;
     let mesh = args.repair.apply(file.mesh, args.quiet)?;
     let defects = validate(&mesh, &Topology::new(&mesh));
-    let result = flatten_mesh(&mesh, &opts, args.quiet)
-        .with_context(|| format!("cannot flatten {}", args.input.display()))?;
+    let mut result = if args.fill_holes {
+        let (filled, holes) = surfmap::mesh::repair::fill_holes(&mesh);
+        if !args.quiet {
+            eprintln!("repair: filled {holes} holes for the flattening (the output keeps them open)");
+        }
+        flatten_mesh(&filled, &opts, args.quiet)
+    } else {
+        flatten_mesh(&mesh, &opts, args.quiet)
+    }
+    .with_context(|| format!("cannot flatten {}", args.input.display()))?;
+    // Fill vertices come after the original ones: drop them.
+    result.uvs.truncate(mesh.positions.len());
     let mut uvs = result.uvs.clone();
     if args.normalize {
         normalize_uvs(&mut uvs);

@@ -202,7 +202,7 @@ impl SpdSystem {
         .map_err(|e| SolveError::Backend(format!("symbolic Cholesky: {e:?}")))?;
         let l_values = vec![0.0; symbolic.len_val()];
         let factor_scratch = MemBuffer::try_new(
-            symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
+            symbolic.factorize_numeric_llt_scratch::<f64>(parallelism(n), Default::default()),
         )
         .map_err(|e| SolveError::Backend(format!("workspace allocation: {e:?}")))?;
         let nnz = row_idx.len();
@@ -365,7 +365,7 @@ impl SpdSystem {
             a,
             Side::Lower,
             Default::default(),
-            Par::Seq,
+            parallelism(self.n),
             stack,
             Default::default(),
         ) {
@@ -394,6 +394,12 @@ impl SpdSystem {
         );
         Ok(())
     }
+}
+
+/// Threads for a factorization of dimension `n`: one below 100k unknowns (measured:
+/// no gain there on 2 cores), all of rayon's above.
+fn parallelism(n: usize) -> Par {
+    if n >= 100_000 { Par::rayon(0) } else { Par::Seq }
 }
 
 fn check_len(expected: usize, got: usize) -> Result<(), SolveError> {

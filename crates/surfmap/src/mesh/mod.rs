@@ -4,6 +4,7 @@
 pub mod generate;
 pub mod io;
 pub mod repair;
+pub mod subdivide;
 pub mod topology;
 pub mod validate;
 

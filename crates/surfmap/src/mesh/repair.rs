@@ -220,6 +220,39 @@ pub fn keep_component(mesh: &TriMesh, choice: ComponentChoice) -> Option<(TriMes
     Some((kept, removed))
 }
 
+/// Fills every boundary loop but the longest with a fan around a new vertex at the
+/// loop's centroid, so a face scan with open eyes and mouth becomes a disc. Returns the
+/// mesh (original vertices and faces first, in their order; the fill after them) and
+/// the number of holes filled. Loops through non-manifold vertices are filled as
+/// walked. UVs are dropped.
+pub fn fill_holes(mesh: &TriMesh) -> (TriMesh, usize) {
+    let topo = Topology::new(mesh);
+    let mut loops: Vec<&[u32]> = topo.boundary_loops.iter().map(|l| l.vertices.as_slice()).collect();
+    if loops.len() <= 1 {
+        return (TriMesh::new(mesh.positions.clone(), mesh.triangles.clone()), 0);
+    }
+    loops.sort_by_key(|l| std::cmp::Reverse(l.len()));
+    let mut out = TriMesh::new(mesh.positions.clone(), mesh.triangles.clone());
+    for hole in &loops[1..] {
+        let n = hole.len() as f64;
+        let mut c = [0.0; 3];
+        for &v in *hole {
+            for k in 0..3 {
+                c[k] += mesh.positions[v as usize][k] / n;
+            }
+        }
+        let centre = out.positions.len() as u32;
+        out.positions.push(c);
+        // The loop runs with the surface on its left; the fill lies on its right, so
+        // its triangles traverse each boundary edge backwards.
+        for k in 0..hole.len() {
+            let (a, b) = (hole[k], hole[(k + 1) % hole.len()]);
+            out.triangles.push([b, a, centre]);
+        }
+    }
+    (out, loops.len() - 1)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -281,6 +314,28 @@ mod tests {
         let (d, n) = drop_unreferenced(&m);
         assert_eq!(n, 1);
         assert_eq!(d.positions.len(), 7);
+    }
+
+    #[test]
+    fn fill_holes_turns_an_annulus_into_a_disc() {
+        // A square with a square hole: 8 vertices, 8 triangles, 2 boundary loops.
+        let p = |x: f64, y: f64| [x, y, 0.0];
+        let m = TriMesh::new(
+            vec![p(0., 0.), p(3., 0.), p(3., 3.), p(0., 3.), p(1., 1.), p(2., 1.), p(2., 2.), p(1., 2.)],
+            vec![
+                [0, 1, 5], [0, 5, 4], [1, 2, 6], [1, 6, 5], [2, 3, 7], [2, 7, 6], [3, 0, 4], [3, 4, 7],
+            ],
+        );
+        let t = Topology::new(&m);
+        assert_eq!(t.boundary_loops.len(), 2);
+        let (f, n) = fill_holes(&m);
+        assert_eq!(n, 1);
+        let t = Topology::new(&f);
+        assert!(t.is_disc(), "filled mesh is a disc");
+        assert!(t.inconsistent_edges.is_empty(), "fill is oriented like the surface");
+        assert_eq!(f.positions[8], [1.5, 1.5, 0.0]);
+        assert!((f.area() - 9.0).abs() < 1e-12);
+        assert_eq!(&f.triangles[..8], &m.triangles[..]);
     }
 
     #[test]

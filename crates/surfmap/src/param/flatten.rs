@@ -5,7 +5,7 @@
 
 use super::density::{EnergyKind, Litke};
 use super::element::{RestTriangleError, rest_triangles};
-use super::newton::{IterationLog, NewtonSettings, NewtonSolver, StopReason};
+use super::newton::{IterationLog, NewtonSettings, NewtonSolver, NewtonTimings, StopReason};
 use super::{InitialMapError, count_flipped, lscm, signed_uv_area, tutte};
 use crate::linsolve::SolveError;
 use crate::mesh::validate::{Defect, validate};
@@ -82,6 +82,8 @@ pub struct Flattening {
     pub time_start: f64,
     pub time_newton: f64,
     pub time_total: f64,
+    /// Newton time by phase.
+    pub newton_timings: NewtonTimings,
 }
 
 /// Why a flattening failed.
@@ -93,6 +95,8 @@ pub enum FlattenError {
     Degenerate(#[from] RestTriangleError),
     #[error("linear solve failed: {0}")]
     Solve(#[from] SolveError),
+    #[error("continuation (--from-alpha) blends Litke α values; it needs the Litke energy as the target")]
+    ContinuationNeedsLitke,
     #[error("initial map: {0}")]
     InitialMap(#[from] InitialMapError),
     #[error("both initial maps flipped triangles (LSCM: {lscm}, mean-value: {mean_value}); the mesh geometry is probably broken (non-finite or coincident vertices)")]
@@ -114,6 +118,9 @@ pub fn flatten_with_progress(
     progress: &mut dyn FnMut(&IterationLog),
 ) -> Result<Flattening, FlattenError> {
     let clock = Instant::now();
+    if options.from_alpha.is_some() && !matches!(options.energy, EnergyKind::Litke(_)) {
+        return Err(FlattenError::ContinuationNeedsLitke);
+    }
     // Vertices used by no face get no UV from the solve: flatten the used part and
     // put them at the origin afterwards.
     let (compact, old_of_new) = without_unreferenced(mesh);
@@ -258,6 +265,7 @@ pub fn flatten_with_progress(
         time_start,
         time_newton,
         time_total: clock.elapsed().as_secs_f64(),
+        newton_timings: solver.timings,
     })
 }
 

@@ -69,7 +69,7 @@ pub struct NewtonSettings {
 
 impl Default for NewtonSettings {
     fn default() -> Self {
-        Self { armijo_c: 0.5, armijo_rho: 0.8, tolerance: 1e-10, max_iterations: 200 }
+        Self { armijo_c: 0.5, armijo_rho: 0.8, tolerance: 1e-12, max_iterations: 200 }
     }
 }
 
@@ -92,6 +92,23 @@ pub struct NewtonSolver<'m> {
     direction: Vec<[f64; 2]>,
     trial: Vec<[f64; 2]>,
     best: Vec<[f64; 2]>,
+    /// Where the time went, accumulated over all calls of [`Self::minimize`].
+    pub timings: NewtonTimings,
+}
+
+/// Seconds spent in each phase of the Newton iterations.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct NewtonTimings {
+    /// Symbolic analysis of the sparse pattern (once per mesh).
+    pub symbolic: f64,
+    /// Element gradients and Hessians, scatter into the sparse matrix.
+    pub assemble: f64,
+    /// Numeric Cholesky factorizations (including failed exact-Hessian attempts).
+    pub factorize: f64,
+    /// Triangular solves.
+    pub solve: f64,
+    /// Flip-free bound and Armijo backtracking (energy evaluations).
+    pub line_search: f64,
 }
 
 /// Which element Hessian to assemble.
@@ -157,7 +174,9 @@ impl<'m> NewtonSolver<'m> {
                 }
             }
         }
+        let t_symbolic = Instant::now();
         let (system, entry_slots) = SpdSystem::new(n as usize, &entries)?;
+        let symbolic_time = t_symbolic.elapsed().as_secs_f64();
         drop(entries);
         let mut slots = vec![[u32::MAX; 21]; triangles.len()];
         let mut k = 0;
@@ -184,6 +203,7 @@ impl<'m> NewtonSolver<'m> {
             direction: vec![[0.0; 2]; nv],
             trial: vec![[0.0; 2]; nv],
             best: vec![[0.0; 2]; nv],
+            timings: NewtonTimings { symbolic: symbolic_time, ..Default::default() },
         })
     }
 
@@ -235,20 +255,33 @@ impl<'m> NewtonSolver<'m> {
             let mut p = Vec::new();
             let mut solved = false;
             if try_exact {
+                let t0 = Instant::now();
                 self.assemble(uv, density, HessianKind::Exact);
-                if self.system.factorize_unshifted().is_ok() {
+                let t1 = Instant::now();
+                let ok = self.system.factorize_unshifted().is_ok();
+                self.timings.assemble += (t1 - t0).as_secs_f64();
+                self.timings.factorize += t1.elapsed().as_secs_f64();
+                if ok {
+                    let t2 = Instant::now();
                     p = self.gradient.iter().map(|g| -g).collect();
                     self.system.solve_in_place(&mut p)?;
+                    self.timings.solve += t2.elapsed().as_secs_f64();
                     solved = true;
                 } else {
                     exact_blocked_until = it + 3;
                 }
             }
             if !solved {
+                let t0 = Instant::now();
                 self.assemble(uv, density, HessianKind::Projected);
+                let t1 = Instant::now();
                 self.system.factorize()?;
+                let t2 = Instant::now();
                 p = self.gradient.iter().map(|g| -g).collect();
                 self.system.solve_in_place(&mut p)?;
+                self.timings.assemble += (t1 - t0).as_secs_f64();
+                self.timings.factorize += (t2 - t1).as_secs_f64();
+                self.timings.solve += t2.elapsed().as_secs_f64();
             }
             let gradient_norm = self.gradient.iter().map(|g| g * g).sum::<f64>().sqrt();
             let decrement = -self.gradient.iter().zip(&p).map(|(g, p)| g * p).sum::<f64>();
@@ -267,6 +300,7 @@ impl<'m> NewtonSolver<'m> {
                     d[c] = if k == u32::MAX { 0.0 } else { p[k as usize] };
                 }
             }
+            let t_search = Instant::now();
             let t_max = max_flip_free_step(uv, self.triangles, &self.direction);
             // Start at the full Newton step, or 90% of the way to the first flip.
             let mut step = 1.0f64.min(0.9 * t_max);
@@ -275,13 +309,20 @@ impl<'m> NewtonSolver<'m> {
             // Roundoff guard: near the minimum E(u + τp) − E(u) drowns in the rounding
             // of the sum; allow that much slack.
             let slack = 1e-13 * energy.abs();
+            let mut at_rounding_floor = false;
             for _ in 0..200 {
                 for (tr, (u, d)) in self.trial.iter_mut().zip(uv.iter().zip(&self.direction)) {
                     *tr = [u[0] + step * d[0], u[1] + step * d[1]];
                 }
                 let e = self.energy(&self.trial, density);
-                if e.is_finite() && e <= energy + settings.armijo_c * step * slope + slack {
+                // Sufficient decrease (thesis fig. 3.3), but never an increase.
+                if e.is_finite() && e < energy && e <= energy + settings.armijo_c * step * slope + slack {
                     accepted = Some(e);
+                    break;
+                }
+                if e.is_finite() && (e - energy).abs() <= slack {
+                    // No decrease is measurable any more: a minimum to rounding.
+                    at_rounding_floor = true;
                     break;
                 }
                 step *= settings.armijo_rho;
@@ -290,13 +331,14 @@ impl<'m> NewtonSolver<'m> {
                 }
             }
             let Some(mut e_new) = accepted else {
-                return Ok((StopReason::Locked, it - 1, energy));
+                let reason = if at_rounding_floor { StopReason::Converged } else { StopReason::Locked };
+                return Ok((reason, it - 1, energy));
             };
             // Barrier-dominated regions (triangles the start map shrank a lot) take
             // Newton steps that are far too short (a 1/d barrier grows a shrunk
             // triangle by only ~20% per full step): when the full step was accepted and
             // the flip-free bound allows, try doubling it while the energy still drops.
-            if step == 1.0 && 0.9 * t_max > 2.0 {
+            if step == 1.0 && 0.9 * t_max > 2.0 && energy - e_new > 1e3 * slack {
                 std::mem::swap(&mut self.trial, &mut self.best);
                 let mut t = 2.0;
                 while t <= 0.9 * t_max {
@@ -315,6 +357,7 @@ impl<'m> NewtonSolver<'m> {
                 std::mem::swap(&mut self.trial, &mut self.best);
             }
             uv.copy_from_slice(&self.trial);
+            self.timings.line_search += t_search.elapsed().as_secs_f64();
             energy = e_new;
             log(IterationLog {
                 iteration: it,

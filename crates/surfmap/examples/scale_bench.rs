@@ -1,0 +1,45 @@
+//! Scaling benchmark: a real disc mesh subdivided in code (midpoint 1 → 4, `k` times;
+//! the result is synthetic) and flattened with the balanced preset. Prints size,
+//! iterations, time by phase and peak resident memory.
+//!
+//! `cargo run --release -p surfmap --example scale_bench -- MESH LEVELS`
+//! e.g. `../shared/data/faces/face_bff.obj 3` (34k → 2.2M faces).
+
+use surfmap::mesh::io::read_mesh;
+use surfmap::mesh::subdivide::subdivide_midpoint;
+use surfmap::param::count_flipped;
+use surfmap::param::flatten::{FlattenOptions, flatten};
+
+fn peak_rss_mib() -> f64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| s.lines().find(|l| l.starts_with("VmHWM:")).map(|l| l.to_string()))
+        .and_then(|l| l.split_whitespace().nth(1).and_then(|k| k.parse::<f64>().ok()))
+        .map_or(f64::NAN, |kib| kib / 1024.0)
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let path = args.first().expect("MESH LEVELS");
+    let levels: usize = args.get(1).map_or(3, |s| s.parse().expect("LEVELS"));
+    let mut mesh = read_mesh(std::path::Path::new(path)).expect("readable").mesh;
+    for _ in 0..levels {
+        mesh = subdivide_midpoint(&mesh);
+    }
+    println!("{path} subdivided {levels}×: {} vertices, {} faces", mesh.positions.len(), mesh.triangles.len());
+    let t = std::time::Instant::now();
+    let r = flatten(&mesh, &FlattenOptions::default()).expect("flattened");
+    let total = t.elapsed().as_secs_f64();
+    println!(
+        "balanced: start {:?}, {} iterations, converged {}, energy {:.6}, flipped {}, total {:.2} s (start map {:.2} s), peak RSS {:.0} MiB",
+        r.start,
+        r.iterations,
+        r.converged,
+        r.energy,
+        count_flipped(&r.uvs, &mesh.triangles),
+        total,
+        r.time_start,
+        peak_rss_mib()
+    );
+    println!("{:?}", r.newton_timings);
+}
