@@ -4,7 +4,8 @@
 //! `cargo run --release --example images_bench [-- path/to/mesh.obj [sheet.png]]`
 //!
 //! The flattening is `param::flatten` with the balanced preset (thesis §3.2.1); its time is
-//! reported separately and excluded from the image timings. `RUNS` sets the number of runs.
+//! reported separately and excluded from the image timings. `RUNS` sets the number of runs,
+//! `SIZES` the grid sizes (comma-separated).
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -78,7 +79,13 @@ fn main() {
         .ok()
         .and_then(|s| s.parse().ok())
         .unwrap_or(5);
-    for size in [257usize, 1025] {
+    // SIZES=257,1025 (default) picks the grid sizes.
+    let sizes: Vec<usize> = std::env::var("SIZES")
+        .unwrap_or_else(|_| "257,1025".into())
+        .split(',')
+        .filter_map(|s| s.trim().parse().ok())
+        .collect();
+    for size in sizes {
         let options = GeometryImagesOptions {
             size,
             ..Default::default()

@@ -282,6 +282,29 @@ mod tests {
     }
 
     #[test]
+    fn one_factorization_serves_many_fields() {
+        // Fields extended together through one HarmonicExtension equal fields extended one
+        // at a time, and extension is linear: ext(a f + b g) = a ext(f) + b ext(g).
+        let n = 17;
+        let inside = disc_mask(n);
+        let f: Vec<f64> = (0..n * n).map(|k| (k % n) as f64 * 0.1).collect();
+        let g: Vec<f64> = (0..n * n).map(|k| ((k / n) as f64).sqrt()).collect();
+        let ext = HarmonicExtension::new(n, &inside).unwrap();
+        assert_eq!(ext.num_unknowns(), inside.iter().filter(|&&b| !b).count());
+        let (mut f1, mut g1) = (f.clone(), g.clone());
+        let mut mix: Vec<f64> = f.iter().zip(&g).map(|(a, b)| 2.0 * a - 3.0 * b).collect();
+        ext.apply(&mut [&mut f1, &mut g1, &mut mix]).unwrap();
+        let mut f2 = f.clone();
+        harmonic_extension(n, &inside, &mut [&mut f2]).unwrap();
+        for k in 0..n * n {
+            assert!((f1[k] - f2[k]).abs() < 1e-12);
+            assert!((mix[k] - (2.0 * f1[k] - 3.0 * g1[k])).abs() < 1e-10);
+        }
+        let mut short = vec![0.0; 5];
+        assert!(ext.apply(&mut [&mut short]).is_err());
+    }
+
+    #[test]
     fn empty_domain_is_an_error() {
         let mut f = vec![0.0; 9];
         assert!(matches!(
