@@ -66,6 +66,18 @@ pub struct TextureImage {
 }
 
 impl TextureImage {
+    /// Reads a PNG (any colour type; alpha ignored).
+    pub fn read(path: &std::path::Path) -> Result<Self, RasterError> {
+        let img = image::open(path)
+            .map_err(|e| RasterError::Texture(format!("cannot read {}: {e}", path.display())))?
+            .to_rgb8();
+        Ok(Self {
+            width: img.width(),
+            height: img.height(),
+            rgb: img.pixels().map(|p| p.0).collect(),
+        })
+    }
+
     /// Bilinear lookup at texture coordinates `(u, v)`, `v` up, clamped to the edge.
     pub fn sample(&self, uv: [f64; 2]) -> [u8; 3] {
         let (w, h) = (self.width as usize, self.height as usize);
