@@ -12,6 +12,7 @@ use std::time::Instant;
 
 use surfmap::mesh::io::read_mesh;
 use surfmap::param::flatten::{FlattenOptions, flatten};
+use surfmap::raster::output::position_picture;
 use surfmap::raster::picture::{
     contact_sheet, distance_picture, diverging_picture, metric_picture,
 };
@@ -131,28 +132,36 @@ fn main() {
                 let lvl = &pyr.levels[5];
                 let tiles = vec![
                     (
-                        "mean curvature h".to_string(),
+                        "H (RED +, BLUE -)".to_string(),
                         diverging_picture(n, &img.mean_curvature),
                     ),
                     (
-                        "h extended".to_string(),
+                        "H EXTENDED".to_string(),
                         diverging_picture(n, &img.mean_curvature_extended),
                     ),
-                    ("metric g (rgb)".to_string(), metric_picture(n, &img.metric)),
                     (
-                        "boundary distance".to_string(),
+                        format!("H, σ=1/{} ({}²)", 1 << lvl.level, lvl.size),
+                        diverging_picture(lvl.size, &lvl.images[0]),
+                    ),
+                    (
+                        "POSITION XYZ=RGB".to_string(),
+                        position_picture(n, &img.position),
+                    ),
+                    ("METRIC G (RGB)".to_string(), metric_picture(n, &img.metric)),
+                    (
+                        "G EXTENDED (RGB)".to_string(),
+                        metric_picture(n, &img.metric_extended),
+                    ),
+                    (
+                        "BOUNDARY DISTANCE".to_string(),
                         distance_picture(n, &img.boundary_distance, Some(&outside)),
                     ),
                     (
-                        "feature distance".to_string(),
+                        "FEATURE DISTANCE".to_string(),
                         distance_picture(n, img.feature_distance.as_ref().unwrap(), Some(&outside)),
                     ),
-                    (
-                        format!("h level {} s=1/{}", lvl.level, 1 << lvl.level),
-                        diverging_picture(lvl.size, &lvl.images[0]),
-                    ),
                 ];
-                contact_sheet(&tiles, 3, 320)
+                contact_sheet(&tiles, 4, 320)
                     .save_png(std::path::Path::new(out))
                     .expect("write sheet");
                 println!("wrote {out}");
