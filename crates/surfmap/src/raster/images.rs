@@ -133,7 +133,8 @@ pub struct GeometryImages {
     pub texture: Option<Vec<[u8; 3]>>,
     /// Pyramid of `h`, `g11`, `g12`, `g22` (extended), when requested.
     pub pyramid: Option<Pyramid>,
-    /// Wall-clock seconds per stage, in order.
+    /// Wall-clock seconds per stage, in order; entries named "  of which …" break down the
+    /// stage before them (its parts ran concurrently, so they do not add up).
     pub timings: Vec<(&'static str, f64)>,
 }
 
