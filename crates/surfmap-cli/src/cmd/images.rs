@@ -71,9 +71,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Some(p) => Some(FeatureMask::read_png(p)?),
         None => None,
     };
-    let texture_path = args.texture.clone().or(file.texture);
-    let texture = match &texture_path {
-        Some(p) if args.texture.is_some() || p.is_file() => Some(TextureImage::read(p)?),
+    // An explicit --texture must be readable; the material's map_Kd is used when it is
+    // (a missing or non-PNG file is reported and skipped).
+    let texture = match (&args.texture, &file.texture) {
+        (Some(p), _) => Some(TextureImage::read(p)?),
+        (None, Some(p)) if mesh.uvs.is_some() => match TextureImage::read(p) {
+            Ok(t) => Some(t),
+            Err(e) => {
+                if !args.quiet {
+                    eprintln!("note: skipping the material's texture: {e}");
+                }
+                None
+            }
+        },
         _ => None,
     };
     if let (Some(m), Some(p)) = (&mask, &args.feature_mask) {
