@@ -28,6 +28,8 @@ enum Command {
     Demo(cmd::demo::Args),
     /// Score a map: distortion measures, flips and overlap of a mesh's texture coordinates.
     Measure(cmd::measure::Args),
+    /// Geometry images: flatten (balanced), rasterize h, g, distances, pyramid; PNG + .npy.
+    Images(cmd::images::Args),
 }
 
 fn main() {
@@ -38,6 +40,7 @@ fn main() {
         Command::Tradeoff(a) => cmd::tradeoff::run(a),
         Command::Demo(a) => cmd::demo::run(a),
         Command::Measure(a) => cmd::measure::run(a),
+        Command::Images(a) => cmd::images::run(a),
     };
     if let Err(e) = result {
         // Print the chain of causes, skipping a cause its parent already quotes.

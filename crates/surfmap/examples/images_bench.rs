@@ -3,15 +3,16 @@
 //!
 //! `cargo run --release --example images_bench [-- path/to/mesh.obj [sheet.png]]`
 //!
-//! Until `param::flatten` exists, the flattening here is a uniform-weight Tutte embedding
-//! onto a circle (flip-free, NOT the balanced preset of §3.2.1); its time is reported
-//! separately and excluded from the image timings.
+//! The flattening is `param::flatten` with the balanced preset (thesis §3.2.1); its time is
+//! reported separately and excluded from the image timings. `RUNS` sets the number of runs,
+//! `SIZES` the grid sizes (comma-separated).
 
 use std::path::PathBuf;
 use std::time::Instant;
 
-use surfmap::TriMesh;
-use surfmap::raster::boundary::boundary_edges;
+use surfmap::mesh::io::read_mesh;
+use surfmap::param::flatten::{FlattenOptions, flatten};
+use surfmap::raster::output::position_picture;
 use surfmap::raster::picture::{
     contact_sheet, distance_picture, diverging_picture, metric_picture,
 };
@@ -42,15 +43,7 @@ fn main() {
         println!("note: {} not found; nothing to benchmark", path.display());
         return;
     }
-    let (models, _) = tobj::load_obj(&path, &tobj::GPU_LOAD_OPTIONS).expect("read OBJ");
-    let m = &models[0].mesh;
-    let positions: Vec<[f64; 3]> = m
-        .positions
-        .chunks(3)
-        .map(|p| [p[0] as f64, p[1] as f64, p[2] as f64])
-        .collect();
-    let triangles: Vec<[u32; 3]> = m.indices.chunks(3).map(|t| [t[0], t[1], t[2]]).collect();
-    let mesh = TriMesh::new(positions, triangles);
+    let mesh = read_mesh(&path).expect("read mesh").mesh;
     println!(
         "mesh {}: {} vertices, {} faces",
         path.display(),
@@ -58,12 +51,23 @@ fn main() {
         mesh.num_triangles()
     );
 
-    let t = Instant::now();
-    let uvs = tutte(&mesh);
+    let flatten_runs = 3;
+    let mut flatten_times = vec![];
+    let mut flat = None;
+    for _ in 0..flatten_runs {
+        let t = Instant::now();
+        flat = Some(flatten(&mesh, &FlattenOptions::default()).expect("flatten"));
+        flatten_times.push(t.elapsed().as_secs_f64());
+    }
+    flatten_times.sort_by(f64::total_cmp);
+    let flat = flat.unwrap();
     println!(
-        "placeholder Tutte flattening: {:.3} s (excluded below)",
-        t.elapsed().as_secs_f64()
+        "balanced flattening: median {:.3} s over {flatten_runs} runs ({} Newton iterations, converged {}; excluded below)",
+        flatten_times[flatten_runs / 2],
+        flat.iterations,
+        flat.converged
     );
+    let uvs = flat.uvs;
 
     // Two point-like features, to include the Eikonal solves in the timing.
     let features = FeatureFile {
@@ -84,7 +88,13 @@ fn main() {
         .ok()
         .and_then(|s| s.parse().ok())
         .unwrap_or(5);
-    for size in [257usize, 1025] {
+    // SIZES=257,1025 (default) picks the grid sizes.
+    let sizes: Vec<usize> = std::env::var("SIZES")
+        .unwrap_or_else(|_| "257,1025".into())
+        .split(',')
+        .filter_map(|s| s.trim().parse().ok())
+        .collect();
+    for size in sizes {
         let options = GeometryImagesOptions {
             size,
             ..Default::default()
@@ -130,137 +140,40 @@ fn main() {
                 let lvl = &pyr.levels[5];
                 let tiles = vec![
                     (
-                        "mean curvature h".to_string(),
+                        "H (RED +, BLUE -)".to_string(),
                         diverging_picture(n, &img.mean_curvature),
                     ),
                     (
-                        "h extended".to_string(),
+                        "H EXTENDED".to_string(),
                         diverging_picture(n, &img.mean_curvature_extended),
                     ),
-                    ("metric g (rgb)".to_string(), metric_picture(n, &img.metric)),
                     (
-                        "boundary distance".to_string(),
+                        format!("H, σ=1/{} ({}²)", 1 << lvl.level, lvl.size),
+                        diverging_picture(lvl.size, &lvl.images[0]),
+                    ),
+                    (
+                        "POSITION XYZ=RGB".to_string(),
+                        position_picture(n, &img.position),
+                    ),
+                    ("METRIC G (RGB)".to_string(), metric_picture(n, &img.metric)),
+                    (
+                        "G EXTENDED (RGB)".to_string(),
+                        metric_picture(n, &img.metric_extended),
+                    ),
+                    (
+                        "BOUNDARY DISTANCE".to_string(),
                         distance_picture(n, &img.boundary_distance, Some(&outside)),
                     ),
                     (
-                        "feature distance".to_string(),
+                        "FEATURE DISTANCE".to_string(),
                         distance_picture(n, img.feature_distance.as_ref().unwrap(), Some(&outside)),
                     ),
-                    (
-                        format!("h level {} s=1/{}", lvl.level, 1 << lvl.level),
-                        diverging_picture(lvl.size, &lvl.images[0]),
-                    ),
                 ];
-                contact_sheet(&tiles, 3, 320)
+                contact_sheet(&tiles, 4, 320)
                     .save_png(std::path::Path::new(out))
                     .expect("write sheet");
                 println!("wrote {out}");
             }
         }
     }
-}
-
-/// Uniform-weight Tutte embedding of a disc onto the unit circle (boundary spaced by
-/// arc length), solved by conjugate gradients.
-fn tutte(mesh: &TriMesh) -> Vec<[f64; 2]> {
-    let nv = mesh.num_vertices();
-    let edges = boundary_edges(&mesh.triangles);
-    let mut next = vec![u32::MAX; nv];
-    for e in &edges {
-        next[e[0] as usize] = e[1];
-    }
-    let start = edges[0][0];
-    let mut ring = vec![start];
-    while let Some(&v) = ring.last() {
-        let w = next[v as usize];
-        if w == start || w == u32::MAX {
-            break;
-        }
-        ring.push(w);
-    }
-    let len = |a: u32, b: u32| {
-        let (p, q) = (mesh.positions[a as usize], mesh.positions[b as usize]);
-        ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
-    };
-    let total: f64 = (0..ring.len())
-        .map(|i| len(ring[i], ring[(i + 1) % ring.len()]))
-        .sum();
-    let mut uv = vec![[0.0; 2]; nv];
-    let mut fixed = vec![false; nv];
-    let mut acc = 0.0;
-    for i in 0..ring.len() {
-        let a = std::f64::consts::TAU * acc / total;
-        uv[ring[i] as usize] = [a.cos(), a.sin()];
-        fixed[ring[i] as usize] = true;
-        acc += len(ring[i], ring[(i + 1) % ring.len()]);
-    }
-    let mut nbrs: Vec<Vec<u32>> = vec![vec![]; nv];
-    for t in &mesh.triangles {
-        for k in 0..3 {
-            nbrs[t[k] as usize].push(t[(k + 1) % 3]);
-            nbrs[t[(k + 1) % 3] as usize].push(t[k]);
-        }
-    }
-    for l in &mut nbrs {
-        l.sort_unstable();
-        l.dedup();
-    }
-    // CG on the free vertices: deg·u_i − Σ_free u_j = Σ_fixed u_j.
-    for d in 0..2 {
-        let apply = |x: &[f64], y: &mut [f64]| {
-            for i in 0..nv {
-                y[i] = if fixed[i] {
-                    0.0
-                } else {
-                    nbrs[i].len() as f64 * x[i]
-                        - nbrs[i]
-                            .iter()
-                            .filter(|&&j| !fixed[j as usize])
-                            .map(|&j| x[j as usize])
-                            .sum::<f64>()
-                };
-            }
-        };
-        let b: Vec<f64> = (0..nv)
-            .map(|i| {
-                if fixed[i] {
-                    0.0
-                } else {
-                    nbrs[i]
-                        .iter()
-                        .filter(|&&j| fixed[j as usize])
-                        .map(|&j| uv[j as usize][d])
-                        .sum()
-                }
-            })
-            .collect();
-        let mut x = vec![0.0; nv];
-        let mut r = b.clone();
-        let mut p = r.clone();
-        let mut ap = vec![0.0; nv];
-        let mut rr: f64 = r.iter().map(|v| v * v).sum();
-        let b2 = rr;
-        for _ in 0..20000 {
-            apply(&p, &mut ap);
-            let alpha = rr / p.iter().zip(&ap).map(|(a, b)| a * b).sum::<f64>();
-            for i in 0..nv {
-                x[i] += alpha * p[i];
-                r[i] -= alpha * ap[i];
-            }
-            let rr_new: f64 = r.iter().map(|v| v * v).sum();
-            if rr_new < 1e-24 * b2 {
-                break;
-            }
-            for i in 0..nv {
-                p[i] = r[i] + rr_new / rr * p[i];
-            }
-            rr = rr_new;
-        }
-        for (i, p) in uv.iter_mut().enumerate() {
-            if !fixed[i] {
-                p[d] = x[i];
-            }
-        }
-    }
-    uv
 }

@@ -1,5 +1,6 @@
 pub mod demo;
 pub mod flatten;
+pub mod images;
 pub mod inspect;
 pub mod measure;
 pub mod tradeoff;

@@ -96,10 +96,24 @@ pub fn solve_eikonal(
 ) -> Result<(), RasterError> {
     let n = size;
     let h = 1.0 / (n - 1) as f64;
+    // Sources: finite nodes that can update someone, i.e. updatable themselves or with an
+    // updatable 8-neighbour (a frozen node inside a frozen region never needs a visit).
+    let near_updatable = |k: usize| {
+        let (i, j) = ((k / n) as i64, (k % n) as i64);
+        updatable[k]
+            || RING.iter().any(|&(di, dj)| {
+                let (a, b) = (i + di, j + dj);
+                a >= 0
+                    && b >= 0
+                    && a < n as i64
+                    && b < n as i64
+                    && updatable[a as usize * n + b as usize]
+            })
+    };
     let mut heap: BinaryHeap<Entry> = value
         .iter()
         .enumerate()
-        .filter(|(_, v)| v.is_finite())
+        .filter(|&(k, v)| v.is_finite() && near_updatable(k))
         .map(|(k, &v)| Entry(v, k as u32))
         .collect();
     let max_pops = 64 * n * n + 1024;

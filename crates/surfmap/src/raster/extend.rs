@@ -10,175 +10,171 @@
 //! extension of `g = [g11, g12, g22]` stays symmetric positive definite (a convex
 //! combination of SPD matrices is SPD).
 
+use rayon::prelude::*;
+
 use super::RasterError;
+use crate::linsolve::SpdSystem;
+
+/// The factorized Laplace system of one grid size and inside mask: build it once with
+/// [`HarmonicExtension::new`] (pattern, symbolic and numeric Cholesky), then extend any
+/// number of fields with [`HarmonicExtension::apply`] (two triangular solves each).
+///
+/// Unknowns are the outside nodes; row `p` is `deg(p) u_p − Σ_{q~p, q outside} u_q =
+/// Σ_{q~p, q inside} f_q`, with `deg(p)` the number of grid neighbours of `p` (natural
+/// boundary conditions on ∂ω). Every connected outside region touches an inside node,
+/// so the matrix is an irreducibly diagonally dominant M-matrix: symmetric positive definite.
+#[derive(Debug)]
+pub struct HarmonicExtension {
+    size: usize,
+    /// Grid index of every unknown.
+    outside: Vec<u32>,
+    /// For every unknown, its up-to-4 inside neighbours (grid indices; `u32::MAX` = none).
+    inside_neighbours: Vec<[u32; 4]>,
+    system: Option<SpdSystem>,
+}
+
+impl HarmonicExtension {
+    /// Assembles and factorizes the Laplacian on the outside nodes of `inside`
+    /// (`size²` flags). Fails if no node is inside.
+    pub fn new(size: usize, inside: &[bool]) -> Result<Self, RasterError> {
+        let n = size;
+        if inside.len() != n * n {
+            return Err(RasterError::BadOption(format!(
+                "inside mask has {} entries for a {n}×{n} grid",
+                inside.len()
+            )));
+        }
+        if !inside.iter().any(|&b| b) {
+            return Err(RasterError::EmptyDomain);
+        }
+        let mut unknown = vec![u32::MAX; n * n];
+        let mut outside = vec![];
+        for k in 0..n * n {
+            if !inside[k] {
+                unknown[k] = outside.len() as u32;
+                outside.push(k as u32);
+            }
+        }
+        let m = outside.len();
+        if m == 0 {
+            return Ok(Self {
+                size,
+                outside,
+                inside_neighbours: vec![],
+                system: None,
+            });
+        }
+        // Each off-diagonal pair once (to the right and downwards), plus the diagonal.
+        let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(3 * m);
+        let mut off: Vec<usize> = Vec::with_capacity(2 * m);
+        let mut degree = vec![0.0; m];
+        let mut inside_neighbours = vec![[u32::MAX; 4]; m];
+        for (row, &p) in outside.iter().enumerate() {
+            let p = p as usize;
+            let (i, j) = (p / n, p % n);
+            let mut slot = 0;
+            for (ok, q) in [
+                (j > 0, p.wrapping_sub(1)),
+                (j + 1 < n, p + 1),
+                (i > 0, p.wrapping_sub(n)),
+                (i + 1 < n, p + n),
+            ] {
+                if !ok {
+                    continue;
+                }
+                degree[row] += 1.0;
+                if inside[q] {
+                    inside_neighbours[row][slot] = q as u32;
+                    slot += 1;
+                } else if q > p {
+                    off.push(pairs.len());
+                    pairs.push((row as u32, unknown[q]));
+                }
+            }
+            pairs.push((row as u32, row as u32));
+        }
+        let (mut system, slots) = SpdSystem::new(m, &pairs).map_err(solve_error)?;
+        let values = system.values_mut();
+        values.fill(0.0);
+        let mut next_off = off.iter().peekable();
+        let mut row = 0usize;
+        for (k, &(r, c)) in pairs.iter().enumerate() {
+            if next_off.peek() == Some(&&k) {
+                next_off.next();
+                values[slots[k] as usize] += -1.0;
+            } else {
+                debug_assert_eq!(r, c);
+                values[slots[k] as usize] += degree[row];
+                row += 1;
+            }
+        }
+        system.factorize_unshifted().map_err(solve_error)?;
+        Ok(Self {
+            size,
+            outside,
+            inside_neighbours,
+            system: Some(system),
+        })
+    }
+
+    /// Number of unknowns (outside nodes).
+    pub fn num_unknowns(&self) -> usize {
+        self.outside.len()
+    }
+
+    /// Overwrites the outside nodes of every field (each `size²` values, read on the
+    /// inside nodes) with the harmonic extension of its inside values.
+    pub fn apply(&self, fields: &mut [&mut [f64]]) -> Result<(), RasterError> {
+        let n = self.size;
+        if let Some(f) = fields.iter().find(|f| f.len() != n * n) {
+            return Err(RasterError::BadOption(format!(
+                "field has {} values for a {n}×{n} grid",
+                f.len()
+            )));
+        }
+        let Some(system) = &self.system else {
+            return Ok(());
+        };
+        // The fields are independent right-hand sides of one factorization: solve them in parallel.
+        fields.par_iter_mut().try_for_each(|f| {
+            let mut rhs: Vec<f64> = self
+                .inside_neighbours
+                .iter()
+                .map(|nb| {
+                    nb.iter()
+                        .take_while(|&&q| q != u32::MAX)
+                        .map(|&q| f[q as usize])
+                        .sum()
+                })
+                .collect();
+            if let Some((k, _)) = rhs.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+                return Err(RasterError::Solve(format!(
+                    "a value next to outside node {} is not finite",
+                    self.outside[k]
+                )));
+            }
+            system.solve_in_place(&mut rhs).map_err(solve_error)?;
+            for (&p, &v) in self.outside.iter().zip(&rhs) {
+                f[p as usize] = v;
+            }
+            Ok(())
+        })
+    }
+}
+
+fn solve_error(e: crate::linsolve::SolveError) -> RasterError {
+    RasterError::Solve(e.to_string())
+}
 
 /// Extends `fields` (each `size²` values, read on `inside` nodes) harmonically to the
-/// outside nodes, in place. Fails if no node is inside.
+/// outside nodes, in place: one factorization, one pair of triangular solves per field.
+/// Fails if no node is inside.
 pub fn harmonic_extension(
     size: usize,
     inside: &[bool],
     fields: &mut [&mut [f64]],
 ) -> Result<(), RasterError> {
-    let n = size;
-    if !inside.iter().any(|&b| b) {
-        return Err(RasterError::EmptyDomain);
-    }
-    let mut unknown = vec![u32::MAX; n * n];
-    let mut outside = vec![];
-    for k in 0..n * n {
-        if !inside[k] {
-            unknown[k] = outside.len() as u32;
-            outside.push(k);
-        }
-    }
-    if outside.is_empty() {
-        return Ok(());
-    }
-    let m = outside.len();
-    let mut triplets: Vec<(u32, u32, f64)> = Vec::with_capacity(5 * m);
-    let mut rhs: Vec<Vec<f64>> = vec![vec![0.0; m]; fields.len()];
-    for (row, &p) in outside.iter().enumerate() {
-        let (i, j) = (p / n, p % n);
-        let mut degree = 0.0;
-        let mut visit = |q: usize| {
-            degree += 1.0;
-            if inside[q] {
-                for (f, r) in fields.iter().zip(rhs.iter_mut()) {
-                    r[row] += f[q];
-                }
-            } else {
-                triplets.push((row as u32, unknown[q], -1.0));
-            }
-        };
-        if j > 0 {
-            visit(p - 1);
-        }
-        if j + 1 < n {
-            visit(p + 1);
-        }
-        if i > 0 {
-            visit(p - n);
-        }
-        if i + 1 < n {
-            visit(p + n);
-        }
-        triplets.push((row as u32, row as u32, degree));
-    }
-    let mut views: Vec<&mut [f64]> = rhs.iter_mut().map(|r| r.as_mut_slice()).collect();
-    solve_spd(m, &triplets, &mut views)?;
-    for (f, r) in fields.iter_mut().zip(&rhs) {
-        for (row, &p) in outside.iter().enumerate() {
-            f[p] = r[row];
-        }
-    }
-    Ok(())
-}
-
-/// The one call site of the sparse SPD solver (full symmetric triplets, duplicates summed;
-/// each right-hand side is overwritten by its solution).
-///
-/// TODO(linsolve): switch to `crate::linsolve::solve_spd` once it is merged; until then a
-/// Jacobi-preconditioned conjugate gradient (fine for tests, slow on 1025² grids).
-#[allow(clippy::needless_range_loop)]
-fn solve_spd(
-    n: usize,
-    triplets: &[(u32, u32, f64)],
-    rhs: &mut [&mut [f64]],
-) -> Result<(), RasterError> {
-    // CSR with summed duplicates.
-    let mut sorted: Vec<(u32, u32, f64)> = triplets.to_vec();
-    sorted.sort_unstable_by_key(|t| (t.0, t.1));
-    let mut start = vec![0usize; n + 1];
-    let mut cols: Vec<u32> = Vec::with_capacity(sorted.len());
-    let mut vals: Vec<f64> = Vec::with_capacity(sorted.len());
-    if let Some(&(r, c, _)) = sorted
-        .iter()
-        .find(|t| t.0 as usize >= n || t.1 as usize >= n)
-    {
-        return Err(RasterError::Solve(format!(
-            "entry ({r}, {c}) outside {n}×{n}"
-        )));
-    }
-    let mut k = 0;
-    for r in 0..n {
-        start[r] = cols.len();
-        while k < sorted.len() && sorted[k].0 as usize == r {
-            let c = sorted[k].1;
-            if cols.len() > start[r] && *cols.last().unwrap() == c {
-                *vals.last_mut().unwrap() += sorted[k].2;
-            } else {
-                cols.push(c);
-                vals.push(sorted[k].2);
-            }
-            k += 1;
-        }
-    }
-    start[n] = cols.len();
-    let mut diag = vec![0.0; n];
-    for r in 0..n {
-        for e in start[r]..start[r + 1] {
-            if cols[e] as usize == r {
-                diag[r] = vals[e];
-            }
-        }
-        if diag[r] <= 0.0 {
-            return Err(RasterError::Solve(format!(
-                "non-positive diagonal in row {r}"
-            )));
-        }
-    }
-    let matvec = |x: &[f64], y: &mut [f64]| {
-        for r in 0..n {
-            let mut s = 0.0;
-            for e in start[r]..start[r + 1] {
-                s += vals[e] * x[cols[e] as usize];
-            }
-            y[r] = s;
-        }
-    };
-    for b in rhs.iter_mut() {
-        let bnorm = b.iter().map(|v| v * v).sum::<f64>().sqrt();
-        let mut x = vec![0.0; n];
-        if bnorm == 0.0 {
-            b.copy_from_slice(&x);
-            continue;
-        }
-        let mut r: Vec<f64> = b.to_vec();
-        let mut z: Vec<f64> = r.iter().zip(&diag).map(|(r, d)| r / d).collect();
-        let mut p = z.clone();
-        let mut ap = vec![0.0; n];
-        let mut rz: f64 = r.iter().zip(&z).map(|(a, b)| a * b).sum();
-        let max_iter = 20 * n + 100;
-        let mut converged = false;
-        for _ in 0..max_iter {
-            matvec(&p, &mut ap);
-            let alpha = rz / p.iter().zip(&ap).map(|(a, b)| a * b).sum::<f64>();
-            for i in 0..n {
-                x[i] += alpha * p[i];
-                r[i] -= alpha * ap[i];
-            }
-            if r.iter().map(|v| v * v).sum::<f64>().sqrt() <= 1e-13 * bnorm {
-                converged = true;
-                break;
-            }
-            for i in 0..n {
-                z[i] = r[i] / diag[i];
-            }
-            let rz_new: f64 = r.iter().zip(&z).map(|(a, b)| a * b).sum();
-            let beta = rz_new / rz;
-            rz = rz_new;
-            for i in 0..n {
-                p[i] = z[i] + beta * p[i];
-            }
-        }
-        if !converged {
-            return Err(RasterError::Solve(
-                "conjugate gradient did not converge".into(),
-            ));
-        }
-        b.copy_from_slice(&x);
-    }
-    Ok(())
+    HarmonicExtension::new(size, inside)?.apply(fields)
 }
 
 #[cfg(test)]
@@ -283,6 +279,29 @@ mod tests {
                 "node {k}"
             );
         }
+    }
+
+    #[test]
+    fn one_factorization_serves_many_fields() {
+        // Fields extended together through one HarmonicExtension equal fields extended one
+        // at a time, and extension is linear: ext(a f + b g) = a ext(f) + b ext(g).
+        let n = 17;
+        let inside = disc_mask(n);
+        let f: Vec<f64> = (0..n * n).map(|k| (k % n) as f64 * 0.1).collect();
+        let g: Vec<f64> = (0..n * n).map(|k| ((k / n) as f64).sqrt()).collect();
+        let ext = HarmonicExtension::new(n, &inside).unwrap();
+        assert_eq!(ext.num_unknowns(), inside.iter().filter(|&&b| !b).count());
+        let (mut f1, mut g1) = (f.clone(), g.clone());
+        let mut mix: Vec<f64> = f.iter().zip(&g).map(|(a, b)| 2.0 * a - 3.0 * b).collect();
+        ext.apply(&mut [&mut f1, &mut g1, &mut mix]).unwrap();
+        let mut f2 = f.clone();
+        harmonic_extension(n, &inside, &mut [&mut f2]).unwrap();
+        for k in 0..n * n {
+            assert!((f1[k] - f2[k]).abs() < 1e-12);
+            assert!((mix[k] - (2.0 * f1[k] - 3.0 * g1[k])).abs() < 1e-10);
+        }
+        let mut short = vec![0.0; 5];
+        assert!(ext.apply(&mut [&mut short]).is_err());
     }
 
     #[test]

@@ -66,6 +66,18 @@ pub struct TextureImage {
 }
 
 impl TextureImage {
+    /// Reads a PNG (any colour type; alpha ignored).
+    pub fn read(path: &std::path::Path) -> Result<Self, RasterError> {
+        let img = image::open(path)
+            .map_err(|e| RasterError::Texture(format!("cannot read {}: {e}", path.display())))?
+            .to_rgb8();
+        Ok(Self {
+            width: img.width(),
+            height: img.height(),
+            rgb: img.pixels().map(|p| p.0).collect(),
+        })
+    }
+
     /// Bilinear lookup at texture coordinates `(u, v)`, `v` up, clamped to the edge.
     pub fn sample(&self, uv: [f64; 2]) -> [u8; 3] {
         let (w, h) = (self.width as usize, self.height as usize);
@@ -121,7 +133,8 @@ pub struct GeometryImages {
     pub texture: Option<Vec<[u8; 3]>>,
     /// Pyramid of `h`, `g11`, `g12`, `g22` (extended), when requested.
     pub pyramid: Option<Pyramid>,
-    /// Wall-clock seconds per stage, in order.
+    /// Wall-clock seconds per stage, in order; entries named "  of which …" break down the
+    /// stage before them (its parts ran concurrently, so they do not add up).
     pub timings: Vec<(&'static str, f64)>,
 }
 
@@ -184,15 +197,6 @@ impl GeometryImages {
             .collect();
         lap("sample position, metric, curvature", &mut timings);
 
-        // Harmonic extension of h and g (one solve, four right-hand sides).
-        let mut hx = mean_curvature.clone();
-        let mut g11: Vec<f64> = metric.iter().map(|g| g[0]).collect();
-        let mut g12: Vec<f64> = metric.iter().map(|g| g[1]).collect();
-        let mut g22: Vec<f64> = metric.iter().map(|g| g[2]).collect();
-        harmonic_extension(n, &inside, &mut [&mut hx, &mut g11, &mut g12, &mut g22])?;
-        let metric_extended: Vec<[f64; 3]> = (0..n * n).map(|k| [g11[k], g12[k], g22[k]]).collect();
-        lap("harmonic extension", &mut timings);
-
         let segments: Vec<[[f64; 2]; 2]> = boundary_edges(&mesh.triangles)
             .iter()
             .map(|e| [xi[e[0] as usize], xi[e[1] as usize]])
@@ -220,58 +224,67 @@ impl GeometryImages {
                 })
                 .collect()
         });
+        lap("texture", &mut timings);
 
-        // Seeds per feature, then the Eikonal solves in parallel (features are independent):
-        // first on the surface, then continued outside with the extended metric.
-        let mut seeds: Vec<(String, Vec<f64>)> = vec![];
-        match features {
-            FeatureSource::None => {}
-            FeatureSource::Curves(file) => {
-                file.validate(mesh.num_vertices())?;
-                for f in &file.features {
-                    let pts: Vec<[f64; 2]> = f.vertices.iter().map(|&v| xi[v as usize]).collect();
-                    let mut d = vec![f64::INFINITY; n * n];
-                    seed_polyline(n, &metric_extended, &inside, &pts, f.closed, &mut d);
-                    seeds.push((f.name.clone(), d));
-                }
-            }
-            FeatureSource::Mask(mask) => {
-                mask.validate(texture_image.map(|t| (t.width, t.height)))?;
-                let tex_uv = tex_uv.as_ref().unwrap();
-                let labels: Vec<[u8; 3]> = (0..n * n)
-                    .map(|k| {
-                        if inside[k] {
-                            mask.lookup(tex_uv[k])
-                        } else {
-                            [0, 0, 0]
-                        }
+        // Feature seeds (validated first, so bad input fails before any solve).
+        let seeds = feature_seeds(
+            mesh,
+            &xi,
+            &raster,
+            &metric,
+            &inside,
+            features,
+            texture_image,
+            tex_uv.as_deref(),
+        )?;
+
+        // Two independent jobs run concurrently: the harmonic extension of h and g (one
+        // Cholesky factorization, four right-hand sides) and the Eikonal solves on the
+        // surface, which read g only on the inside nodes, where it needs no extension.
+        let mut hx = mean_curvature.clone();
+        let mut g11: Vec<f64> = metric.iter().map(|g| g[0]).collect();
+        let mut g12: Vec<f64> = metric.iter().map(|g| g[1]).collect();
+        let mut g22: Vec<f64> = metric.iter().map(|g| g[2]).collect();
+        let (extension, inside_solves) = rayon::join(
+            || {
+                let t = std::time::Instant::now();
+                harmonic_extension(n, &inside, &mut [&mut hx, &mut g11, &mut g12, &mut g22])
+                    .map(|()| t.elapsed().as_secs_f64())
+            },
+            || {
+                let t = std::time::Instant::now();
+                seeds
+                    .into_par_iter()
+                    .map(|(name, mut d)| {
+                        solve_eikonal(n, &metric, &inside, &mut d)?;
+                        Ok((name, d))
                     })
-                    .collect();
-                for c in mask.region_colours() {
-                    let region: Vec<bool> = labels.iter().map(|&l| l == c).collect();
-                    let mut d = vec![f64::INFINITY; n * n];
-                    seed_region_boundary(n, &metric_extended, &inside, &region, &mut d);
-                    seeds.push((colour_name(c), d));
-                }
-            }
-        }
-        if let Some((name, _)) = seeds.iter().find(|(_, d)| !d.iter().any(|v| v.is_finite())) {
-            return Err(RasterError::Feature {
-                name: name.clone(),
-                problem: "it covers no grid node inside the surface; raise the grid size".into(),
-            });
-        }
+                    .collect::<Result<Vec<_>, RasterError>>()
+                    .map(|v| (v, t.elapsed().as_secs_f64()))
+            },
+        );
+        let extension_time = extension?;
+        let (on_surface, inside_time) = inside_solves?;
+        let metric_extended: Vec<[f64; 3]> = (0..n * n).map(|k| [g11[k], g12[k], g22[k]]).collect();
+        lap(
+            "harmonic extension ‖ feature distances on the surface",
+            &mut timings,
+        );
+        timings.push(("  of which harmonic extension", extension_time));
+        timings.push(("  of which feature distances on the surface", inside_time));
+
+        // Continue the distances outside the surface with the extended metric.
         let outside: Vec<bool> = inside.iter().map(|&b| !b).collect();
-        let features_out: Vec<FeatureDistance> = seeds
+        let features_out: Vec<FeatureDistance> = on_surface
             .into_par_iter()
             .map(|(name, mut d)| {
-                solve_eikonal(n, &metric_extended, &inside, &mut d)?;
                 solve_eikonal(n, &metric_extended, &outside, &mut d)?;
                 Ok(FeatureDistance { name, distance: d })
             })
             .collect::<Result<_, RasterError>>()?;
         let feature_distance = (!features_out.is_empty()).then(|| {
             (0..n * n)
+                .into_par_iter()
                 .map(|k| {
                     features_out
                         .iter()
@@ -280,8 +293,7 @@ impl GeometryImages {
                 })
                 .collect()
         });
-
-        lap("texture and feature distances", &mut timings);
+        lap("feature distances outside", &mut timings);
         let pyramid = options.pyramid.then(|| {
             Pyramid::build(
                 n,
@@ -309,6 +321,61 @@ impl GeometryImages {
             timings,
         })
     }
+}
+
+/// Initial values of every feature's distance map (`0`-ish near the feature, `∞`
+/// elsewhere), on the inside nodes, with the feature's name; validates the features.
+#[allow(clippy::too_many_arguments)]
+fn feature_seeds(
+    mesh: &TriMesh,
+    xi: &[[f64; 2]],
+    raster: &Rasterization,
+    metric: &[[f64; 3]],
+    inside: &[bool],
+    features: FeatureSource<'_>,
+    texture_image: Option<&TextureImage>,
+    tex_uv: Option<&[[f64; 2]]>,
+) -> Result<Vec<(String, Vec<f64>)>, RasterError> {
+    let n = raster.size;
+    let mut seeds: Vec<(String, Vec<f64>)> = vec![];
+    match features {
+        FeatureSource::None => {}
+        FeatureSource::Curves(file) => {
+            file.validate(mesh.num_vertices())?;
+            for f in &file.features {
+                let pts: Vec<[f64; 2]> = f.vertices.iter().map(|&v| xi[v as usize]).collect();
+                let mut d = vec![f64::INFINITY; n * n];
+                seed_polyline(n, metric, inside, &pts, f.closed, &mut d);
+                seeds.push((f.name.clone(), d));
+            }
+        }
+        FeatureSource::Mask(mask) => {
+            mask.validate(texture_image.map(|t| (t.width, t.height)))?;
+            let tex_uv = tex_uv.ok_or(RasterError::NoTextureCoordinates)?;
+            let labels: Vec<[u8; 3]> = (0..n * n)
+                .map(|k| {
+                    if inside[k] {
+                        mask.lookup(tex_uv[k])
+                    } else {
+                        [0, 0, 0]
+                    }
+                })
+                .collect();
+            for c in mask.region_colours() {
+                let region: Vec<bool> = labels.iter().map(|&l| l == c).collect();
+                let mut d = vec![f64::INFINITY; n * n];
+                seed_region_boundary(n, metric, inside, &region, &mut d);
+                seeds.push((colour_name(c), d));
+            }
+        }
+    }
+    if let Some((name, _)) = seeds.iter().find(|(_, d)| !d.iter().any(|v| v.is_finite())) {
+        return Err(RasterError::Feature {
+            name: name.clone(),
+            problem: "it covers no grid node inside the surface; raise the grid size".into(),
+        });
+    }
+    Ok(seeds)
 }
 
 /// Corner `k` of triangle `t` in the mesh's own texture coordinates.

@@ -71,6 +71,8 @@ pub enum RasterError {
     },
     #[error("the mesh has no texture coordinates; a feature mask or texture is painted over them")]
     NoTextureCoordinates,
+    #[error("texture image: {0}")]
+    Texture(String),
     #[error("linear solve for the harmonic extension failed: {0}")]
     Solve(String),
     #[error("Eikonal solver did not settle after {pops} updates; the metric is likely degenerate")]

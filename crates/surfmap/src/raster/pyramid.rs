@@ -53,7 +53,7 @@ impl Pyramid {
             let images = finer
                 .images
                 .par_iter()
-                .map(|img| restrict(&gaussian_filter(img, finer.size, extra), finer.size))
+                .map(|img| filter_and_restrict(img, finer.size, extra))
                 .collect();
             levels.push(PyramidLevel {
                 level: k,
@@ -84,42 +84,71 @@ fn mirror(i: i64, n: usize) -> usize {
     (if m >= n as i64 { period - m } else { m }) as usize
 }
 
-/// Separable Gaussian filter of width `sigma_nodes` (in grid spacings) with mirrored
-/// borders; the sampled kernel is normalized to sum 1, radius `⌈4σ⌉`.
-pub fn gaussian_filter(img: &[f64], size: usize, sigma_nodes: f64) -> Vec<f64> {
-    let n = size;
-    if sigma_nodes <= 0.0 {
-        return img.to_vec();
-    }
-    let radius = (4.0 * sigma_nodes).ceil() as i64;
-    let mut kernel: Vec<f64> = (-radius..=radius)
+/// Normalized sampled Gaussian of width `sigma_nodes` (grid spacings), radius `⌈4σ⌉`.
+fn gaussian_kernel(sigma_nodes: f64) -> (Vec<f64>, usize) {
+    let radius = (4.0 * sigma_nodes).ceil() as usize;
+    let r = radius as i64;
+    let mut kernel: Vec<f64> = (-r..=r)
         .map(|t| (-(t * t) as f64 / (2.0 * sigma_nodes * sigma_nodes)).exp())
         .collect();
     let total: f64 = kernel.iter().sum();
     kernel.iter_mut().for_each(|w| *w /= total);
-    // Along rows.
-    let mut tmp = vec![0.0; n * n];
-    tmp.par_chunks_mut(n).enumerate().for_each(|(i, row)| {
+    (kernel, radius)
+}
+
+/// `mirror(i − radius, n)` for `i = 0 .. n + 2·radius`: the source index of every tap position.
+fn mirrored_indices(n: usize, radius: usize) -> Vec<usize> {
+    (0..n + 2 * radius)
+        .map(|i| mirror(i as i64 - radius as i64, n))
+        .collect()
+}
+
+/// Separable Gaussian filter of width `sigma_nodes` (in grid spacings) with mirrored
+/// borders; the sampled kernel is normalized to sum 1, radius `⌈4σ⌉`. Output on the
+/// rows and columns `0, step, 2·step, …` (`step` = 1: the whole grid; 2: filtered then
+/// restricted by injection, computing only the kept nodes).
+fn filter_strided(img: &[f64], size: usize, sigma_nodes: f64, step: usize) -> Vec<f64> {
+    let n = size;
+    let c = (n - 1) / step + 1;
+    if sigma_nodes <= 0.0 {
+        return (0..c * c)
+            .map(|k| img[(k / c) * step * n + (k % c) * step])
+            .collect();
+    }
+    let (kernel, radius) = gaussian_kernel(sigma_nodes);
+    let index = mirrored_indices(n, radius);
+    // Along rows (every row, kept columns only): tmp is n × c.
+    let mut tmp = vec![0.0; n * c];
+    tmp.par_chunks_mut(c).enumerate().for_each(|(i, row)| {
         let src = &img[i * n..(i + 1) * n];
-        for (j, out) in row.iter_mut().enumerate() {
-            let mut s = 0.0;
-            for (t, w) in kernel.iter().enumerate() {
-                s += w * src[mirror(j as i64 + t as i64 - radius, n)];
-            }
-            *out = s;
+        for (jc, out) in row.iter_mut().enumerate() {
+            let taps = &index[jc * step..jc * step + kernel.len()];
+            *out = kernel.iter().zip(taps).map(|(w, &t)| w * src[t]).sum();
         }
     });
-    // Along columns.
-    let mut out = vec![0.0; n * n];
-    out.par_chunks_mut(n).enumerate().for_each(|(i, row)| {
-        for (t, w) in kernel.iter().enumerate() {
-            let src = &tmp[mirror(i as i64 + t as i64 - radius, n) * n..][..n];
+    // Along columns (kept rows only).
+    let mut out = vec![0.0; c * c];
+    out.par_chunks_mut(c).enumerate().for_each(|(ic, row)| {
+        let taps = &index[ic * step..ic * step + kernel.len()];
+        for (w, &t) in kernel.iter().zip(taps) {
+            let src = &tmp[t * c..(t + 1) * c];
             for (o, s) in row.iter_mut().zip(src) {
                 *o += w * s;
             }
         }
     });
     out
+}
+
+/// Separable Gaussian filter of width `sigma_nodes` (in grid spacings) with mirrored
+/// borders; the sampled kernel is normalized to sum 1, radius `⌈4σ⌉`.
+pub fn gaussian_filter(img: &[f64], size: usize, sigma_nodes: f64) -> Vec<f64> {
+    filter_strided(img, size, sigma_nodes, 1)
+}
+
+/// `restrict(&gaussian_filter(img, size, sigma_nodes), size)`, computing only the kept nodes.
+pub fn filter_and_restrict(img: &[f64], size: usize, sigma_nodes: f64) -> Vec<f64> {
+    filter_strided(img, size, sigma_nodes, 2)
 }
 
 /// Injection from a `(2m + 1)²` grid to the `(m + 1)²` grid of every other node.
@@ -245,6 +274,15 @@ mod tests {
             assert!((fine[k] - exact).abs() < 1e-12);
         }
         assert_eq!(restrict(&fine, n), coarse);
+        // The fused filter + restriction equals filtering then restricting.
+        let fused = filter_and_restrict(&fine, n, 1.7);
+        let separate = restrict(&gaussian_filter(&fine, n, 1.7), n);
+        assert!(
+            fused
+                .iter()
+                .zip(&separate)
+                .all(|(a, b)| (a - b).abs() < 1e-12)
+        );
     }
 
     #[test]

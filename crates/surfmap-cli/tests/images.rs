@@ -1,0 +1,323 @@
+//! End-to-end tests of `surfmap images` on a generated surface (`surfmap demo`): the files
+//! named in `images.json` exist, the `.npy` headers carry the announced shapes and the
+//! data has the size they imply, features and texture are used, and bad input (unknown
+//! vertex id, mask of the wrong size, bad grid size) fails with exit code 1 and a message
+//! naming the problem.
+
+mod common;
+use common::*;
+
+use std::path::{Path, PathBuf};
+use std::process::Output;
+
+use surfmap::raster::picture::Picture;
+
+/// `surfmap demo` writes `surface.obj` (no texture coordinates) and `conformal.obj`
+/// (the same surface with a flattening as `vt`).
+fn demo(dir: &Path) -> (PathBuf, PathBuf) {
+    let out = surfmap()
+        .args(["demo", "-o"])
+        .arg(dir)
+        .args(["--rings", "12"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    (dir.join("surface.obj"), dir.join("conformal.obj"))
+}
+
+fn run(args: &[&std::ffi::OsStr]) -> Output {
+    surfmap().arg("images").args(args).output().unwrap()
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// Shape and element size of an `.npy` v1 file, checked against its length.
+fn npy_shape(path: &Path) -> (Vec<usize>, usize) {
+    let bytes = std::fs::read(path).unwrap();
+    assert_eq!(&bytes[..6], b"\x93NUMPY", "{}", path.display());
+    assert_eq!(bytes[6], 1, "version 1");
+    let hlen = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
+    assert_eq!((10 + hlen) % 64, 0, "header padded to 64 bytes");
+    let header = std::str::from_utf8(&bytes[10..10 + hlen]).unwrap();
+    assert!(header.contains("'fortran_order': False"), "{header}");
+    let descr = header
+        .split("'descr': '")
+        .nth(1)
+        .unwrap()
+        .split('\'')
+        .next()
+        .unwrap();
+    let elem: usize = descr[2..].parse().unwrap();
+    let dims = header
+        .split("'shape': (")
+        .nth(1)
+        .unwrap()
+        .split(')')
+        .next()
+        .unwrap();
+    let shape: Vec<usize> = dims
+        .split(',')
+        .map(str::trim)
+        .filter(|s| !s.is_empty())
+        .map(|s| s.parse().unwrap())
+        .collect();
+    assert_eq!(
+        bytes.len() - 10 - hlen,
+        shape.iter().product::<usize>() * elem,
+        "{}: data length vs shape {shape:?}",
+        path.display()
+    );
+    (shape, elem)
+}
+
+#[test]
+fn writes_every_image_listed_in_images_json() {
+    let dir = temp_dir("images-basic");
+    let (surface, _) = demo(&dir);
+    let out_dir = dir.join("img");
+    let features = dir.join("features.json");
+    std::fs::write(
+        &features,
+        r#"{"features": [{"name": "centre", "vertices": [0]},
+                         {"name": "arc", "vertices": [5, 6, 7, 8], "closed": false}]}"#,
+    )
+    .unwrap();
+    let out = run(&[
+        surface.as_os_str(),
+        "-o".as_ref(),
+        out_dir.as_os_str(),
+        "--size".as_ref(),
+        "65".as_ref(),
+        "--features".as_ref(),
+        features.as_os_str(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("balanced flattening"), "{stdout}");
+    assert!(stdout.contains("images.json"), "{stdout}");
+
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("images.json")).unwrap())
+            .unwrap();
+    assert_eq!(json["size"], 65);
+    assert_eq!(json["features"], serde_json::json!(["centre", "arc"]));
+    let images = json["images"].as_array().unwrap();
+    let names: Vec<&str> = images.iter().map(|e| e["name"].as_str().unwrap()).collect();
+    for want in [
+        "mask",
+        "position",
+        "metric",
+        "metric_extended",
+        "mean_curvature",
+        "mean_curvature_extended",
+        "boundary_distance",
+        "feature_0",
+        "feature_1",
+        "feature_distance",
+    ] {
+        assert!(names.contains(&want), "{want} missing from {names:?}");
+    }
+    for e in images {
+        let npy = out_dir.join(e["npy"].as_str().unwrap());
+        let (shape, _) = npy_shape(&npy);
+        let listed: Vec<usize> = e["shape"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_u64().unwrap() as usize)
+            .collect();
+        assert_eq!(shape, listed, "{}", npy.display());
+        assert_eq!(&shape[..2], &[65, 65]);
+        if let Some(png) = e["png"].as_str() {
+            assert!(out_dir.join(png).is_file(), "{png}");
+        }
+    }
+    // The pyramid: levels 0..=6 on (2^k + 1)² grids, each listed file present.
+    let pyramid = json["pyramid"].as_array().unwrap();
+    assert_eq!(pyramid.len(), 7);
+    for (k, level) in pyramid.iter().enumerate() {
+        let m = (1usize << k) + 1;
+        assert_eq!(level["size"], m);
+        for e in level["images"].as_array().unwrap() {
+            let (shape, elem) = npy_shape(&out_dir.join(e["npy"].as_str().unwrap()));
+            assert_eq!((shape, elem), (vec![m, m], 8));
+        }
+    }
+    // The transform maps the flattening into [0, 1]².
+    assert!(json["transform"].is_object(), "{}", json["transform"]);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn texture_and_feature_mask_through_the_meshs_own_uvs() {
+    let dir = temp_dir("images-mask");
+    let (_, textured) = demo(&dir);
+    let texture = dir.join("texture.png");
+    let mut t = Picture::new(8, 8, [200, 40, 40]);
+    t.rgb[..32].fill([40, 40, 200]); // top half blue
+    t.save_png(&texture).unwrap();
+    // Mask of the texture's size: a square region in the middle.
+    let mask = dir.join("mask.png");
+    let mut m = Picture::new(8, 8, [0, 0, 0]);
+    for y in 2..6 {
+        for x in 2..6 {
+            m.rgb[y * 8 + x] = [255, 0, 0];
+        }
+    }
+    m.save_png(&mask).unwrap();
+    let out_dir = dir.join("img");
+    let out = run(&[
+        textured.as_os_str(),
+        "-o".as_ref(),
+        out_dir.as_os_str(),
+        "--size".as_ref(),
+        "33".as_ref(),
+        "--texture".as_ref(),
+        texture.as_os_str(),
+        "--feature-mask".as_ref(),
+        mask.as_os_str(),
+        "--no-pyramid".as_ref(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("images.json")).unwrap())
+            .unwrap();
+    assert_eq!(json["features"], serde_json::json!(["#ff0000"]));
+    assert_eq!(json["pyramid"].as_array().unwrap().len(), 0);
+    let (shape, elem) = npy_shape(&out_dir.join("texture.npy"));
+    assert_eq!((shape, elem), (vec![33, 33, 3], 1));
+    // Both texture colours appear in the sampled texture.
+    let bytes = std::fs::read(out_dir.join("texture.npy")).unwrap();
+    let hlen = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
+    let px: Vec<&[u8]> = bytes[10 + hlen..].chunks(3).collect();
+    assert!(px.iter().any(|p| p[0] > 150 && p[2] < 100), "red missing");
+    assert!(px.iter().any(|p| p[2] > 150 && p[0] < 100), "blue missing");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn bad_input_fails_with_a_message_naming_the_problem() {
+    let dir = temp_dir("images-errors");
+    let (surface, textured) = demo(&dir);
+    let out_dir = dir.join("img");
+
+    // Unknown vertex id: the message names the feature and the vertex.
+    let features = dir.join("bad.json");
+    std::fs::write(
+        &features,
+        r#"{"features": [{"name": "ok", "vertices": [1]}, {"name": "chin", "vertices": [3, 123456]}]}"#,
+    )
+    .unwrap();
+    let out = run(&[
+        surface.as_os_str(),
+        "-o".as_ref(),
+        out_dir.as_os_str(),
+        "--features".as_ref(),
+        features.as_os_str(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let e = stderr(&out);
+    assert!(
+        e.contains("chin") && e.contains("123456") && e.contains("bad.json"),
+        "{e}"
+    );
+    assert!(!out_dir.join("images.json").exists());
+
+    // Empty feature list.
+    std::fs::write(&features, r#"{"features": []}"#).unwrap();
+    let out = run(&[
+        surface.as_os_str(),
+        "-o".as_ref(),
+        out_dir.as_os_str(),
+        "--features".as_ref(),
+        features.as_os_str(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(stderr(&out).contains("empty"), "{}", stderr(&out));
+
+    // Mask of the wrong size: the message gives both sizes.
+    let texture = dir.join("texture.png");
+    Picture::new(8, 4, [90, 90, 90]).save_png(&texture).unwrap();
+    let mask = dir.join("mask.png");
+    Picture::new(5, 3, [0, 255, 0]).save_png(&mask).unwrap();
+    let out = run(&[
+        textured.as_os_str(),
+        "-o".as_ref(),
+        out_dir.as_os_str(),
+        "--texture".as_ref(),
+        texture.as_os_str(),
+        "--feature-mask".as_ref(),
+        mask.as_os_str(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let e = stderr(&out);
+    assert!(
+        e.contains("5×3") && e.contains("8×4") && e.contains("mask.png"),
+        "{e}"
+    );
+
+    // A mask needs texture coordinates.
+    let out = run(&[
+        surface.as_os_str(),
+        "-o".as_ref(),
+        out_dir.as_os_str(),
+        "--feature-mask".as_ref(),
+        mask.as_os_str(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        stderr(&out).contains("texture coordinates"),
+        "{}",
+        stderr(&out)
+    );
+
+    // Grid size not 2^k + 1.
+    let out = run(&[
+        surface.as_os_str(),
+        "-o".as_ref(),
+        out_dir.as_os_str(),
+        "--size".as_ref(),
+        "100".as_ref(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let e = stderr(&out);
+    assert!(e.contains("100") && e.contains("2^k + 1"), "{e}");
+    assert!(!out_dir.join("images.json").exists());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn real_face_if_present() {
+    // A small real mesh with its own UVs (MediaPipe canonical face); skipped without data.
+    // The data folder: SURFMAP_DATA_DIR, else the shared folder next to the checkout.
+    let d = match std::env::var_os("SURFMAP_DATA_DIR") {
+        Some(d) => PathBuf::from(d),
+        None => match data_dir() {
+            Some(d) => d,
+            None => return,
+        },
+    };
+    let mesh = d.join("faces/mp_canonical.obj");
+    if !mesh.is_file() {
+        eprintln!("note: {} missing; skipped", mesh.display());
+        return;
+    }
+    let dir = temp_dir("images-face");
+    let out = run(&[
+        mesh.as_os_str(),
+        "-o".as_ref(),
+        dir.as_os_str(),
+        "--size".as_ref(),
+        "65".as_ref(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let (shape, _) = npy_shape(&dir.join("mean_curvature.npy"));
+    assert_eq!(shape, vec![65, 65]);
+    std::fs::remove_dir_all(&dir).ok();
+}
