@@ -6,8 +6,13 @@ use std::path::PathBuf;
 use std::process::Command;
 
 pub fn data_dir() -> Option<PathBuf> {
-    let d = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data"));
-    if d.join("manifest.json").exists() {
+    let beside = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data"));
+    let from_env = std::env::var_os("SURFMAP_DATA_DIR").map(PathBuf::from);
+    if let Some(d) = from_env
+        .into_iter()
+        .chain([beside])
+        .find(|d| d.join("manifest.json").exists())
+    {
         Some(d)
     } else {
         eprintln!("note: ../shared/data not found; skipping tests on real meshes");
