@@ -10,15 +10,7 @@ use surfmap::param::density::{EnergyKind, Litke};
 use surfmap::param::element::{RestTriangle, energy, gradient_and_projected_hessian};
 use surfmap::param::flip_free::flip_free_step;
 
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+use surfmap::testing::Rng;
 
 fn median_ns_per_item(runs: usize, items: usize, mut f: impl FnMut() -> f64) -> f64 {
     let mut times: Vec<f64> = (0..runs)

@@ -15,5 +15,7 @@ pub mod mesh;
 pub mod param;
 pub mod raster;
 pub mod render;
+#[doc(hidden)]
+pub mod testing;
 
 pub use mesh::{BoundaryLoop, Topology, TriMesh, Uvs};

@@ -10,6 +10,19 @@
 use super::TriMesh;
 use std::f64::consts::TAU;
 
+/// The unit square `[0, 1]² × {0}` as two counter-clockwise triangles.
+pub fn unit_square() -> TriMesh {
+    TriMesh::new(
+        vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+        ],
+        vec![[0, 1, 2], [0, 2, 3]],
+    )
+}
+
 /// Planar `n × n` grid of squares on `[0, 1]² × {0}`: `(n + 1)²` vertices, vertex
 /// `(i, j)` (row `j`, column `i`) at `(i/n, j/n, 0)` has index `j·(n + 1) + i`. Each
 /// square is split along the diagonal from `(i, j)` to `(i + 1, j + 1)`. `n ≥ 1`

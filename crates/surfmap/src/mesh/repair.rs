@@ -167,53 +167,14 @@ pub fn reorient(mesh: &TriMesh) -> Option<(TriMesh, usize)> {
     if !topo.orientable {
         return None;
     }
-    let nf = mesh.triangles.len();
-    let mut flip = vec![u8::MAX; nf];
-    let mut comp_faces: Vec<Vec<usize>> = vec![Vec::new(); topo.num_components];
-    let mut queue = std::collections::VecDeque::new();
-    for seed in 0..nf {
-        if flip[seed] != u8::MAX {
-            continue;
-        }
-        flip[seed] = 0;
-        queue.push_back(seed);
-        while let Some(t) = queue.pop_front() {
-            comp_faces[topo.face_component[t] as usize].push(t);
-            for k in 0..3 {
-                let e = topo.face_edges[t][k] as usize;
-                let fs = topo.faces_of_edge(e);
-                if fs.len() != 2 {
-                    continue;
-                }
-                let other = if fs[0] as usize == t { fs[1] } else { fs[0] } as usize;
-                if flip[other] != u8::MAX || other == t {
-                    continue;
-                }
-                let (a, b) = (mesh.triangles[t][k], mesh.triangles[t][(k + 1) % 3]);
-                let o = mesh.triangles[other];
-                let same = (0..3).any(|j| o[j] == a && o[(j + 1) % 3] == b);
-                flip[other] = flip[t] ^ same as u8;
-                queue.push_back(other);
-            }
-        }
-    }
-    // In each component flip the minority.
     let mut out = mesh.clone();
-    let mut flipped = 0;
-    for faces in &comp_faces {
-        let ones = faces.iter().filter(|&&t| flip[t] == 1).count();
-        let flip_value = if ones * 2 <= faces.len() { 1 } else { 0 };
-        for &t in faces {
-            if flip[t] == flip_value {
-                out.triangles[t].swap(1, 2);
-                if let Some(Uvs::PerCorner { indices, .. }) = &mut out.uvs {
-                    indices[t].swap(1, 2);
-                }
-                flipped += 1;
-            }
+    for &t in &topo.faces_to_flip_list {
+        out.triangles[t as usize].swap(1, 2);
+        if let Some(Uvs::PerCorner { indices, .. }) = &mut out.uvs {
+            indices[t as usize].swap(1, 2);
         }
     }
-    Some((out, flipped))
+    Some((out, topo.faces_to_flip_list.len()))
 }
 
 /// Which component to keep.
@@ -290,17 +251,7 @@ pub fn fill_holes(mesh: &TriMesh) -> (TriMesh, usize) {
 mod tests {
     use super::*;
 
-    fn square() -> TriMesh {
-        TriMesh::new(
-            vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [1.0, 1.0, 0.0],
-                [0.0, 1.0, 0.0],
-            ],
-            vec![[0, 1, 2], [0, 2, 3]],
-        )
-    }
+    use crate::mesh::generate::unit_square as square;
 
     #[test]
     fn weld_closes_a_crack() {

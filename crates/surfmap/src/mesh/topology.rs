@@ -38,6 +38,9 @@ pub struct Topology {
     pub orientable: bool,
     /// Fewest faces to flip (per component) for a consistent orientation; `None` if not orientable.
     pub faces_to_flip: Option<usize>,
+    /// For an orientable mesh, the faces to flip for a consistent orientation (the
+    /// smaller side of each component); empty when not orientable.
+    pub faces_to_flip_list: Vec<u32>,
 }
 
 impl Topology {
@@ -138,7 +141,7 @@ impl Topology {
             .collect();
 
         // Orientation: propagate a flip bit across manifold edges (breadth-first).
-        let (orientable, faces_to_flip) = orient_faces(
+        let (orientable, faces_to_flip_list) = orient_faces(
             mesh,
             &edges,
             &face_edges,
@@ -164,7 +167,8 @@ impl Topology {
             non_manifold_vertices,
             inconsistent_edges,
             orientable,
-            faces_to_flip,
+            faces_to_flip: orientable.then_some(faces_to_flip_list.len()),
+            faces_to_flip_list,
         }
     }
     /// `V_used − E + F`.
@@ -372,7 +376,7 @@ fn several_fans<'a>(
 
 /// Breadth-first propagation of orientation across manifold edges. Returns whether
 /// every component is orientable and, if so, the fewest faces to flip (per component
-/// the smaller side of the two-colouring).
+/// the smaller side of the two-colouring), in increasing order.
 fn orient_faces<'a>(
     mesh: &TriMesh,
     edges: &[[u32; 2]],
@@ -381,7 +385,7 @@ fn orient_faces<'a>(
     direction: &impl Fn(u32, [u32; 2]) -> bool,
     num_components: usize,
     face_component: &[u32],
-) -> (bool, Option<usize>) {
+) -> (bool, Vec<u32>) {
     let nf = mesh.triangles.len();
     let mut flip = vec![u8::MAX; nf];
     let mut flipped_count = vec![0usize; num_components];
@@ -420,12 +424,16 @@ fn orient_faces<'a>(
         }
     }
     if !orientable {
-        return (false, None);
+        return (false, Vec::new());
     }
-    let total = (0..num_components)
-        .map(|c| flipped_count[c].min(comp_size[c] - flipped_count[c]))
-        .sum();
-    (true, Some(total))
+    // In each component keep the majority colour and flip the others.
+    let keep_colour: Vec<u8> = (0..num_components)
+        .map(|c| u8::from(2 * flipped_count[c] > comp_size[c]))
+        .collect();
+    let list = (0..nf as u32)
+        .filter(|&t| flip[t as usize] != keep_colour[face_component[t as usize] as usize])
+        .collect();
+    (true, list)
 }
 
 /// Disjoint sets over vertex ids, path halving, union by size.

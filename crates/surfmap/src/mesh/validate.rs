@@ -392,17 +392,7 @@ mod tests {
             .collect()
     }
 
-    fn square() -> TriMesh {
-        TriMesh::new(
-            vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [1.0, 1.0, 0.0],
-                [0.0, 1.0, 0.0],
-            ],
-            vec![[0, 1, 2], [0, 2, 3]],
-        )
-    }
+    use crate::mesh::generate::unit_square as square;
 
     #[test]
     fn clean_disc_has_no_defect() {

@@ -495,18 +495,7 @@ mod tests {
     use super::*;
     use crate::param::density::{Arap, EnergyKind, Litke, Mips, SymmetricDirichlet};
 
-    struct Rng(u64);
-    impl Rng {
-        fn next(&mut self) -> f64 {
-            self.0 ^= self.0 << 13;
-            self.0 ^= self.0 >> 7;
-            self.0 ^= self.0 << 17;
-            (self.0 >> 11) as f64 / (1u64 << 53) as f64
-        }
-        fn range(&mut self, lo: f64, hi: f64) -> f64 {
-            lo + (hi - lo) * self.next()
-        }
-    }
+    use crate::testing::Rng;
 
     fn densities() -> Vec<(&'static str, EnergyKind)> {
         vec![

@@ -108,21 +108,7 @@ pub fn max_flip_free_step(uvs: &[[f64; 2]], triangles: &[[u32; 3]], dir: &[[f64;
 mod tests {
     use super::*;
 
-    struct Rng(u64);
-    impl Rng {
-        fn next(&mut self) -> f64 {
-            self.0 ^= self.0 << 13;
-            self.0 ^= self.0 >> 7;
-            self.0 ^= self.0 << 17;
-            (self.0 >> 11) as f64 / (1u64 << 53) as f64
-        }
-        fn range(&mut self, lo: f64, hi: f64) -> f64 {
-            lo + (hi - lo) * self.next()
-        }
-        fn point(&mut self, r: f64) -> [f64; 2] {
-            [self.range(-r, r), self.range(-r, r)]
-        }
-    }
+    use crate::testing::Rng;
 
     fn det_at(uv: [[f64; 2]; 3], dir: [[f64; 2]; 3], s: f64) -> f64 {
         let p: Vec<[f64; 2]> = (0..3)

@@ -1,0 +1,26 @@
+//! Deterministic pseudo-random inputs for tests and benchmarks (not for anything that
+//! needs statistical quality): xorshift64, so runs repeat exactly.
+
+/// xorshift64 generator of uniform `f64` in `[0, 1)`. Seed must be non-zero.
+#[derive(Clone, Debug)]
+pub struct Rng(pub u64);
+
+impl Rng {
+    /// Next uniform value in `[0, 1)`.
+    pub fn next(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// Uniform value in `[lo, hi)`.
+    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.next()
+    }
+
+    /// A point with both coordinates uniform in `[-r, r)`.
+    pub fn point(&mut self, r: f64) -> [f64; 2] {
+        [self.range(-r, r), self.range(-r, r)]
+    }
+}
