@@ -34,12 +34,12 @@ fn main() {
     let mut uvs = Vec::with_capacity(n);
     let mut dirs = Vec::with_capacity(n);
     while rest.len() < n {
-        let p: [[f64; 3]; 3] = std::array::from_fn(|_| std::array::from_fn(|_| rng.next()));
+        let p: [[f64; 3]; 3] = std::array::from_fn(|_| std::array::from_fn(|_| rng.uniform()));
         let Some(r) = RestTriangle::new(p[0], p[1], p[2]) else {
             continue;
         };
         // UV: the rest triangle's own frame, perturbed, kept counter-clockwise.
-        let uv: [[f64; 2]; 3] = std::array::from_fn(|_| [rng.next(), rng.next()]);
+        let uv: [[f64; 2]; 3] = std::array::from_fn(|_| [rng.uniform(), rng.uniform()]);
         let det = (uv[1][0] - uv[0][0]) * (uv[2][1] - uv[0][1])
             - (uv[2][0] - uv[0][0]) * (uv[1][1] - uv[0][1]);
         if det.abs() < 1e-3 {
@@ -49,7 +49,7 @@ fn main() {
         rest.push(r);
         uvs.push(uv);
         dirs.push(std::array::from_fn(|_| {
-            [rng.next() - 0.5, rng.next() - 0.5]
+            [rng.uniform() - 0.5, rng.uniform() - 0.5]
         }));
     }
     let density = EnergyKind::Litke(Litke::balanced());

@@ -410,7 +410,7 @@ mod tests {
         for _ in 0..200 {
             let l = rng.range(1e-3, 1.0);
             let ar = rng.range(1e-3, 1.0);
-            let c = if rng.next() < 0.2 {
+            let c = if rng.uniform() < 0.2 {
                 0.0
             } else {
                 rng.range(0.0, 1.0)
