@@ -89,7 +89,7 @@ pub struct Flattening {
 /// Why a flattening failed.
 #[derive(Debug, thiserror::Error)]
 pub enum FlattenError {
-    #[error("the mesh is not a disc, so it cannot be flattened:\n{}", .0.iter().map(|d| format!("  - {}", d.message)).collect::<Vec<_>>().join("\n"))]
+    #[error("the mesh cannot be flattened as a disc:\n{}", .0.iter().map(|d| format!("  - {}", d.message)).collect::<Vec<_>>().join("\n"))]
     NotADisc(Vec<Defect>),
     #[error("{0}; run with --drop-degenerate or fix the mesh")]
     Degenerate(#[from] RestTriangleError),
@@ -139,6 +139,7 @@ pub fn flatten_with_progress(
     }
     let topo = Topology::new(mesh);
     if !topo.is_disc()
+        || !topo.inconsistent_edges.is_empty()
         || mesh
             .positions
             .iter()
@@ -346,4 +347,47 @@ fn without_unreferenced(mesh: &TriMesh) -> (Option<TriMesh>, Vec<u32>) {
         .collect();
     let (compact, _) = crate::mesh::repair::drop_unreferenced(mesh);
     (Some(compact), old_of_new)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::generate::bumpy_disc;
+    use crate::mesh::repair::reorient;
+
+    #[test]
+    fn inconsistent_orientation_is_refused_with_advice_and_reorient_fixes_it() {
+        let mut mesh = bumpy_disc(6, 0.3);
+        mesh.triangles[40].swap(1, 2);
+        let err = flatten(&mesh, &FlattenOptions::default()).unwrap_err();
+        assert!(matches!(err, FlattenError::NotADisc(_)), "{err}");
+        assert!(err.to_string().contains("--reorient"), "{err}");
+        let (fixed, flipped) = reorient(&mesh).unwrap();
+        assert_eq!(flipped, 1);
+        let map = flatten(&fixed, &FlattenOptions::default()).unwrap();
+        assert_eq!(map.flipped_triangles, 0);
+    }
+
+    #[test]
+    fn unreferenced_vertices_are_carried_through() {
+        let mut mesh = bumpy_disc(5, 0.3);
+        mesh.positions.push([9.0, 9.0, 9.0]);
+        let map = flatten(&mesh, &FlattenOptions::default()).unwrap();
+        assert_eq!(map.uvs.len(), mesh.positions.len());
+        assert_eq!(count_flipped(&map.uvs, &mesh.triangles), 0);
+    }
+
+    #[test]
+    fn continuation_needs_the_litke_energy() {
+        let mesh = bumpy_disc(4, 0.3);
+        let options = FlattenOptions {
+            energy: EnergyKind::SymmetricDirichlet,
+            from_alpha: Some(Litke::conformal()),
+            ..Default::default()
+        };
+        assert!(matches!(
+            flatten(&mesh, &options),
+            Err(FlattenError::ContinuationNeedsLitke)
+        ));
+    }
 }
