@@ -397,14 +397,11 @@ impl SpdSystem {
     }
 }
 
-/// Threads for a factorization of dimension `n`: one below 100k unknowns (measured:
-/// no gain there on 2 cores), all of rayon's above.
-fn parallelism(n: usize) -> Par {
-    if n >= 100_000 {
-        Par::rayon(0)
-    } else {
-        Par::Seq
-    }
+/// Threads for a factorization: one. Measured on this 2-core machine (see
+/// BENCHMARKS.md): faer's parallel supernodal factorization was 2.4× slower on 22.7k
+/// unknowns and 1.2× slower on 1.07M unknowns than the sequential one.
+fn parallelism(_n: usize) -> Par {
+    Par::Seq
 }
 
 fn check_len(expected: usize, got: usize) -> Result<(), SolveError> {
