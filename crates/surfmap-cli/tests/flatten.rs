@@ -217,3 +217,46 @@ fn face_scans_with_open_eyes_and_mouth_flatten_with_fill_holes() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn normalize_and_uv_as_positions_write_the_flat_unit_layout() {
+    let dir = temp_dir("normalize");
+    let run = surfmap()
+        .arg("demo")
+        .arg("-o")
+        .arg(&dir)
+        .args(["--rings", "8"])
+        .output()
+        .unwrap();
+    assert!(run.status.success());
+    let out = dir.join("flat.obj");
+    let run = surfmap()
+        .arg("flatten")
+        .arg(dir.join("surface.obj"))
+        .args(["--normalize", "--uv-as-positions", "--quiet", "-o"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(run.stdout.is_empty(), "--quiet prints nothing");
+    let flat = read_mesh(&out).unwrap().mesh;
+    let uv = flat.vertex_uvs().unwrap();
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for (p, t) in flat.positions.iter().zip(uv) {
+        assert_eq!(p[2], 0.0);
+        assert_eq!([p[0], p[1]], *t, "positions are the UVs");
+        for k in 0..2 {
+            lo[k] = lo[k].min(t[k]);
+            hi[k] = hi[k].max(t[k]);
+        }
+    }
+    // Fits [0,1]²: starts at the origin, the longer side spans exactly 1 (aspect kept).
+    assert!(lo[0].abs() < 1e-12 && lo[1].abs() < 1e-12, "{lo:?}");
+    assert!((hi[0].max(hi[1]) - 1.0).abs() < 1e-12, "{hi:?}");
+    assert!(min_signed_uv_area(&out).0 > 0.0);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -246,11 +246,12 @@ pub fn flatten_with_progress(
     let (stop, energy) = match (&options.energy, &options.from_alpha) {
         (EnergyKind::Litke(target), Some(from)) => {
             // Continuation (§3.1.3): θ from 0 to 1, halving the step when a stage locks.
-            let (stop0, it0, _) =
+            // Stage 0 only prepares a start: a locked or capped stage 0 is still a
+            // valid (flip-free) start for the next stage.
+            let (_, it0, _) =
                 solver.minimize(&mut uv, from, &options.newton, 0, clock, &mut record)?;
             iterations += it0;
             continuation.push(from.alphas());
-            let _ = stop0;
             let (mut theta, mut dtheta) = (0.0f64, 1.0f64);
             let mut stage = 1;
             let mut last = (StopReason::Converged, f64::NAN);
