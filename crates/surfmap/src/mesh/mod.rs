@@ -100,6 +100,15 @@ impl TriMesh {
         Some((lo, hi))
     }
 
+    /// The first triangle `(t, corner)` whose vertex index is out of range, if any.
+    pub fn first_invalid_index(&self) -> Option<(usize, usize)> {
+        let n = self.positions.len();
+        self.triangles
+            .iter()
+            .enumerate()
+            .find_map(|(t, tri)| tri.iter().position(|&v| v as usize >= n).map(|k| (t, k)))
+    }
+
     /// Per-vertex UVs, when the mesh carries them per vertex (or per corner with
     /// indices equal to the vertex indices).
     pub fn vertex_uvs(&self) -> Option<&[[f64; 2]]> {

@@ -47,7 +47,9 @@ impl Topology {
     /// Derives the topology of `mesh` in `O(F log F)` (one sort of the half-edges).
     ///
     /// Works on any triangle soup: non-manifold edges, inconsistent orientation and
-    /// unreferenced vertices are recorded, never rejected.
+    /// unreferenced vertices are recorded, never rejected. Precondition: every vertex
+    /// index is below `positions.len()` (the readers guarantee it; check meshes built
+    /// by hand with [`TriMesh::first_invalid_index`]).
     pub fn new(mesh: &TriMesh) -> Self {
         let nf = mesh.triangles.len();
         let nv = mesh.positions.len();

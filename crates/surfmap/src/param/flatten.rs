@@ -95,6 +95,12 @@ pub enum FlattenError {
     Degenerate(#[from] RestTriangleError),
     #[error("linear solve failed: {0}")]
     Solve(#[from] SolveError),
+    #[error("triangle {triangle} uses vertex {vertex}, but the mesh has {vertices} vertices")]
+    InvalidIndex {
+        triangle: usize,
+        vertex: u32,
+        vertices: usize,
+    },
     #[error(
         "continuation (--from-alpha) blends Litke α values; it needs the Litke energy as the target"
     )]
@@ -122,6 +128,13 @@ pub fn flatten_with_progress(
     progress: &mut dyn FnMut(&IterationLog),
 ) -> Result<Flattening, FlattenError> {
     let clock = Instant::now();
+    if let Some((t, k)) = mesh.first_invalid_index() {
+        return Err(FlattenError::InvalidIndex {
+            triangle: t,
+            vertex: mesh.triangles[t][k],
+            vertices: mesh.positions.len(),
+        });
+    }
     if options.from_alpha.is_some() && !matches!(options.energy, EnergyKind::Litke(_)) {
         return Err(FlattenError::ContinuationNeedsLitke);
     }
@@ -376,6 +389,24 @@ mod tests {
         let map = flatten(&mesh, &FlattenOptions::default()).unwrap();
         assert_eq!(map.uvs.len(), mesh.positions.len());
         assert_eq!(count_flipped(&map.uvs, &mesh.triangles), 0);
+    }
+
+    #[test]
+    fn out_of_range_index_is_an_error_not_a_panic() {
+        let mut mesh = bumpy_disc(3, 0.3);
+        mesh.triangles[2][1] = 10_000;
+        let err = flatten(&mesh, &FlattenOptions::default()).unwrap_err();
+        assert!(
+            matches!(
+                err,
+                FlattenError::InvalidIndex {
+                    triangle: 2,
+                    vertex: 10_000,
+                    ..
+                }
+            ),
+            "{err}"
+        );
     }
 
     #[test]
