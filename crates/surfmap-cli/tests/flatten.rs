@@ -130,19 +130,7 @@ fn non_disc_inputs_get_a_clear_error() {
 #[test]
 fn demo_writes_what_it_says() {
     let dir = temp_dir("demo");
-    let run = surfmap()
-        .arg("demo")
-        .arg("-o")
-        .arg(&dir)
-        .args(["--rings", "20"])
-        .output()
-        .unwrap();
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let text = String::from_utf8_lossy(&run.stdout);
+    let text = run_demo(&dir, 20);
     let listed: Vec<&str> = text
         .lines()
         .filter(|l| l.starts_with("  "))
@@ -162,14 +150,7 @@ fn demo_writes_what_it_says() {
 #[test]
 fn invalid_alpha_is_rejected_with_a_reason() {
     let dir = temp_dir("alpha");
-    let run = surfmap()
-        .arg("demo")
-        .arg("-o")
-        .arg(&dir)
-        .args(["--rings", "4"])
-        .output()
-        .unwrap();
-    assert!(run.status.success());
+    run_demo(&dir, 4);
     let run = surfmap()
         .arg("flatten")
         .arg(dir.join("surface.obj"))
@@ -221,14 +202,7 @@ fn face_scans_with_open_eyes_and_mouth_flatten_with_fill_holes() {
 #[test]
 fn normalize_and_uv_as_positions_write_the_flat_unit_layout() {
     let dir = temp_dir("normalize");
-    let run = surfmap()
-        .arg("demo")
-        .arg("-o")
-        .arg(&dir)
-        .args(["--rings", "8"])
-        .output()
-        .unwrap();
-    assert!(run.status.success());
+    run_demo(&dir, 8);
     let out = dir.join("flat.obj");
     let run = surfmap()
         .arg("flatten")

@@ -15,17 +15,7 @@ use surfmap::raster::picture::Picture;
 /// `surfmap demo` writes `surface.obj` (no texture coordinates) and `conformal.obj`
 /// (the same surface with a flattening as `vt`).
 fn demo(dir: &Path) -> (PathBuf, PathBuf) {
-    let out = surfmap()
-        .args(["demo", "-o"])
-        .arg(dir)
-        .args(["--rings", "12"])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    run_demo(dir, 12);
     (dir.join("surface.obj"), dir.join("conformal.obj"))
 }
 

@@ -49,3 +49,22 @@ pub fn temp_dir(name: &str) -> PathBuf {
     std::fs::create_dir_all(&d).unwrap();
     d
 }
+
+/// Runs `surfmap demo -o dir --rings N` and returns its stdout; `dir` then holds
+/// `surface.obj` (no texture coordinates) and `conformal.obj` / `balanced.obj` (the
+/// same surface with a flattening as `vt`).
+pub fn run_demo(dir: &std::path::Path, rings: usize) -> String {
+    let out = surfmap()
+        .arg("demo")
+        .arg("-o")
+        .arg(dir)
+        .args(["--rings", &rings.to_string()])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "demo failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}

@@ -66,38 +66,18 @@ pub fn boundary_segments(
     triangles: &[[u32; 3]],
     corner_uvs: &[[[f64; 2]; 3]],
 ) -> Vec<[[f64; 2]; 2]> {
-    // Key: (min vertex, max vertex, uv at min, uv at max) as bit patterns.
-    let mut sides: Vec<([u32; 2], [u64; 4], u32, u8)> = Vec::with_capacity(3 * triangles.len());
-    for (t, (tri, uv)) in triangles.iter().zip(corner_uvs).enumerate() {
-        for k in 0..3 {
-            let (a, b) = (tri[k], tri[(k + 1) % 3]);
-            let (ua, ub) = (uv[k], uv[(k + 1) % 3]);
-            let (lo, hi, ulo, uhi) = if a <= b {
-                (a, b, ua, ub)
-            } else {
-                (b, a, ub, ua)
-            };
-            let key = [
-                ulo[0].to_bits(),
-                ulo[1].to_bits(),
-                uhi[0].to_bits(),
-                uhi[1].to_bits(),
-            ];
-            sides.push(([lo, hi], key, t as u32, k as u8));
-        }
-    }
-    sides.sort_unstable_by_key(|x| (x.0, x.1));
+    let sides = super::charts::sorted_uv_sides(triangles, corner_uvs);
     let mut out = Vec::new();
     let mut i = 0;
     while i < sides.len() {
         let mut j = i + 1;
-        while j < sides.len() && sides[j].0 == sides[i].0 && sides[j].1 == sides[i].1 {
+        while j < sides.len() && sides[j].same_side(&sides[i]) {
             j += 1;
         }
         if j - i == 1 {
-            let (_, _, t, k) = sides[i];
-            let uv = corner_uvs[t as usize];
-            out.push([uv[k as usize], uv[(k as usize + 1) % 3]]);
+            let (t, k) = (sides[i].face as usize, sides[i].corner as usize);
+            let uv = corner_uvs[t];
+            out.push([uv[k], uv[(k + 1) % 3]]);
         }
         i = j;
     }
