@@ -285,14 +285,7 @@ fn bad_input_fails_with_a_message_naming_the_problem() {
 #[test]
 fn real_face_if_present() {
     // A small real mesh with its own UVs (MediaPipe canonical face); skipped without data.
-    // The data folder: SURFMAP_DATA_DIR, else the shared folder next to the checkout.
-    let d = match std::env::var_os("SURFMAP_DATA_DIR") {
-        Some(d) => PathBuf::from(d),
-        None => match data_dir() {
-            Some(d) => d,
-            None => return,
-        },
-    };
+    let Some(d) = data_dir() else { return };
     let mesh = d.join("faces/mp_canonical.obj");
     if !mesh.is_file() {
         eprintln!("note: {} missing; skipped", mesh.display());
@@ -309,5 +302,39 @@ fn real_face_if_present() {
     assert!(out.status.success(), "{}", stderr(&out));
     let (shape, _) = npy_shape(&dir.join("mean_curvature.npy"));
     assert_eq!(shape, vec![65, 65]);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn face_with_open_eyes_and_mouth_with_fill_holes() {
+    // ICT face crop: 4 boundary loops (outer rim, mouth, two eyes). Without
+    // --fill-holes it is refused; with it, the holes stay outside the surface mask.
+    let Some(d) = data_dir() else { return };
+    let mesh = d.join("faces/ict/ict_neutral.obj");
+    let dir = temp_dir("images-ict");
+    let size: &std::ffi::OsStr = "65".as_ref();
+    let refused = run(&[
+        mesh.as_os_str(),
+        "-o".as_ref(),
+        dir.as_os_str(),
+        "--size".as_ref(),
+        size,
+    ]);
+    assert_eq!(refused.status.code(), Some(1));
+    assert!(
+        stderr(&refused).contains("boundary loops"),
+        "{}",
+        stderr(&refused)
+    );
+    let out = run(&[
+        mesh.as_os_str(),
+        "-o".as_ref(),
+        dir.as_os_str(),
+        "--size".as_ref(),
+        size,
+        "--fill-holes".as_ref(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(dir.join("images.json").is_file());
     std::fs::remove_dir_all(&dir).ok();
 }

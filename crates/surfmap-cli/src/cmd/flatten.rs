@@ -199,6 +199,28 @@ pub fn flatten_mesh(
     Ok(result?)
 }
 
+/// [`flatten_mesh`], optionally with every boundary loop but the longest filled by a
+/// fan for the solve (`repair::fill_holes`); the fill's vertices come after the
+/// original ones and are dropped from the result, so the UVs belong to `mesh` and its
+/// holes stay open in the map.
+pub fn flatten_mesh_filling_holes(
+    mesh: &TriMesh,
+    opts: &FlattenOptions,
+    quiet: bool,
+    fill_holes: bool,
+) -> anyhow::Result<Flattening> {
+    if !fill_holes {
+        return flatten_mesh(mesh, opts, quiet);
+    }
+    let (filled, holes) = surfmap::mesh::repair::fill_holes(mesh);
+    if !quiet {
+        eprintln!("repair: filled {holes} holes for the flattening (the output keeps them open)");
+    }
+    let mut result = flatten_mesh(&filled, opts, quiet)?;
+    result.uvs.truncate(mesh.positions.len());
+    Ok(result)
+}
+
 /// Maps UVs into [0,1]² keeping the aspect ratio.
 pub fn normalize_uvs(uvs: &mut [[f64; 2]]) {
     let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
@@ -232,20 +254,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let opts = options(&args)?;
     let mesh = args.repair.apply(file.mesh, args.quiet)?;
     let defects = validate(&mesh, &Topology::new(&mesh));
-    let mut result = if args.fill_holes {
-        let (filled, holes) = surfmap::mesh::repair::fill_holes(&mesh);
-        if !args.quiet {
-            eprintln!(
-                "repair: filled {holes} holes for the flattening (the output keeps them open)"
-            );
-        }
-        flatten_mesh(&filled, &opts, args.quiet)
-    } else {
-        flatten_mesh(&mesh, &opts, args.quiet)
-    }
-    .with_context(|| format!("cannot flatten {}", args.input.display()))?;
-    // Fill vertices come after the original ones: drop them.
-    result.uvs.truncate(mesh.positions.len());
+    let result = flatten_mesh_filling_holes(&mesh, &opts, args.quiet, args.fill_holes)
+        .with_context(|| format!("cannot flatten {}", args.input.display()))?;
     let mut uvs = result.uvs.clone();
     if args.normalize {
         normalize_uvs(&mut uvs);

@@ -12,7 +12,7 @@ use surfmap::raster::{
     FeatureFile, FeatureMask, FeatureSource, GeometryImages, GeometryImagesOptions, TextureImage,
 };
 
-use super::flatten::flatten_mesh;
+use super::flatten::flatten_mesh_filling_holes;
 use super::{RepairArgs, load_mesh};
 
 #[derive(clap::Args)]
@@ -42,6 +42,10 @@ pub struct Args {
     /// Print nothing but errors.
     #[arg(short, long)]
     pub quiet: bool,
+    /// Fill every boundary loop but the longest (eyes, mouth) for the flattening; the
+    /// holes stay outside the surface mask and are covered by the harmonic extension.
+    #[arg(long)]
+    pub fill_holes: bool,
     #[command(flatten)]
     pub repair: RepairArgs,
 }
@@ -100,8 +104,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         bail!("the mesh has no texture coordinates, so the texture cannot be sampled");
     }
 
-    let flat = flatten_mesh(&mesh, &FlattenOptions::default(), args.quiet)
-        .with_context(|| format!("cannot flatten {}", args.mesh.display()))?;
+    let flat = flatten_mesh_filling_holes(
+        &mesh,
+        &FlattenOptions::default(),
+        args.quiet,
+        args.fill_holes,
+    )
+    .with_context(|| format!("cannot flatten {}", args.mesh.display()))?;
     if !args.quiet {
         println!(
             "{}: balanced flattening, start {}, {} iterations, {}, energy {:.6}, flipped triangles {}, {:.3} s",
