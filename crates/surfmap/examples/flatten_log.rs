@@ -22,8 +22,8 @@ fn main() {
     )
     .expect("flattened");
     println!(
-        "start {:?}, {} iterations, stop {:?}, total {:.3} s (start map {:.3} s)",
-        r.start, r.iterations, r.stop_reason, r.time_total, r.time_start
+        "start {:?}, {} warm-start steps, {} iterations, stop {:?}, total {:.3} s (start map + warm start {:.3} s)",
+        r.start, r.warm_start_iterations, r.iterations, r.stop_reason, r.time_total, r.time_start
     );
     println!("{:?}", r.newton_timings);
     println!(

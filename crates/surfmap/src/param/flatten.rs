@@ -3,8 +3,10 @@
 //! projected Newton (with optional α-continuation), verifies the result has no
 //! flipped triangle, and returns UVs in the mesh's own units.
 
+use super::arap::ArapStep;
 use super::density::{EnergyKind, Litke};
 use super::element::{RestTriangleError, rest_triangles};
+use super::flip_free::max_flip_free_step;
 use super::newton::{IterationLog, NewtonSettings, NewtonSolver, NewtonTimings, StopReason};
 use super::{InitialMapError, count_flipped, lscm, signed_uv_area, tutte};
 use crate::linsolve::SolveError;
@@ -45,6 +47,9 @@ pub struct FlattenOptions {
     pub from_alpha: Option<Litke>,
     pub start: StartChoice,
     pub newton: NewtonSettings,
+    /// Move the start map toward an isometry with a few ARAP local/global steps before
+    /// Newton (each one only accepted if flip-free and energy-decreasing).
+    pub warm_start: bool,
 }
 
 impl Default for FlattenOptions {
@@ -54,6 +59,7 @@ impl Default for FlattenOptions {
             from_alpha: None,
             start: StartChoice::Auto,
             newton: NewtonSettings::default(),
+            warm_start: true,
         }
     }
 }
@@ -66,6 +72,8 @@ pub struct Flattening {
     pub start: StartMap,
     /// Triangles LSCM flipped or degenerated (0 when LSCM was used).
     pub lscm_flipped: usize,
+    /// ARAP warm-start steps accepted before Newton.
+    pub warm_start_iterations: usize,
     /// Newton iterations, all stages together.
     pub iterations: usize,
     pub converged: bool,
@@ -230,16 +238,50 @@ pub fn flatten_with_progress(
     // Rigid-motion pins: the two boundary vertices farthest apart in the start map,
     // rotated onto the u axis.
     let (p0, p1) = farthest_pair(&uv, boundary);
-    let (dx, dy) = (
-        uv[p1 as usize][0] - uv[p0 as usize][0],
-        uv[p1 as usize][1] - uv[p0 as usize][1],
-    );
-    let len = dx.hypot(dy).max(f64::MIN_POSITIVE);
-    let (c, sn) = (dx / len, dy / len);
-    let origin = uv[p0 as usize];
-    for p in uv.iter_mut() {
-        let (x, y) = (p[0] - origin[0], p[1] - origin[1]);
-        *p = [s * (c * x + sn * y), s * (-sn * x + c * y)];
+    uv.iter_mut().for_each(|p| *p = [s * p[0], s * p[1]]);
+    align_pins(&mut uv, p0, p1);
+
+    // ARAP warm start: only as search directions, accepted when flip-free and when
+    // they lower the energy being minimized first (see `arap`).
+    let mut warm_start_iterations = 0;
+    if options.warm_start {
+        let first_energy = match (&options.energy, &options.from_alpha) {
+            (_, Some(from)) => EnergyKind::Litke(*from),
+            (e, None) => e.clone(),
+        };
+        let arap = ArapStep::new(mesh.positions.len(), &mesh.triangles, &rest, p0)?;
+        let evaluate = NewtonSolver::energy_of(&rest, &mesh.triangles);
+        let mut energy = evaluate(&uv, &first_energy);
+        let (mut target, mut direction, mut trial) =
+            (Vec::new(), vec![[0.0; 2]; uv.len()], uv.clone());
+        for _ in 0..WARM_START_MAX_ITERATIONS {
+            arap.target(&uv, &mut target)?;
+            for ((d, t), u) in direction.iter_mut().zip(&target).zip(&uv) {
+                *d = [t[0] - u[0], t[1] - u[1]];
+            }
+            let mut step = 1.0f64.min(0.9 * max_flip_free_step(&uv, &mesh.triangles, &direction));
+            let mut accepted = None;
+            for _ in 0..6 {
+                for ((tr, u), d) in trial.iter_mut().zip(&uv).zip(&direction) {
+                    *tr = [u[0] + step * d[0], u[1] + step * d[1]];
+                }
+                let e = evaluate(&trial, &first_energy);
+                if e < energy {
+                    accepted = Some(e);
+                    break;
+                }
+                step *= 0.5;
+            }
+            let Some(e) = accepted else { break };
+            let gain = (energy - e) / energy;
+            std::mem::swap(&mut uv, &mut trial);
+            energy = e;
+            warm_start_iterations += 1;
+            if gain < WARM_START_MIN_GAIN {
+                break;
+            }
+        }
+        align_pins(&mut uv, p0, p1);
     }
     let time_start = clock.elapsed().as_secs_f64();
 
@@ -311,6 +353,7 @@ pub fn flatten_with_progress(
         uvs,
         start,
         lscm_flipped,
+        warm_start_iterations,
         iterations,
         converged: stop == StopReason::Converged,
         stop_reason: stop,
@@ -323,6 +366,28 @@ pub fn flatten_with_progress(
         time_total: clock.elapsed().as_secs_f64(),
         newton_timings: solver.timings,
     })
+}
+
+/// ARAP warm-start iterations at most, and the relative energy decrease below which
+/// they stop (Newton takes over).
+const WARM_START_MAX_ITERATIONS: usize = 30;
+const WARM_START_MIN_GAIN: f64 = 0.05;
+
+/// Moves `p0` to the origin and rotates `p1` onto the positive u axis (a rigid motion:
+/// the energy does not change), so pinning `p0` and the v coordinate of `p1` removes
+/// exactly the rigid motions.
+fn align_pins(uv: &mut [[f64; 2]], p0: u32, p1: u32) {
+    let origin = uv[p0 as usize];
+    let (dx, dy) = (
+        uv[p1 as usize][0] - origin[0],
+        uv[p1 as usize][1] - origin[1],
+    );
+    let len = dx.hypot(dy).max(f64::MIN_POSITIVE);
+    let (c, sn) = (dx / len, dy / len);
+    for p in uv.iter_mut() {
+        let (x, y) = (p[0] - origin[0], p[1] - origin[1]);
+        *p = [c * x + sn * y, -sn * x + c * y];
+    }
 }
 
 /// The two loop vertices farthest apart (approximately: farthest from the loop's
@@ -389,6 +454,36 @@ mod tests {
         let map = flatten(&mesh, &FlattenOptions::default()).unwrap();
         assert_eq!(map.uvs.len(), mesh.positions.len());
         assert_eq!(count_flipped(&map.uvs, &mesh.triangles), 0);
+    }
+
+    #[test]
+    fn warm_start_reaches_the_same_minimum_with_fewer_newton_iterations() {
+        // A cap deep enough that the conformal start squeezes its pole region.
+        let mesh = crate::mesh::generate::spherical_cap(1.0, 2.4, 16, 48);
+        let cold = flatten(
+            &mesh,
+            &FlattenOptions {
+                warm_start: false,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        let warm = flatten(&mesh, &FlattenOptions::default()).unwrap();
+        assert!(warm.warm_start_iterations > 0);
+        assert!(warm.converged && cold.converged);
+        assert!(
+            (warm.energy - cold.energy).abs() <= 1e-9 * cold.energy,
+            "{} vs {}",
+            warm.energy,
+            cold.energy
+        );
+        assert!(
+            warm.iterations < cold.iterations,
+            "{} vs {}",
+            warm.iterations,
+            cold.iterations
+        );
+        assert_eq!(warm.flipped_triangles, 0);
     }
 
     #[test]

@@ -2,6 +2,7 @@
 //! projected Newton minimization of `E = Σ_T area3D(T) · W(a, d)` with flip-free
 //! line search and α-continuation.
 
+pub mod arap;
 pub mod density;
 pub mod element;
 pub mod flatten;

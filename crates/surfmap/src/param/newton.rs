@@ -229,6 +229,31 @@ impl<'m> NewtonSolver<'m> {
         ]
     }
 
+    /// The energy function of a mesh without building a solver (for the warm start).
+    pub fn energy_of<'a, D: Density + ?Sized>(
+        rest: &'a [RestTriangle],
+        triangles: &'a [[u32; 3]],
+    ) -> impl Fn(&[[f64; 2]], &D) -> f64 + 'a {
+        move |uv, density| {
+            (0..triangles.len())
+                .into_par_iter()
+                .with_min_len(4096)
+                .map(|t| {
+                    let tri = triangles[t];
+                    element::energy(
+                        &rest[t],
+                        &[
+                            uv[tri[0] as usize],
+                            uv[tri[1] as usize],
+                            uv[tri[2] as usize],
+                        ],
+                        density,
+                    )
+                })
+                .sum()
+        }
+    }
+
     /// `E(u) = Σ_T area(T)·W` (thesis (2.5) summed per triangle); `+∞` if any
     /// triangle is flipped or degenerate.
     pub fn energy<D: Density + ?Sized>(&self, uv: &[[f64; 2]], density: &D) -> f64 {
