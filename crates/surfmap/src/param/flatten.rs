@@ -247,7 +247,7 @@ pub fn flatten_with_progress(
     if options.warm_start {
         let first_energy = match (&options.energy, &options.from_alpha) {
             (_, Some(from)) => EnergyKind::Litke(*from),
-            (e, None) => e.clone(),
+            (e, None) => *e,
         };
         let arap = ArapStep::new(mesh.positions.len(), &mesh.triangles, &rest, p0)?;
         let evaluate = NewtonSolver::energy_of(&rest, &mesh.triangles);
