@@ -1,6 +1,15 @@
 //! The `surfmap` command-line tool: argument parsing, progress and files only; the
 //! algorithms live in the `surfmap` library.
 
+/// `println!` that ignores a closed standard output (`surfmap … | head` must not
+/// panic on a broken pipe).
+macro_rules! outln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout(), $($arg)*);
+    }};
+}
+
 mod cmd;
 
 use clap::{Parser, Subcommand};

@@ -171,3 +171,27 @@ fn exit_codes() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn closed_stdout_is_not_a_panic() {
+    // `surfmap demo | head -1`: the reader goes away; the program must not panic.
+    let dir = temp_dir("broken-pipe");
+    let mut child = surfmap()
+        .arg("demo")
+        .arg("-o")
+        .arg(&dir)
+        .args(["--rings", "6"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

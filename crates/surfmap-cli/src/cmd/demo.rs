@@ -41,7 +41,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let input = dir.join("surface.obj");
     write_mesh(&input, &mesh)?;
     written.push(input);
-    println!(
+    outln!(
         "generated a bumpy disc: {} vertices, {} triangles (z = {}·(1 − r²)·(sin 4x·cos 3y + ½ cos 5r))",
         mesh.positions.len(),
         mesh.triangles.len(),
@@ -80,7 +80,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         write_atomically(&report_path, |w| w.write_all(&json))?;
         written.push(report_path);
         written.extend(super::flatten::write_pictures(&dir.join(name), &mesh, &r)?);
-        println!(
+        outln!(
             "{name:>9}: start {}, {} iterations, {}, energy {:.5}, flipped triangles {}, angle distortion mean {:.4} max {:.4}, {:.3} s",
             match r.start {
                 StartMap::Lscm => "lscm",
@@ -112,9 +112,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let sheet = dir.join("tradeoff.png");
     save_png(&sheet, &tradeoff_sheet(&panels, (1000, 620)))?;
     written.push(sheet);
-    println!("wrote:");
+    outln!("wrote:");
     for p in &written {
-        println!("  {}", p.display());
+        outln!("  {}", p.display());
     }
     Ok(())
 }

@@ -288,14 +288,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
     }
     if !args.quiet {
-        println!(
-            "{}: start {}, {} iterations, {}, energy {:.6}, flipped triangles {}, {:.3} s → {}",
+        outln!(
+            "{}: start {} + {} ARAP steps, {} iterations, {}, energy {:.6}, flipped triangles {}, {:.3} s → {}",
             args.input.display(),
             match result.start {
                 surfmap::param::flatten::StartMap::Lscm => "lscm".to_string(),
                 surfmap::param::flatten::StartMap::MeanValue =>
                     format!("mean-value (LSCM flipped {})", result.lscm_flipped),
             },
+            result.warm_start_iterations,
             result.iterations,
             if result.converged {
                 "converged"
@@ -320,6 +321,8 @@ pub struct FlattenReport<'a> {
     /// Initial map used: `lscm` or `mean_value`.
     pub start: surfmap::param::flatten::StartMap,
     pub lscm_flipped_triangles: usize,
+    /// ARAP warm-start steps accepted before Newton.
+    pub warm_start_iterations: usize,
     pub iterations: usize,
     pub converged: bool,
     pub stop_reason: surfmap::param::newton::StopReason,
@@ -353,6 +356,7 @@ impl<'a> FlattenReport<'a> {
             triangles: mesh.triangles.len(),
             start: r.start,
             lscm_flipped_triangles: r.lscm_flipped,
+            warm_start_iterations: r.warm_start_iterations,
             iterations: r.iterations,
             converged: r.converged,
             stop_reason: r.stop_reason,

@@ -112,7 +112,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     )
     .with_context(|| format!("cannot flatten {}", args.mesh.display()))?;
     if !args.quiet {
-        println!(
+        outln!(
             "{}: balanced flattening, start {}, {} iterations, {}, energy {:.6}, flipped triangles {}, {:.3} s",
             args.mesh.display(),
             match flat.start {
@@ -145,7 +145,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let inside = (0..img.size * img.size)
             .filter(|&k| img.raster.is_inside(k))
             .count();
-        println!(
+        outln!(
             "images: {n}×{n} grid, {:.1}% of the nodes on the surface, length unit ℓ = {:.6} mesh units, {} feature(s), {:.3} s",
             100.0 * inside as f64 / (img.size * img.size) as f64,
             img.length_unit,
@@ -153,14 +153,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             compute_time,
             n = img.size,
         );
-        println!("wrote into {}:", args.output.display());
+        outln!("wrote into {}:", args.output.display());
         for e in &manifest.images {
             let png = e
                 .png
                 .as_deref()
                 .map(|p| format!(" + {p}"))
                 .unwrap_or_default();
-            println!("  {}{png}  {:?}  {}", e.npy, e.shape, e.description);
+            outln!("  {}{png}  {:?}  {}", e.npy, e.shape, e.description);
         }
         if !manifest.pyramid.is_empty() {
             let files: usize = manifest
@@ -168,7 +168,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 .iter()
                 .map(|l| l.images.len() + l.images.iter().filter(|e| e.png.is_some()).count())
                 .sum();
-            println!(
+            outln!(
                 "  pyramid: {} levels ({}² … {}²) of {}, {files} files pyramid_KK_*",
                 manifest.pyramid.len(),
                 manifest.pyramid[0].size,
@@ -179,7 +179,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                     .unwrap_or_default()
             );
         }
-        println!("  images.json");
+        outln!("  images.json");
     }
     Ok(())
 }

@@ -88,15 +88,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         &file.mesh,
     );
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&r)?);
+        outln!("{}", serde_json::to_string_pretty(&r)?);
         return Ok(());
     }
-    println!("{} ({})", r.file, r.format);
-    println!("  vertices   {:>10}", r.vertices);
-    println!("  faces      {:>10}   ({} triangles)", r.faces, r.triangles);
-    println!("  edges      {:>10}", r.edges);
+    outln!("{} ({})", r.file, r.format);
+    outln!("  vertices   {:>10}", r.vertices);
+    outln!("  faces      {:>10}   ({} triangles)", r.faces, r.triangles);
+    outln!("  edges      {:>10}", r.edges);
     if let (Some(lo), Some(hi)) = (r.bbox_min, r.bbox_max) {
-        println!(
+        outln!(
             "  bbox       [{:.4}, {:.4}, {:.4}] – [{:.4}, {:.4}, {:.4}]  (size {:.4} × {:.4} × {:.4})",
             lo[0],
             lo[1],
@@ -109,8 +109,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             hi[2] - lo[2]
         );
     }
-    println!("  area       {:.6}", r.area);
-    println!(
+    outln!("  area       {:.6}", r.area);
+    outln!(
         "  topology   {} component(s), {} boundary loop(s), χ = {}, genus {}, {}, {}",
         r.components,
         r.boundary_loops,
@@ -127,7 +127,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "NOT orientable"
         },
     );
-    println!(
+    outln!(
         "  disc       {}",
         if r.disc {
             "yes: ready to flatten"
@@ -136,11 +136,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
     );
     if r.defects.is_empty() {
-        println!("  defects    none");
+        outln!("  defects    none");
     } else {
-        println!("  defects    {}", r.defects.len());
+        outln!("  defects    {}", r.defects.len());
         for d in &r.defects {
-            println!(
+            outln!(
                 "    - [{}] {}",
                 serde_json::to_value(d.kind)?.as_str().unwrap_or("?"),
                 d.message

@@ -113,15 +113,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 serde_json::Value::String(args.mesh.display().to_string()),
             );
         }
-        println!("{}", serde_json::to_string_pretty(&value)?);
+        outln!("{}", serde_json::to_string_pretty(&value)?);
     } else if args.csv {
-        println!("Filename,{}", BENCHMARK_CSV_HEADER.join(","));
+        outln!("Filename,{}", BENCHMARK_CSV_HEADER.join(","));
         let name = args
             .mesh
             .file_name()
             .map(|n| n.to_string_lossy().replace(',', "_"))
             .unwrap_or_default();
-        println!("{name},{}", report.benchmark.csv_values().join(","));
+        outln!("{name},{}", report.benchmark.csv_values().join(","));
     } else {
         print_summary(&args.mesh.display().to_string(), &report);
     }
@@ -163,8 +163,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 
 fn print_summary(name: &str, r: &DistortionReport) {
     let m = &r.measures;
-    println!("{name}");
-    println!(
+    outln!("{name}");
+    outln!(
         "  triangles {}  vertices {}  charts {} (mirrored {})  degenerate 3D {}  degenerate UV {}",
         r.num_triangles,
         r.num_vertices,
@@ -173,8 +173,8 @@ fn print_summary(name: &str, r: &DistortionReport) {
         r.degenerate_3d,
         r.degenerate_uv
     );
-    println!("  flipped triangles      {}", r.flipped_triangles);
-    println!(
+    outln!("  flipped triangles      {}", r.flipped_triangles);
+    outln!(
         "  boundary overlap       {} ({} crossings), overlap area {:.6} ({:.4}% of UV area)",
         if r.boundary_overlap.self_intersecting {
             "yes"
@@ -186,39 +186,45 @@ fn print_summary(name: &str, r: &DistortionReport) {
         100.0 * r.boundary_overlap.overlap_fraction
     );
     if !r.boundary_overlap.complete {
-        println!(
+        outln!(
             "                         (tangled layout: search stopped early, these are lower bounds)"
         );
     }
-    println!("  UV scale               {:.6}", r.uv_scale);
-    println!(
+    outln!("  UV scale               {:.6}", r.uv_scale);
+    outln!(
         "  symmetric Dirichlet    mean {:.6}  max {:.6}   (isometry 4)",
-        r.symmetric_dirichlet, r.symmetric_dirichlet_max
+        r.symmetric_dirichlet,
+        r.symmetric_dirichlet_max
     );
-    println!(
+    outln!(
         "  conformal s1/s2        mean {:.6}  max {:.6}",
-        r.conformal_mean, r.conformal_max
+        r.conformal_mean,
+        r.conformal_max
     );
-    println!(
+    outln!(
         "  area s1*s2             min {:.6}  max {:.6}  mean |log| {:.6}  max |log| {:.6}",
         r.area_distortion.min,
         r.area_distortion.max,
         r.area_distortion.log_mean_abs,
         r.area_distortion.log_max_abs
     );
-    println!(
+    outln!(
         "  stretch (Sander)       L2 {:.6}  Linf {:.6}  L2 forward {:.6}",
-        r.stretch.l2, r.stretch.linf, r.stretch.l2_forward
+        r.stretch.l2,
+        r.stretch.linf,
+        r.stretch.l2_forward
     );
-    println!("  thesis (min / mean / max, 3D-area weighted mean)");
+    outln!("  thesis (min / mean / max, 3D-area weighted mean)");
     for (label, s) in [
         ("angle  √(Γ/γ)", m.angle),
         ("area   √(Γγ)", m.area),
         ("length √(Γ+γ)", m.length),
     ] {
-        println!(
+        outln!(
             "    {label:<14} {:>12.6} {:>12.6} {:>12.6}",
-            s.min, s.mean, s.max
+            s.min,
+            s.mean,
+            s.max
         );
     }
 }

@@ -68,6 +68,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .collect();
     save_png(&args.output, &tradeoff_sheet(&panels, size))
         .with_context(|| format!("cannot write {}", args.output.display()))?;
-    println!("wrote {}", args.output.display());
+    outln!("wrote {}", args.output.display());
     Ok(())
 }
