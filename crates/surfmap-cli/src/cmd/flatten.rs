@@ -409,15 +409,18 @@ pub fn write_pictures(dir: &Path, mesh: &TriMesh, r: &Flattening) -> anyhow::Res
             (900, 900),
         ),
     )?;
+    // Iterate k: energy E_k (entry k) and the gradient there (recorded with entry
+    // k + 1, before its step). Plotted as E_k − E_final, whose decay shows the rate.
+    let last = r.log.last().map_or(f64::NAN, |l| l.energy);
     let history: Vec<(f64, f64)> = r
         .log
-        .iter()
-        .filter(|l| l.iteration > 0)
-        .map(|l| (l.energy, l.gradient_norm))
+        .windows(2)
+        .filter(|w| w[1].stage == w[0].stage)
+        .map(|w| (w[0].energy - last, w[1].gradient_norm))
         .collect();
     save(
         "convergence.png",
-        render::convergence_plot(&history, (900, 600)),
+        render::convergence_plot_labeled(&history, "E - E_FINAL (PER UNIT AREA)", (900, 600)),
     )?;
     Ok(written)
 }

@@ -12,7 +12,7 @@ pub mod tradeoff;
 pub mod uv_layout;
 
 pub use image::RgbImage;
-pub use plot::convergence_plot;
+pub use plot::{convergence_plot, convergence_plot_labeled};
 pub use surface::{automatic_view, checker_render};
 pub use tradeoff::{TradeoffPanel, tradeoff_sheet};
 pub use uv_layout::uv_layout;

@@ -141,6 +141,16 @@ fn log_panel(
 /// Energy (top) and gradient norm (bottom) per iteration, both on log10 axes, from
 /// `history[i] = (E_i, ‖∇E_i‖)`. `size = (width, height)`.
 pub fn convergence_plot(history: &[(f64, f64)], size: (u32, u32)) -> RgbImage {
+    convergence_plot_labeled(history, "ENERGY E", size)
+}
+
+/// [`convergence_plot`] with its own label for the top series (e.g. `E − E_final`,
+/// which shows the rate of convergence on a log axis).
+pub fn convergence_plot_labeled(
+    history: &[(f64, f64)],
+    energy_label: &str,
+    size: (u32, u32),
+) -> RgbImage {
     let (w, h) = (size.0.clamp(128, 16384), size.1.clamp(128, 16384));
     let font = if w.min(h) >= 700 { 2 } else { 1 };
     let th = text_height(font) as f64;
@@ -173,7 +183,7 @@ pub fn convergence_plot(history: &[(f64, f64)], size: (u32, u32)) -> RgbImage {
         r1,
         &energy,
         rgb(30, 90, 200),
-        "ENERGY E",
+        energy_label,
         font,
     );
     log_panel(
