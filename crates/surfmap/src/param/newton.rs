@@ -7,7 +7,16 @@
 //! 2. solves `H p = −∇E` (the sign NOTES.md §1 corrects in thesis (3.1)) with a sparse
 //!    Cholesky whose symbolic factorization is computed once, in [`NewtonSolver::new`];
 //! 3. steps along `p` with Armijo backtracking (thesis fig. 3.3) started at or below
-//!    the largest flip-free step, so no accepted iterate has `det J ≤ 0` anywhere.
+//!    the largest flip-free step, so no accepted iterate has `det J ≤ 0` anywhere; an
+//!    energy increase is never accepted, and when the full step was accepted and the
+//!    flip-free bound allows, the step is doubled while the energy keeps dropping
+//!    (barrier-dominated regions, where Newton steps are far too short).
+//!
+//! Once the Newton decrement is small (`λ² < 10⁻³·E`) the *exact* Hessian is tried
+//! first: where its Cholesky succeeds (positive definite) the convergence is
+//! quadratic, where it fails the projected one is used for the next few steps.
+//! Stopping: `λ²/2 ≤ tolerance` (energy per unit area, scale-free), the iteration cap,
+//! or no measurable decrease (the rounding floor).
 //!
 //! Rigid motions are removed by pinning three coordinates (both coordinates of one
 //! vertex, the `v` coordinate of a second one after rotating it onto the `u` axis):
