@@ -267,14 +267,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .map(|t| surfmap::mesh::io::ObjMaterial { texture: t.clone() });
     write_obj(&args.output, &out, material.as_ref())
         .with_context(|| format!("cannot write {}", args.output.display()))?;
-    let measures = distortion_report_per_vertex(
-        &mesh.positions,
-        &mesh.triangles,
-        &result.uvs,
-        &MeasureOptions::default(),
-    )?;
     if let Some(path) = &args.report {
-        let report = FlattenReport::new(&args.input, &mesh, &result, measures.clone(), &defects);
+        // Measured on the written map (its own scale; the measures normalize area).
+        let measures = distortion_report_per_vertex(
+            &mesh.positions,
+            &mesh.triangles,
+            &result.uvs,
+            &MeasureOptions::default(),
+        )?;
+        let report = FlattenReport::new(&args.input, &mesh, &result, measures, &defects);
         let json = serde_json::to_vec_pretty(&report)?;
         write_atomically(path, |w| w.write_all(&json))
             .with_context(|| format!("cannot write {}", path.display()))?;
