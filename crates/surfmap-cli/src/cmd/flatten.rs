@@ -253,7 +253,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let file = load_mesh(&args.input)?;
     let opts = options(&args)?;
     let mesh = args.repair.apply(file.mesh, args.quiet)?;
-    let defects = validate(&mesh, &Topology::new(&mesh));
     let result = flatten_mesh_filling_holes(&mesh, &opts, args.quiet, args.fill_holes)
         .with_context(|| format!("cannot flatten {}", args.input.display()))?;
     let mut uvs = result.uvs.clone();
@@ -275,6 +274,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             &result.uvs,
             &MeasureOptions::default(),
         )?;
+        let defects = validate(&mesh, &Topology::new(&mesh));
         let report = FlattenReport::new(&args.input, &mesh, &result, measures, &defects);
         let json = serde_json::to_vec_pretty(&report)?;
         write_atomically(path, |w| w.write_all(&json))
