@@ -367,7 +367,8 @@ pub fn validate(mesh: &TriMesh, topo: &Topology) -> Vec<Defect> {
                 .collect(),
             format!(
                 "found {loops} boundary loops (edge counts: {}{}); a disc has exactly one. The others are holes \
-                 (eyes, mouth, scan gaps): fill them, or cut from each hole to the outer boundary, before flattening.",
+                 (eyes, mouth, scan gaps): use --fill-holes to fill all but the longest for the flattening (they stay \
+                 open in the output), or cut from each hole to the outer boundary.",
                 lens.iter()
                     .take(EXAMPLES)
                     .map(|(n, _)| n.to_string())
