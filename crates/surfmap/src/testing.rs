@@ -24,3 +24,18 @@ impl Rng {
         [self.range(-r, r), self.range(-r, r)]
     }
 }
+
+/// Every energy density with a name: the four Litke presets, symmetric Dirichlet, MIPS
+/// and ARAP (tests run each property over all of them).
+pub fn all_energies() -> Vec<(&'static str, crate::param::density::EnergyKind)> {
+    use crate::param::density::{EnergyKind, Litke};
+    vec![
+        ("litke conformal", EnergyKind::Litke(Litke::conformal())),
+        ("litke balanced", EnergyKind::Litke(Litke::balanced())),
+        ("litke area", EnergyKind::Litke(Litke::area())),
+        ("litke length", EnergyKind::Litke(Litke::length())),
+        ("sym dirichlet", EnergyKind::SymmetricDirichlet),
+        ("mips", EnergyKind::Mips),
+        ("arap", EnergyKind::Arap),
+    ]
+}

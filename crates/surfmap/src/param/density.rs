@@ -307,17 +307,7 @@ mod tests {
 
     use crate::testing::Rng;
 
-    fn all_densities() -> Vec<(&'static str, EnergyKind)> {
-        vec![
-            ("litke conformal", EnergyKind::Litke(Litke::conformal())),
-            ("litke balanced", EnergyKind::Litke(Litke::balanced())),
-            ("litke area", EnergyKind::Litke(Litke::area())),
-            ("litke length", EnergyKind::Litke(Litke::length())),
-            ("sym dirichlet", EnergyKind::SymmetricDirichlet),
-            ("mips", EnergyKind::Mips),
-            ("arap", EnergyKind::Arap),
-        ]
-    }
+    use crate::testing::all_energies as all_densities;
 
     fn assert_close(got: f64, want: f64, rel: f64, what: &str) {
         let tol = rel * (1.0 + want.abs().max(got.abs()));

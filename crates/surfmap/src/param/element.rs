@@ -493,21 +493,11 @@ fn cross3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 #[allow(clippy::needless_range_loop)] // matrix indices read best as indices
 mod tests {
     use super::*;
-    use crate::param::density::{Arap, EnergyKind, Litke, Mips, SymmetricDirichlet};
+    use crate::param::density::{Arap, Litke, Mips, SymmetricDirichlet};
 
     use crate::testing::Rng;
 
-    fn densities() -> Vec<(&'static str, EnergyKind)> {
-        vec![
-            ("litke conformal", EnergyKind::Litke(Litke::conformal())),
-            ("litke balanced", EnergyKind::Litke(Litke::balanced())),
-            ("litke area", EnergyKind::Litke(Litke::area())),
-            ("litke length", EnergyKind::Litke(Litke::length())),
-            ("sym dirichlet", EnergyKind::SymmetricDirichlet),
-            ("mips", EnergyKind::Mips),
-            ("arap", EnergyKind::Arap),
-        ]
-    }
+    use crate::testing::all_energies as densities;
 
     fn random_rest(rng: &mut Rng) -> ([[f64; 3]; 3], RestTriangle) {
         loop {
