@@ -243,12 +243,12 @@ fn boundary_loops<'a>(
         if used[seed] {
             continue;
         }
-        // Walk along the component, preferring to continue at the head of the current edge.
+        // Walk from the seed edge in its face's direction, always continuing with an
+        // unused boundary edge at the current vertex; for a simple loop this visits
+        // its vertices in order.
         let mut vertices = Vec::new();
-        let mut stack = vec![seed as u32];
+        let mut walked = vec![seed as u32];
         used[seed] = true;
-        // Depth-first walk that follows the directed edges where it can; for a simple
-        // loop this visits the vertices in order.
         let mut current = bedges[seed].0;
         vertices.push(current);
         let mut next_edge = Some(seed as u32);
@@ -261,7 +261,7 @@ fn boundary_loops<'a>(
                 if !used[cand as usize] {
                     used[cand as usize] = true;
                     next_edge = Some(cand);
-                    stack.push(cand);
+                    walked.push(cand);
                     break;
                 }
             }
@@ -271,7 +271,7 @@ fn boundary_loops<'a>(
         }
         // Sweep any edges of this component the walk did not reach (figure-eight
         // boundaries through non-manifold vertices): they belong to the same loop.
-        let mut frontier: Vec<u32> = stack;
+        let mut frontier = walked;
         while let Some(ei) = frontier.pop() {
             let (a, b) = bedges[ei as usize];
             for v in [a, b] {
