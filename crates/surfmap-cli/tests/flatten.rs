@@ -4,7 +4,21 @@
 
 mod common;
 use common::*;
+use std::path::Path;
+use std::process::Output;
 use surfmap::mesh::io::read_mesh;
+
+/// `surfmap flatten INPUT OPTIONS… -o OUT`.
+fn flatten(input: &Path, options: &[&str], out: &Path) -> Output {
+    surfmap()
+        .arg("flatten")
+        .arg(input)
+        .args(options)
+        .arg("-o")
+        .arg(out)
+        .output()
+        .unwrap()
+}
 
 /// Signed area of every UV triangle of an OBJ written by `flatten`, computed here.
 fn min_signed_uv_area(path: &std::path::Path) -> (f64, usize) {
@@ -32,17 +46,8 @@ fn every_disc_mesh_flattens_without_flips_at_both_presets() {
             let name = mesh.file_stem().unwrap().to_string_lossy();
             let out = dir.join(format!("{name}-{preset}.obj"));
             let report = dir.join(format!("{name}-{preset}.json"));
-            let run = surfmap()
-                .arg("flatten")
-                .arg(mesh)
-                .arg("-o")
-                .arg(&out)
-                .arg("--preset")
-                .arg(preset)
-                .arg("--report")
-                .arg(&report)
-                .output()
-                .unwrap();
+            let report_arg = report.to_string_lossy();
+            let run = flatten(mesh, &["--preset", preset, "--report", &report_arg], &out);
             assert!(
                 run.status.success(),
                 "{name} {preset}: {}",
@@ -93,13 +98,7 @@ fn non_disc_inputs_get_a_clear_error() {
         ("moebius.obj", "not orientable"),
         ("beetle_messy.obj", "shared by more than two faces"),
     ] {
-        let run = surfmap()
-            .arg("flatten")
-            .arg(data.join(file))
-            .arg("-o")
-            .arg(dir.join("x.obj"))
-            .output()
-            .unwrap();
+        let run = flatten(&data.join(file), &[], &dir.join("x.obj"));
         assert_eq!(run.status.code(), Some(1), "{file}");
         let err = String::from_utf8_lossy(&run.stderr);
         assert!(err.contains(says), "{file}: expected {says:?} in: {err}");
@@ -110,13 +109,7 @@ fn non_disc_inputs_get_a_clear_error() {
     }
     // A repair that makes it a disc: the mask without the cone.
     let out = dir.join("mask.obj");
-    let run = surfmap()
-        .arg("flatten")
-        .arg(data.join("mask_cone.off"))
-        .args(["--keep-largest", "-o"])
-        .arg(&out)
-        .output()
-        .unwrap();
+    let run = flatten(&data.join("mask_cone.off"), &["--keep-largest"], &out);
     assert!(
         run.status.success(),
         "{}",
@@ -151,13 +144,11 @@ fn demo_writes_what_it_says() {
 fn invalid_alpha_is_rejected_with_a_reason() {
     let dir = temp_dir("alpha");
     run_demo(&dir, 4);
-    let run = surfmap()
-        .arg("flatten")
-        .arg(dir.join("surface.obj"))
-        .args(["--alpha", "0,1,1", "-o"])
-        .arg(dir.join("x.obj"))
-        .output()
-        .unwrap();
+    let run = flatten(
+        &dir.join("surface.obj"),
+        &["--alpha", "0,1,1"],
+        &dir.join("x.obj"),
+    );
     assert_eq!(run.status.code(), Some(1));
     let err = String::from_utf8_lossy(&run.stderr);
     assert!(err.contains("α"), "{err}");
@@ -173,15 +164,8 @@ fn face_scans_with_open_eyes_and_mouth_flatten_with_fill_holes() {
         ("faces/flame/flame_template.ply", vec!["--keep-largest"]),
     ] {
         let out = dir.join("face.obj");
-        let run = surfmap()
-            .arg("flatten")
-            .arg(data.join(file))
-            .args(&extra)
-            .arg("--fill-holes")
-            .arg("-o")
-            .arg(&out)
-            .output()
-            .unwrap();
+        let options: Vec<&str> = extra.iter().copied().chain(["--fill-holes"]).collect();
+        let run = flatten(&data.join(file), &options, &out);
         assert!(
             run.status.success(),
             "{file}: {}",
@@ -204,13 +188,11 @@ fn normalize_and_uv_as_positions_write_the_flat_unit_layout() {
     let dir = temp_dir("normalize");
     run_demo(&dir, 8);
     let out = dir.join("flat.obj");
-    let run = surfmap()
-        .arg("flatten")
-        .arg(dir.join("surface.obj"))
-        .args(["--normalize", "--uv-as-positions", "--quiet", "-o"])
-        .arg(&out)
-        .output()
-        .unwrap();
+    let run = flatten(
+        &dir.join("surface.obj"),
+        &["--normalize", "--uv-as-positions", "--quiet"],
+        &out,
+    );
     assert!(
         run.status.success(),
         "{}",

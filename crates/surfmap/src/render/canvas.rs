@@ -119,6 +119,18 @@ impl Canvas {
     }
 
     /// Draws a segment of `width` output pixels (drawn on top, no depth test).
+    /// Outline of the axis-aligned rectangle `[x0, x1] × [y0, y1]`.
+    pub fn stroke_rect(&mut self, x0: f64, y0: f64, x1: f64, y1: f64, width: f64, color: [f32; 3]) {
+        for (a, b) in [
+            ([x0, y0], [x1, y0]),
+            ([x1, y0], [x1, y1]),
+            ([x1, y1], [x0, y1]),
+            ([x0, y1], [x0, y0]),
+        ] {
+            self.line(a, b, width, color);
+        }
+    }
+
     pub fn line(&mut self, a: [f64; 2], b: [f64; 2], width: f64, color: [f32; 3]) {
         let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
         let len = (dx * dx + dy * dy).sqrt();

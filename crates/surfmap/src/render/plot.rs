@@ -127,15 +127,7 @@ fn log_panel(
         }
     }
     // Frame.
-    let (x0, y0, x1, y1) = (rect.x, rect.y, rect.x + rect.w, rect.y + rect.h);
-    for (a, b) in [
-        ([x0, y0], [x1, y0]),
-        ([x1, y0], [x1, y1]),
-        ([x1, y1], [x0, y1]),
-        ([x0, y1], [x0, y0]),
-    ] {
-        canvas.line(a, b, 1.2, axis);
-    }
+    canvas.stroke_rect(rect.x, rect.y, rect.x + rect.w, rect.y + rect.h, 1.2, axis);
 }
 
 /// Energy (top) and gradient norm (bottom) per iteration, both on log10 axes, from

@@ -150,15 +150,7 @@ pub fn tradeoff_sheet(panels: &[TradeoffPanel], size: (u32, u32)) -> RgbImage {
             hi += 0.1;
         }
         let frame = rgb(90, 90, 90);
-        let (x0, y0, x1, y1) = (rect.x, rect.y, rect.x + rect.w, rect.y + rect.h);
-        for (a, b) in [
-            ([x0, y0], [x1, y0]),
-            ([x1, y0], [x1, y1]),
-            ([x1, y1], [x0, y1]),
-            ([x0, y1], [x0, y0]),
-        ] {
-            canvas.line(a, b, 1.0, frame);
-        }
+        canvas.stroke_rect(rect.x, rect.y, rect.x + rect.w, rect.y + rect.h, 1.0, frame);
         let sx = |i: usize| {
             if n > 1 {
                 rect.x + rect.w * (0.05 + 0.9 * i as f64 / (n - 1) as f64)
