@@ -64,15 +64,7 @@ pub fn mean_value(
     triangles: &[[u32; 3]],
     boundary: &[u32],
 ) -> Result<Vec<[f64; 2]>, InitialMapError> {
-    let counter_clockwise = check_disc_input(positions, triangles, boundary)?;
-    let boundary_uv = circle_by_arc_length(positions, boundary, counter_clockwise)?;
-    solve_fixed_boundary(
-        positions,
-        triangles,
-        boundary,
-        &boundary_uv,
-        Weights::MeanValue,
-    )
+    onto_circle(positions, triangles, boundary, Weights::MeanValue)
 }
 
 /// Mean-value coordinates (Floater 2003, eq. 5.1) with the boundary loop fixed at
@@ -110,15 +102,19 @@ pub fn tutte_uniform(
     triangles: &[[u32; 3]],
     boundary: &[u32],
 ) -> Result<Vec<[f64; 2]>, InitialMapError> {
+    onto_circle(positions, triangles, boundary, Weights::Uniform)
+}
+
+/// The fixed-boundary map with the boundary on the unit circle by arc length.
+fn onto_circle(
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    boundary: &[u32],
+    weights: Weights,
+) -> Result<Vec<[f64; 2]>, InitialMapError> {
     let counter_clockwise = check_disc_input(positions, triangles, boundary)?;
     let boundary_uv = circle_by_arc_length(positions, boundary, counter_clockwise)?;
-    solve_fixed_boundary(
-        positions,
-        triangles,
-        boundary,
-        &boundary_uv,
-        Weights::Uniform,
-    )
+    solve_fixed_boundary(positions, triangles, boundary, &boundary_uv, weights)
 }
 
 #[derive(Clone, Copy, PartialEq)]
