@@ -9,7 +9,7 @@ use std::time::Instant;
 use surfmap::mesh::io::read_mesh;
 use surfmap::param::count_flipped;
 use surfmap::param::density::{EnergyKind, Litke};
-use surfmap::param::flatten::{FlattenOptions, StartMap, flatten};
+use surfmap::param::flatten::{FlattenOptions, flatten};
 
 fn main() {
     let mut args: Vec<String> = std::env::args().skip(1).collect();
@@ -35,7 +35,7 @@ fn main() {
         args.iter().map(PathBuf::from).collect()
     };
     println!(
-        "{:<24} {:>7} {:>7} {:<10} {:<10} {:>5} {:>9} {:>9} {:>12} {:>5}",
+        "{:<24} {:>7} {:>7} {:<10} {:<28} {:>5} {:>9} {:>9} {:>12} {:>5}",
         "mesh", "V", "F", "energy", "start", "iters", "median_s", "min_s", "E/area", "flips"
     );
     for path in meshes {
@@ -62,15 +62,12 @@ fn main() {
             let name = path.file_name().unwrap().to_string_lossy();
             match last.unwrap() {
                 Ok(r) => println!(
-                    "{:<24} {:>7} {:>7} {:<10} {:<10} {:>5} {:>9.3} {:>9.3} {:>12.6} {:>5}{}",
+                    "{:<24} {:>7} {:>7} {:<10} {:<28} {:>5} {:>9.3} {:>9.3} {:>12.6} {:>5}{}",
                     name,
                     mesh.positions.len(),
                     mesh.triangles.len(),
                     label,
-                    match r.start {
-                        StartMap::Lscm => "lscm".into(),
-                        StartMap::MeanValue => format!("mvc({})", r.lscm_flipped),
-                    },
+                    r.start_description(),
                     r.iterations,
                     times[times.len() / 2],
                     times[0],

@@ -11,7 +11,7 @@ use surfmap::mesh::generate::bumpy_disc;
 use surfmap::mesh::io::{write_mesh, write_obj};
 use surfmap::mesh::validate::validate;
 use surfmap::param::density::{EnergyKind, Litke};
-use surfmap::param::flatten::{FlattenOptions, StartMap};
+use surfmap::param::flatten::FlattenOptions;
 use surfmap::render::{TradeoffPanel, save_png, tradeoff_sheet};
 
 #[derive(clap::Args)]
@@ -82,10 +82,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         written.extend(super::flatten::write_pictures(&dir.join(name), &mesh, &r)?);
         outln!(
             "{name:>9}: start {}, {} iterations, {}, energy {:.5}, flipped triangles {}, angle distortion mean {:.4} max {:.4}, {:.3} s",
-            match r.start {
-                StartMap::Lscm => "lscm",
-                StartMap::MeanValue => "mean-value",
-            },
+            r.start_description(),
             r.iterations,
             if r.converged {
                 "converged"

@@ -292,11 +292,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         outln!(
             "{}: start {} + {} ARAP steps, {} iterations, {}, energy {:.6}, flipped triangles {}, {:.3} s → {}",
             args.input.display(),
-            match result.start {
-                surfmap::param::flatten::StartMap::Lscm => "lscm".to_string(),
-                surfmap::param::flatten::StartMap::MeanValue =>
-                    format!("mean-value (LSCM flipped {})", result.lscm_flipped),
-            },
+            result.start_description(),
             result.warm_start_iterations,
             result.iterations,
             if result.converged {

@@ -6,7 +6,7 @@
 use std::path::PathBuf;
 
 use anyhow::{Context, bail};
-use surfmap::param::flatten::{FlattenOptions, StartMap};
+use surfmap::param::flatten::FlattenOptions;
 use surfmap::raster::output::write_image_set;
 use surfmap::raster::{
     FeatureFile, FeatureMask, FeatureSource, GeometryImages, GeometryImagesOptions, TextureImage,
@@ -115,10 +115,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         outln!(
             "{}: balanced flattening, start {}, {} iterations, {}, energy {:.6}, flipped triangles {}, {:.3} s",
             args.mesh.display(),
-            match flat.start {
-                StartMap::Lscm => "lscm".to_string(),
-                StartMap::MeanValue => format!("mean-value (LSCM flipped {})", flat.lscm_flipped),
-            },
+            flat.start_description(),
             flat.iterations,
             if flat.converged {
                 "converged"

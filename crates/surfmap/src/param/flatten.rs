@@ -35,6 +35,8 @@ pub enum StartMap {
     /// Mean-value coordinates onto a circle (injective by construction), used because
     /// LSCM flipped or degenerated `lscm_flipped` triangles.
     MeanValue,
+    /// The caller's map ([`FlattenOptions::initial_uv`]).
+    Given,
 }
 
 /// Options of [`flatten`].
@@ -50,6 +52,10 @@ pub struct FlattenOptions {
     /// Move the start map toward an isometry with a few ARAP local/global steps before
     /// Newton (each one only accepted if flip-free and energy-decreasing).
     pub warm_start: bool,
+    /// Start from this map (one UV per vertex in the mesh's length units, as
+    /// [`Flattening::uvs`], no flipped triangle)
+    /// instead of computing one; `start` is then ignored.
+    pub initial_uv: Option<Vec<[f64; 2]>>,
 }
 
 impl Default for FlattenOptions {
@@ -60,6 +66,7 @@ impl Default for FlattenOptions {
             start: StartChoice::Auto,
             newton: NewtonSettings::default(),
             warm_start: true,
+            initial_uv: None,
         }
     }
 }
@@ -94,6 +101,18 @@ pub struct Flattening {
     pub newton_timings: NewtonTimings,
 }
 
+impl Flattening {
+    /// The start map for people: `lscm`, `mean-value (LSCM flipped N)`, `given`,
+    /// ….
+    pub fn start_description(&self) -> String {
+        match self.start {
+            StartMap::Lscm => "lscm".to_string(),
+            StartMap::MeanValue => format!("mean-value (LSCM flipped {})", self.lscm_flipped),
+            StartMap::Given => "given".to_string(),
+        }
+    }
+}
+
 /// Why a flattening failed.
 #[derive(Debug, thiserror::Error)]
 pub enum FlattenError {
@@ -119,6 +138,12 @@ pub enum FlattenError {
         "both initial maps flipped triangles (LSCM: {lscm}, mean-value: {mean_value}); the mesh geometry is probably broken (non-finite or coincident vertices)"
     )]
     NoAdmissibleStart { lscm: usize, mean_value: usize },
+    #[error("the given initial map has {uvs} UVs, but the mesh has {vertices} vertices")]
+    GivenStartLength { uvs: usize, vertices: usize },
+    #[error(
+        "the given initial map flips or degenerates {0} triangles; a start map must be injective"
+    )]
+    GivenStartFlipped(usize),
     #[error("internal error: the result has {0} flipped triangles; please report this mesh")]
     FlippedResult(usize),
 }
@@ -150,7 +175,13 @@ pub fn flatten_with_progress(
     // put them at the origin afterwards.
     let (compact, old_of_new) = without_unreferenced(mesh);
     if let Some(compact) = compact {
-        let mut result = flatten_with_progress(&compact, options, progress)?;
+        let mut compact_options = options.clone();
+        if let Some(given) = &options.initial_uv {
+            check_given_length(given, mesh)?;
+            compact_options.initial_uv =
+                Some(old_of_new.iter().map(|&v| given[v as usize]).collect());
+        }
+        let mut result = flatten_with_progress(&compact, &compact_options, progress)?;
         let mut uvs = vec![[0.0, 0.0]; mesh.positions.len()];
         for (new, &old) in old_of_new.iter().enumerate() {
             uvs[old as usize] = result.uvs[new];
@@ -202,12 +233,16 @@ pub fn flatten_with_progress(
         count_flipped(uv, &mesh.triangles)
     };
     let mut lscm_flipped = 0;
-    let (mut uv, start) = match options.start {
-        StartChoice::MeanValue => (
+    let (mut uv, start) = match (&options.initial_uv, options.start) {
+        (Some(given), _) => {
+            check_given_length(given, mesh)?;
+            (given.clone(), StartMap::Given)
+        }
+        (None, StartChoice::MeanValue) => (
             tutte::mean_value(&positions, &mesh.triangles, boundary)?,
             StartMap::MeanValue,
         ),
-        StartChoice::Auto | StartChoice::Lscm => {
+        (None, StartChoice::Auto | StartChoice::Lscm) => {
             let mut uv = lscm::lscm(&positions, &mesh.triangles, boundary)?.uv;
             lscm_flipped = admissible(&mut uv);
             if lscm_flipped == 0 || options.start == StartChoice::Lscm {
@@ -221,6 +256,9 @@ pub fn flatten_with_progress(
         }
     };
     let start_flipped = admissible(&mut uv);
+    if start_flipped > 0 && start == StartMap::Given {
+        return Err(FlattenError::GivenStartFlipped(start_flipped));
+    }
     if start_flipped > 0 {
         return Err(FlattenError::NoAdmissibleStart {
             lscm: lscm_flipped,
@@ -234,7 +272,12 @@ pub fn flatten_with_progress(
         .iter()
         .map(|t| signed_uv_area([uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]]))
         .sum();
-    let s = (1.0 / uv_area).sqrt();
+    // A given map is in the mesh's units: only the normalization applies to it.
+    let s = if start == StartMap::Given {
+        1.0 / scale
+    } else {
+        (1.0 / uv_area).sqrt()
+    };
     // Rigid-motion pins: the two boundary vertices farthest apart in the start map,
     // rotated onto the u axis.
     let (p0, p1) = farthest_pair(&uv, boundary);
@@ -368,6 +411,17 @@ pub fn flatten_with_progress(
     })
 }
 
+fn check_given_length(given: &[[f64; 2]], mesh: &TriMesh) -> Result<(), FlattenError> {
+    if given.len() == mesh.positions.len() {
+        Ok(())
+    } else {
+        Err(FlattenError::GivenStartLength {
+            uvs: given.len(),
+            vertices: mesh.positions.len(),
+        })
+    }
+}
+
 /// ARAP warm-start iterations at most, and the relative energy decrease below which
 /// they stop (Newton takes over).
 const WARM_START_MAX_ITERATIONS: usize = 30;
@@ -484,6 +538,53 @@ mod tests {
             cold.iterations
         );
         assert_eq!(warm.flipped_triangles, 0);
+    }
+
+    #[test]
+    fn a_given_start_is_used_in_mesh_units_and_checked() {
+        let mesh = bumpy_disc(8, 0.4);
+        let first = flatten(&mesh, &FlattenOptions::default()).unwrap();
+        // Restarting from a converged map (in the mesh's units) needs no iteration.
+        let again = flatten(
+            &mesh,
+            &FlattenOptions {
+                initial_uv: Some(first.uvs.clone()),
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        assert_eq!(again.start, StartMap::Given);
+        assert_eq!(again.start_description(), "given");
+        assert!(again.iterations <= 1, "{}", again.iterations);
+        assert!((again.energy - first.energy).abs() <= 1e-10 * first.energy);
+        // A start with a flipped triangle is refused, not repaired silently.
+        let mut folded = first.uvs.clone();
+        let t = mesh.triangles[0];
+        folded[t[0] as usize] = [
+            folded[t[1] as usize][0] + folded[t[2] as usize][0] - folded[t[0] as usize][0],
+            folded[t[1] as usize][1] + folded[t[2] as usize][1] - folded[t[0] as usize][1],
+        ];
+        let err = flatten(
+            &mesh,
+            &FlattenOptions {
+                initial_uv: Some(folded),
+                ..Default::default()
+            },
+        )
+        .unwrap_err();
+        assert!(
+            matches!(err, FlattenError::GivenStartFlipped(n) if n >= 1),
+            "{err}"
+        );
+        let err = flatten(
+            &mesh,
+            &FlattenOptions {
+                initial_uv: Some(vec![[0.0; 2]; 3]),
+                ..Default::default()
+            },
+        )
+        .unwrap_err();
+        assert!(err.to_string().contains("3 UVs"), "{err}");
     }
 
     #[test]
