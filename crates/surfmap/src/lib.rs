@@ -55,6 +55,7 @@ pub mod mesh;
 pub mod param;
 pub mod raster;
 pub mod render;
+pub(crate) mod vec3;
 #[doc(hidden)]
 pub mod testing;
 

@@ -19,6 +19,7 @@
 //! De Goes, Kim 2019, *Analytic eigensystems for isotropic distortion energies*), which
 //! [`gradient_and_projected_hessian`] uses to clamp negative eigenvalues to zero.
 
+use crate::vec3::{cross3, dot3, sub3};
 use super::density::Density;
 use rayon::prelude::*;
 use thiserror::Error;
@@ -470,24 +471,8 @@ fn pull_back_hessian(rest: &RestTriangle, hj: &[[f64; 4]; 4], out: &mut [[f64; 6
     }
 }
 
-#[inline(always)]
-fn sub3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
 
-#[inline(always)]
-fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
 
-#[inline(always)]
-fn cross3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
 
 #[cfg(test)]
 #[allow(clippy::needless_range_loop)] // matrix indices read best as indices

@@ -15,7 +15,7 @@
 //! boundary vertices with no interior neighbour).
 
 use super::boundary::boundary_vertices;
-use super::metric::{cross3, dot3, sub3};
+use crate::vec3::{cross3, dot3, sub3};
 
 /// Signed mean curvature `H` of every vertex (`0` for unused vertices).
 pub fn vertex_mean_curvature(x: &[[f64; 3]], triangles: &[[u32; 3]]) -> Vec<f64> {

@@ -5,6 +5,7 @@
 //! Stored as its three unique components `[g11, g12, g22]`; `√det g` is the ratio of
 //! surface area to domain area.
 
+use crate::vec3::{dot3, sub3};
 use rayon::prelude::*;
 
 /// `[g11, g12, g22]` of every triangle, for surface positions `x` and domain coordinates `xi`.
@@ -35,22 +36,6 @@ pub fn triangle_metrics(x: &[[f64; 3]], xi: &[[f64; 2]], triangles: &[[u32; 3]])
         .collect()
 }
 
-#[inline]
-pub(crate) fn sub3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-#[inline]
-pub(crate) fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-#[inline]
-pub(crate) fn cross3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
 
 #[cfg(test)]
 mod tests {
