@@ -40,6 +40,7 @@ pub fn triangle_metrics(x: &[[f64; 3]], xi: &[[f64; 2]], triangles: &[[u32; 3]])
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::vec3::cross3;
 
     #[test]
     fn metric_of_a_linear_map_is_its_gram_matrix() {
