@@ -55,8 +55,8 @@ pub mod mesh;
 pub mod param;
 pub mod raster;
 pub mod render;
-pub(crate) mod vec3;
 #[doc(hidden)]
 pub mod testing;
+pub(crate) mod vec3;
 
 pub use mesh::{BoundaryLoop, Topology, TriMesh, Uvs};

@@ -19,8 +19,8 @@
 //! De Goes, Kim 2019, *Analytic eigensystems for isotropic distortion energies*), which
 //! [`gradient_and_projected_hessian`] uses to clamp negative eigenvalues to zero.
 
-use crate::vec3::{cross3, dot3, sub3};
 use super::density::Density;
+use crate::vec3::{cross3, dot3, sub3};
 use rayon::prelude::*;
 use thiserror::Error;
 
@@ -470,9 +470,6 @@ fn pull_back_hessian(rest: &RestTriangle, hj: &[[f64; 4]; 4], out: &mut [[f64; 6
         }
     }
 }
-
-
-
 
 #[cfg(test)]
 #[allow(clippy::needless_range_loop)] // matrix indices read best as indices

@@ -136,6 +136,8 @@ enum HessianKind {
     Projected,
     /// The exact Hessian: quadratic convergence near a minimum, if positive definite.
     Exact,
+    /// No Hessian: the gradient only (the matrix values are left as they are).
+    None,
 }
 
 /// Armijo constant for exact-Hessian steps (see the line search).
@@ -303,7 +305,30 @@ impl<'m> NewtonSolver<'m> {
         // (quadratic convergence) and keep it while its Cholesky succeeds.
         let mut exact_blocked_until = 0;
         let mut decrement_prev = f64::INFINITY;
+        let mut last_step_full_exact = false;
         for it in 1..=settings.max_iterations {
+            if last_step_full_exact {
+                // After a full exact-Newton step the decrement has dropped quadratically:
+                // test convergence with the previous factorization (a Hessian that differs
+                // by O(step), so the estimate is accurate to that order) before paying
+                // for a new one. Not converged: go on as usual.
+                let t0 = Instant::now();
+                self.assemble(uv, density, HessianKind::None);
+                let t1 = Instant::now();
+                let mut q: Vec<f64> = self.gradient.iter().map(|g| -g).collect();
+                self.system.solve_in_place(&mut q)?;
+                let estimate = -self
+                    .gradient
+                    .iter()
+                    .zip(&q)
+                    .map(|(g, q)| g * q)
+                    .sum::<f64>();
+                self.timings.assemble += (t1 - t0).as_secs_f64();
+                self.timings.solve += t1.elapsed().as_secs_f64();
+                if estimate.is_finite() && 0.5 * estimate.abs() <= settings.tolerance {
+                    return Ok((StopReason::Converged, it - 1, energy));
+                }
+            }
             let try_exact =
                 it >= exact_blocked_until && decrement_prev < EXACT_SWITCH * energy.abs().max(1.0);
             let mut p = Vec::new();
@@ -435,6 +460,7 @@ impl<'m> NewtonSolver<'m> {
                 std::mem::swap(&mut self.trial, &mut self.best);
             }
             uv.copy_from_slice(&self.trial);
+            last_step_full_exact = solved_exact && step == 1.0;
             self.timings.line_search += t_search.elapsed().as_secs_f64();
             energy = e_new;
             log(IterationLog {
@@ -470,6 +496,7 @@ impl<'m> NewtonSolver<'m> {
                 ];
                 let mut hess = [[0.0; 6]; 6];
                 *e = match kind {
+                    HessianKind::None => element::gradient(&rest[t], &corners, density, g),
                     HessianKind::Projected => element::gradient_and_projected_hessian(
                         &rest[t], &corners, density, g, &mut hess,
                     ),
@@ -477,20 +504,28 @@ impl<'m> NewtonSolver<'m> {
                         element::exact_hessian(&rest[t], &corners, density, g, &mut hess)
                     }
                 };
-                for (p, &(i, j)) in LOWER_PAIRS.iter().enumerate() {
-                    h[p] = hess[i][j];
+                if kind != HessianKind::None {
+                    for (p, &(i, j)) in LOWER_PAIRS.iter().enumerate() {
+                        h[p] = hess[i][j];
+                    }
                 }
             });
         self.gradient.iter_mut().for_each(|g| *g = 0.0);
-        let values = self.system.values_mut();
-        values.iter_mut().for_each(|v| *v = 0.0);
+        let with_hessian = kind != HessianKind::None;
+        // Only a new Hessian touches the matrix (and invalidates its factorization).
+        let mut values = with_hessian.then(|| self.system.values_mut());
+        if let Some(values) = values.as_deref_mut() {
+            values.iter_mut().for_each(|v| *v = 0.0);
+        }
         for (t, tri) in triangles.iter().enumerate() {
-            let slots = &self.slots[t];
-            let h = &self.elem_hess[t];
-            for p in 0..21 {
-                let s = slots[p];
-                if s != u32::MAX {
-                    values[s as usize] += h[p];
+            if let Some(values) = values.as_deref_mut() {
+                let slots = &self.slots[t];
+                let h = &self.elem_hess[t];
+                for p in 0..21 {
+                    let s = slots[p];
+                    if s != u32::MAX {
+                        values[s as usize] += h[p];
+                    }
                 }
             }
             let g = &self.elem_grad[t];
@@ -501,5 +536,66 @@ impl<'m> NewtonSolver<'m> {
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::Topology;
+    use crate::mesh::generate::bumpy_disc;
+    use crate::param::density::Litke;
+    use crate::param::element::rest_triangles;
+    use crate::param::tutte::mean_value;
+
+    #[test]
+    fn convergence_is_judged_by_the_decrement_at_the_returned_map() {
+        // The stopping test after a full exact step reuses the previous factorization;
+        // check its verdict against a fresh factorization at the returned map.
+        let mesh = bumpy_disc(10, 0.5);
+        let scale = mesh.area().sqrt();
+        let positions: Vec<[f64; 3]> = mesh
+            .positions
+            .iter()
+            .map(|p| p.map(|x| x / scale))
+            .collect();
+        let topo = Topology::new(&mesh);
+        let boundary = &topo.boundary_loops[0].vertices;
+        let mut uv = mean_value(&positions, &mesh.triangles, boundary).unwrap();
+        let rest = rest_triangles(&positions, &mesh.triangles).unwrap();
+        let (p0, p1) = (boundary[0], boundary[boundary.len() / 2]);
+        let mut solver = NewtonSolver::new(
+            uv.len(),
+            &mesh.triangles,
+            rest,
+            &[(p0, 0), (p0, 1), (p1, 1)],
+        )
+        .unwrap();
+        let density = Litke::balanced();
+        let settings = NewtonSettings::default();
+        let (stop, iterations, _) = solver
+            .minimize(&mut uv, &density, &settings, 0, Instant::now(), &mut |_| {})
+            .unwrap();
+        assert_eq!(stop, StopReason::Converged);
+        assert!(iterations > 2);
+        // The last verdict came without a factorization of its own.
+        assert_eq!(
+            solver.timings.factorizations,
+            iterations + solver.timings.exact_failures
+        );
+        solver.assemble(&uv, &density, HessianKind::Exact);
+        solver.system.factorize().unwrap();
+        let mut p: Vec<f64> = solver.gradient.iter().map(|g| -g).collect();
+        solver.system.solve_in_place(&mut p).unwrap();
+        let decrement = -solver
+            .gradient
+            .iter()
+            .zip(&p)
+            .map(|(g, p)| g * p)
+            .sum::<f64>();
+        assert!(
+            0.5 * decrement.abs() <= 2.0 * settings.tolerance,
+            "decrement {decrement:e} at the returned map"
+        );
     }
 }

@@ -36,7 +36,6 @@ pub fn triangle_metrics(x: &[[f64; 3]], xi: &[[f64; 2]], triangles: &[[u32; 3]])
         .collect()
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;
