@@ -26,7 +26,7 @@
 use super::density::Density;
 use super::element::{self, RestTriangle};
 use super::flip_free::max_flip_free_step;
-use crate::linsolve::{SolveError, SpdSystem};
+use crate::linsolve::{Ordering, SolveError, SpdSystem, VertexOrdering};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::time::Instant;
@@ -165,11 +165,14 @@ impl<'m> NewtonSolver<'m> {
     /// Builds the solver from the rest triangles (one per triangle, from positions the
     /// caller normalized to unit area), the pinned coordinates `pins`
     /// (`(vertex, coordinate)`), the sparse pattern and its symbolic factorization.
+    /// `ordering`: the mesh's shared vertex ordering, each vertex's `(u, v)` eliminated
+    /// consecutively, or `None` for AMD on the `2n − 3` system's own pattern.
     pub fn new(
         num_vertices: usize,
         triangles: &'m [[u32; 3]],
         rest: Vec<RestTriangle>,
         pins: &[(u32, usize)],
+        ordering: Option<&VertexOrdering>,
     ) -> Result<Self, SolveError> {
         let nv = num_vertices;
         let mut dof = vec![0u32; 2 * nv];
@@ -196,7 +199,11 @@ impl<'m> NewtonSolver<'m> {
             }
         }
         let t_symbolic = Instant::now();
-        let (system, entry_slots) = SpdSystem::new(n as usize, &entries)?;
+        let ordering = match ordering {
+            Some(vertices) => vertices.expand(2, &dof)?,
+            None => Ordering::Amd,
+        };
+        let (system, entry_slots) = SpdSystem::with_ordering(n as usize, &entries, &ordering)?;
         let symbolic_time = t_symbolic.elapsed().as_secs_f64();
         drop(entries);
         let mut slots = vec![[u32::MAX; 21]; triangles.len()];
