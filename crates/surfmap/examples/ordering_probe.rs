@@ -86,10 +86,8 @@ fn main() {
     dof2[1] = u32::MAX;
     dof2[2 * nv - 1] = u32::MAX;
     for dof in [&mut dof1, &mut dof2] {
-        let mut n = 0;
-        for d in dof.iter_mut().filter(|d| **d != u32::MAX) {
-            *d = n;
-            n += 1;
+        for (n, d) in dof.iter_mut().filter(|d| **d != u32::MAX).enumerate() {
+            *d = n as u32;
         }
     }
     let (mut lap, mut blk) = (Vec::new(), Vec::new());

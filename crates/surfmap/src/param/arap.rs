@@ -218,4 +218,38 @@ mod tests {
             "max |log det J| {before} → {after}"
         );
     }
+
+    #[test]
+    fn shared_vertex_ordering_does_not_change_the_step() {
+        let mesh = crate::mesh::generate::bumpy_disc(6, 0.4);
+        let rest = rest_triangles(&mesh.positions, &mesh.triangles).unwrap();
+        let uv: Vec<[f64; 2]> = mesh
+            .positions
+            .iter()
+            .map(|p| [p[0] * (1.0 + 0.3 * p[1]), p[1] - 0.2 * p[0] * p[0]])
+            .collect();
+        let n = uv.len();
+        let ordering = VertexOrdering::of_triangles(n, &mesh.triangles).unwrap();
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        ArapStep::new(n, &mesh.triangles, &rest, 5, None)
+            .unwrap()
+            .target(&uv, &mut a)
+            .unwrap();
+        ArapStep::new(n, &mesh.triangles, &rest, 5, Some(&ordering))
+            .unwrap()
+            .target(&uv, &mut b)
+            .unwrap();
+        let diff = a
+            .iter()
+            .zip(&b)
+            .map(|(p, q)| (p[0] - q[0]).abs().max((p[1] - q[1]).abs()))
+            .fold(0.0, f64::max);
+        assert!(diff < 1e-9, "{diff}");
+        assert!(a.iter().zip(&uv).any(|(p, q)| (p[0] - q[0]).abs() > 1e-3));
+        let other = VertexOrdering::of_triangles(n + 1, &mesh.triangles).unwrap();
+        assert!(matches!(
+            ArapStep::new(n, &mesh.triangles, &rest, 5, Some(&other)),
+            Err(SolveError::DimensionMismatch { .. })
+        ));
+    }
 }
