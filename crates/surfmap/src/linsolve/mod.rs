@@ -17,11 +17,16 @@
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::solvers::LltError;
 use faer::linalg::solvers::Solve;
+use faer::perm::PermRef;
 use faer::sparse::linalg::cholesky::{
     LltRef, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
 };
 use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMatRef, Triplet};
 use faer::{Conj, MatMut, Par, Side};
+
+mod ordering;
+use ordering::inverse_permutation;
+pub use ordering::{Ordering, VertexOrdering};
 
 /// What went wrong in a sparse solve, and what to do about it.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -55,6 +60,11 @@ pub enum SolveError {
         "solve is numerically unreliable: relative residual {residual:e}; the matrix is (nearly) singular"
     )]
     Inaccurate { residual: f64 },
+    #[error(
+        "the ordering of a {n}-unknown system is not a permutation of 0..{n} (entry #{index} = {value}); \
+         build it from the same unknowns as the system"
+    )]
+    InvalidOrdering { n: usize, index: usize, value: u32 },
     #[error("solve_in_place called before a successful factorize")]
     NotFactorized,
     #[error("sparse solver failed: {0}")]
@@ -118,88 +128,43 @@ impl SpdSystem {
     /// triangle), or scatter half of it from each side.
     ///
     /// Cost: O(nnz log(row length)) for the pattern plus faer's symbolic analysis
-    /// (AMD ordering, elimination tree, supernodal structure).
+    /// (AMD ordering, elimination tree, supernodal structure). Same as
+    /// [`SpdSystem::with_ordering`] with [`Ordering::Amd`].
     pub fn new(n: usize, entries: &[(u32, u32)]) -> Result<(Self, Vec<u32>), SolveError> {
-        if n == 0 {
-            return Err(SolveError::Empty);
-        }
-        let total = entries.len().checked_add(n);
-        if n > u32::MAX as usize || total.is_none_or(|t| t > u32::MAX as usize) {
-            return Err(SolveError::TooLarge { n });
-        }
-        for &(row, col) in entries {
-            if row as usize >= n || col as usize >= n {
-                return Err(SolveError::IndexOutOfRange { row, col, n });
-            }
-        }
-        let lower = |(r, c): (u32, u32)| if r >= c { (r, c) } else { (c, r) };
+        Self::with_ordering(n, entries, &Ordering::Amd)
+    }
 
-        // Counting sort by column (the diagonal once per column, then every entry).
-        let mut start = vec![0u32; n + 1];
-        for j in 0..n {
-            start[j + 1] = 1;
-        }
-        for &e in entries {
-            start[lower(e).1 as usize + 1] += 1;
-        }
-        for j in 0..n {
-            start[j + 1] += start[j];
-        }
-        let mut fill = start.clone();
-        let mut rows = vec![0u32; start[n] as usize];
-        for j in 0..n {
-            rows[fill[j] as usize] = j as u32;
-            fill[j] += 1;
-        }
-        for &e in entries {
-            let (i, j) = lower(e);
-            rows[fill[j as usize] as usize] = i;
-            fill[j as usize] += 1;
-        }
-        drop(fill);
-
-        // Sort and deduplicate every column in place, compacting to the front.
-        let mut col_ptr = vec![0u32; n + 1];
-        let mut write = 0usize;
-        for j in 0..n {
-            let (s, e) = (start[j] as usize, start[j + 1] as usize);
-            rows[s..e].sort_unstable();
-            let mut last = u32::MAX;
-            for k in s..e {
-                let r = rows[k];
-                if r != last {
-                    rows[write] = r;
-                    write += 1;
-                    last = r;
-                }
-            }
-            col_ptr[j + 1] = write as u32;
-        }
-        rows.truncate(write);
-        rows.shrink_to_fit();
-        let row_idx = rows;
-
+    /// [`SpdSystem::new`] with a given fill-reducing ordering instead of AMD on this
+    /// pattern: with [`Ordering::Custom`], faer's symbolic phase skips its AMD and only
+    /// computes the elimination tree, column counts and supernodes of `P A Pᵀ`.
+    /// The solution of `A x = b` does not depend on the ordering (up to rounding); the
+    /// fill of `L` and so the cost of each numeric factorization does.
+    ///
+    /// An `Ordering::Custom` that is not a permutation of `0..n` is an error
+    /// ([`SolveError::InvalidOrdering`]).
+    pub fn with_ordering(
+        n: usize,
+        entries: &[(u32, u32)],
+        ordering: &Ordering,
+    ) -> Result<(Self, Vec<u32>), SolveError> {
+        let LowerPattern {
+            col_ptr,
+            row_idx,
+            slots,
+        } = LowerPattern::new(n, entries)?;
         let diag_slots: Vec<u32> = col_ptr[..n].to_vec(); // rows sorted, all ≥ j, (j, j) present
-        let column = |j: usize| &row_idx[col_ptr[j] as usize..col_ptr[j + 1] as usize];
-        let slots = entries
-            .iter()
-            .map(|&e| {
-                let (i, j) = lower(e);
-                let pos = column(j as usize)
-                    .binary_search(&i)
-                    .expect("every entry was inserted into its column");
-                col_ptr[j as usize] + pos as u32
-            })
-            .collect();
-
         let pattern = SymbolicSparseColMatRef::new_checked(n, n, &col_ptr, None, &row_idx);
-        let symbolic = factorize_symbolic_cholesky(
-            pattern,
-            Side::Lower,
-            SymmetricOrdering::Amd,
-            Default::default(),
-        )
-        .map_err(|e| SolveError::Backend(format!("symbolic Cholesky: {e:?}")))?;
+        let inverse;
+        let faer_ordering = match ordering {
+            Ordering::Amd => SymmetricOrdering::Amd,
+            Ordering::Custom(forward) => {
+                inverse = inverse_permutation(forward, n)?;
+                SymmetricOrdering::Custom(PermRef::new_checked(forward, &inverse, n))
+            }
+        };
+        let symbolic =
+            factorize_symbolic_cholesky(pattern, Side::Lower, faer_ordering, Default::default())
+                .map_err(|e| SolveError::Backend(format!("symbolic Cholesky: {e:?}")))?;
         let l_values = vec![0.0; symbolic.len_val()];
         let factor_scratch = MemBuffer::try_new(
             symbolic.factorize_numeric_llt_scratch::<f64>(parallelism(n), Default::default()),
@@ -394,6 +359,98 @@ impl SpdSystem {
             MemStack::new(&mut buf),
         );
         Ok(())
+    }
+}
+
+/// The lower triangle (with the full diagonal) of a symmetric pattern in CSC, sorted
+/// and deduplicated, and the slot of every input pair in it.
+pub(crate) struct LowerPattern {
+    /// Rows of column `j` are `row_idx[col_ptr[j]..col_ptr[j+1]]`, sorted, `≥ j`, `j` first.
+    pub(crate) col_ptr: Vec<u32>,
+    pub(crate) row_idx: Vec<u32>,
+    /// For each input pair, its slot (an index into `row_idx`).
+    pub(crate) slots: Vec<u32>,
+}
+
+impl LowerPattern {
+    /// From (row, col) pairs, any triangle, duplicates allowed: a counting sort by
+    /// column, then a sort and deduplication of each column, O(nnz log(row length)).
+    pub(crate) fn new(n: usize, entries: &[(u32, u32)]) -> Result<Self, SolveError> {
+        if n == 0 {
+            return Err(SolveError::Empty);
+        }
+        let total = entries.len().checked_add(n);
+        if n > u32::MAX as usize || total.is_none_or(|t| t > u32::MAX as usize) {
+            return Err(SolveError::TooLarge { n });
+        }
+        for &(row, col) in entries {
+            if row as usize >= n || col as usize >= n {
+                return Err(SolveError::IndexOutOfRange { row, col, n });
+            }
+        }
+        let lower = |(r, c): (u32, u32)| if r >= c { (r, c) } else { (c, r) };
+
+        // Counting sort by column (the diagonal once per column, then every entry).
+        let mut start = vec![0u32; n + 1];
+        for j in 0..n {
+            start[j + 1] = 1;
+        }
+        for &e in entries {
+            start[lower(e).1 as usize + 1] += 1;
+        }
+        for j in 0..n {
+            start[j + 1] += start[j];
+        }
+        let mut fill = start.clone();
+        let mut rows = vec![0u32; start[n] as usize];
+        for j in 0..n {
+            rows[fill[j] as usize] = j as u32;
+            fill[j] += 1;
+        }
+        for &e in entries {
+            let (i, j) = lower(e);
+            rows[fill[j as usize] as usize] = i;
+            fill[j as usize] += 1;
+        }
+        drop(fill);
+
+        // Sort and deduplicate every column in place, compacting to the front.
+        let mut col_ptr = vec![0u32; n + 1];
+        let mut write = 0usize;
+        for j in 0..n {
+            let (s, e) = (start[j] as usize, start[j + 1] as usize);
+            rows[s..e].sort_unstable();
+            let mut last = u32::MAX;
+            for k in s..e {
+                let r = rows[k];
+                if r != last {
+                    rows[write] = r;
+                    write += 1;
+                    last = r;
+                }
+            }
+            col_ptr[j + 1] = write as u32;
+        }
+        rows.truncate(write);
+        rows.shrink_to_fit();
+        let row_idx = rows;
+
+        let column = |j: usize| &row_idx[col_ptr[j] as usize..col_ptr[j + 1] as usize];
+        let slots = entries
+            .iter()
+            .map(|&e| {
+                let (i, j) = lower(e);
+                let pos = column(j as usize)
+                    .binary_search(&i)
+                    .expect("every entry was inserted into its column");
+                col_ptr[j as usize] + pos as u32
+            })
+            .collect();
+        Ok(Self {
+            col_ptr,
+            row_idx,
+            slots,
+        })
     }
 }
 

@@ -13,7 +13,7 @@
 //! can never flip a triangle or raise the energy.
 
 use super::element::RestTriangle;
-use crate::linsolve::{SolveError, SpdSystem};
+use crate::linsolve::{Ordering, SolveError, SpdSystem, VertexOrdering};
 
 /// The factorized ARAP global step of one mesh.
 pub struct ArapStep<'m> {
@@ -37,12 +37,15 @@ fn gradient_coefficients(rest: &RestTriangle) -> [[f64; 2]; 3] {
 
 impl<'m> ArapStep<'m> {
     /// Assembles and factorizes `K = Σ_T area(T)·C Cᵀ` (the cotangent Laplacian) with
-    /// vertex `pinned` held fixed.
+    /// vertex `pinned` held fixed. `ordering`: the mesh's shared vertex ordering (the
+    /// pinned vertex skipped), or `None` for AMD on `K`'s own pattern; the result does
+    /// not depend on it (up to rounding), only the fill of the factor does.
     pub fn new(
         num_vertices: usize,
         triangles: &'m [[u32; 3]],
         rest: &'m [RestTriangle],
         pinned: u32,
+        ordering: Option<&VertexOrdering>,
     ) -> Result<Self, SolveError> {
         let mut unknown = vec![0u32; num_vertices];
         unknown[pinned as usize] = u32::MAX;
@@ -67,7 +70,11 @@ impl<'m> ArapStep<'m> {
                 }
             }
         }
-        let (mut system, slots) = SpdSystem::new(n as usize, &entries)?;
+        let ordering = match ordering {
+            Some(vertices) => vertices.expand(1, &unknown)?,
+            None => Ordering::Amd,
+        };
+        let (mut system, slots) = SpdSystem::with_ordering(n as usize, &entries, &ordering)?;
         let v = system.values_mut();
         for (&s, &x) in slots.iter().zip(&values) {
             v[s as usize] += x;
@@ -162,7 +169,7 @@ mod tests {
             .iter()
             .map(|p| [c * p[0] - s * p[1] + 3.0, s * p[0] + c * p[1] - 1.0])
             .collect();
-        let step = ArapStep::new(uv.len(), &mesh.triangles, &rest, 0).unwrap();
+        let step = ArapStep::new(uv.len(), &mesh.triangles, &rest, 0, None).unwrap();
         let mut target = Vec::new();
         step.target(&uv, &mut target).unwrap();
         for (a, b) in uv.iter().zip(&target) {
@@ -199,7 +206,7 @@ mod tests {
                 .fold(0.0, f64::max)
         };
         let before = worst(&uv);
-        let step = ArapStep::new(uv.len(), &mesh.triangles, &rest, 0).unwrap();
+        let step = ArapStep::new(uv.len(), &mesh.triangles, &rest, 0, None).unwrap();
         let mut target = Vec::new();
         for _ in 0..20 {
             step.target(&uv, &mut target).unwrap();
@@ -210,5 +217,39 @@ mod tests {
             after < 1e-3 && after < before / 100.0,
             "max |log det J| {before} → {after}"
         );
+    }
+
+    #[test]
+    fn shared_vertex_ordering_does_not_change_the_step() {
+        let mesh = crate::mesh::generate::bumpy_disc(6, 0.4);
+        let rest = rest_triangles(&mesh.positions, &mesh.triangles).unwrap();
+        let uv: Vec<[f64; 2]> = mesh
+            .positions
+            .iter()
+            .map(|p| [p[0] * (1.0 + 0.3 * p[1]), p[1] - 0.2 * p[0] * p[0]])
+            .collect();
+        let n = uv.len();
+        let ordering = VertexOrdering::of_triangles(n, &mesh.triangles).unwrap();
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        ArapStep::new(n, &mesh.triangles, &rest, 5, None)
+            .unwrap()
+            .target(&uv, &mut a)
+            .unwrap();
+        ArapStep::new(n, &mesh.triangles, &rest, 5, Some(&ordering))
+            .unwrap()
+            .target(&uv, &mut b)
+            .unwrap();
+        let diff = a
+            .iter()
+            .zip(&b)
+            .map(|(p, q)| (p[0] - q[0]).abs().max((p[1] - q[1]).abs()))
+            .fold(0.0, f64::max);
+        assert!(diff < 1e-9, "{diff}");
+        assert!(a.iter().zip(&uv).any(|(p, q)| (p[0] - q[0]).abs() > 1e-3));
+        let other = VertexOrdering::of_triangles(n + 1, &mesh.triangles).unwrap();
+        assert!(matches!(
+            ArapStep::new(n, &mesh.triangles, &rest, 5, Some(&other)),
+            Err(SolveError::DimensionMismatch { .. })
+        ));
     }
 }

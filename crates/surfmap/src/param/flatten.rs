@@ -9,7 +9,7 @@ use super::element::{RestTriangleError, rest_triangles};
 use super::flip_free::max_flip_free_step;
 use super::newton::{IterationLog, NewtonSettings, NewtonSolver, NewtonTimings, StopReason};
 use super::{InitialMapError, count_flipped, lscm, signed_uv_area, tutte};
-use crate::linsolve::SolveError;
+use crate::linsolve::{SolveError, VertexOrdering};
 use crate::mesh::validate::{Defect, validate};
 use crate::mesh::{Topology, TriMesh};
 use serde::Serialize;
@@ -284,6 +284,8 @@ pub fn flatten_with_progress(
     uv.iter_mut().for_each(|p| *p = [s * p[0], s * p[1]]);
     align_pins(&mut uv, p0, p1);
 
+    // One fill-reducing vertex ordering for the ARAP and Newton systems.
+    let vertex_ordering = VertexOrdering::of_triangles(mesh.positions.len(), &mesh.triangles)?;
     // ARAP warm start: only as search directions, accepted when flip-free and when
     // they lower the energy being minimized first (see `arap`).
     let mut warm_start_iterations = 0;
@@ -292,7 +294,13 @@ pub fn flatten_with_progress(
             (_, Some(from)) => EnergyKind::Litke(*from),
             (e, None) => *e,
         };
-        let arap = ArapStep::new(mesh.positions.len(), &mesh.triangles, &rest, p0)?;
+        let arap = ArapStep::new(
+            mesh.positions.len(),
+            &mesh.triangles,
+            &rest,
+            p0,
+            Some(&vertex_ordering),
+        )?;
         let evaluate = NewtonSolver::energy_of(&rest, &mesh.triangles);
         let mut energy = evaluate(&uv, &first_energy);
         let (mut target, mut direction, mut trial) =
@@ -333,6 +341,7 @@ pub fn flatten_with_progress(
         &mesh.triangles,
         rest,
         &[(p0, 0), (p0, 1), (p1, 1)],
+        Some(&vertex_ordering),
     )?;
     let mut log = Vec::new();
     let mut record = |entry: IterationLog| {

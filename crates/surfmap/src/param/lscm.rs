@@ -69,7 +69,12 @@ pub fn lscm(
         }
     };
     let m = 2 * free as usize;
-    let mut triplets: Vec<(u32, u32, f64)> = Vec::with_capacity(18 * triangles.len());
+    // Off-diagonal entries as triplets (one per triangle edge and component, plus the
+    // boundary's u–v couplings), diagonal entries summed in place: the triangles would
+    // otherwise list each diagonal entry about 12 times, for the pattern assembly to sort.
+    let mut triplets: Vec<(u32, u32, f64)> =
+        Vec::with_capacity(6 * triangles.len() + 2 * boundary.len() + m);
+    let mut diagonal = vec![0.0; m];
     let mut rhs = vec![0.0; m];
     // Adds the symmetric entry `Q[(a, ca), (b, cb)] = Q[(b, cb), (a, ca)] += q` (once if the
     // two dofs coincide), moving pinned columns to the right-hand side.
@@ -78,6 +83,7 @@ pub fn lscm(
         let da = (fa != PINNED).then(|| 2 * fa + ca as u32);
         let db = (fb != PINNED).then(|| 2 * fb + cb as u32);
         match (da, db) {
+            (Some(i), Some(j)) if i == j => diagonal[i as usize] += q,
             (Some(i), Some(j)) => triplets.push((i, j, q)),
             (Some(i), None) => rhs[i as usize] -= q * pin_value(b, cb),
             (None, Some(j)) => rhs[j as usize] -= q * pin_value(a, ca),
@@ -113,6 +119,12 @@ pub fn lscm(
         add(i, 0, j, 1, -0.25);
         add(j, 0, i, 1, 0.25);
     }
+    triplets.extend(
+        diagonal
+            .iter()
+            .enumerate()
+            .map(|(i, &q)| (i as u32, i as u32, q)),
+    );
 
     solve_spd(m, &triplets, &mut [&mut rhs])?;
     let mut uv = vec![[0.0; 2]; n];
