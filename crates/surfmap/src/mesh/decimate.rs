@@ -244,6 +244,8 @@ impl Decimation {
 /// Decimates the disc `mesh` to `target_vertices` vertices with default options (see
 /// [`decimate_with`]).
 pub fn decimate(mesh: &TriMesh, target_vertices: usize) -> Result<Decimation, DecimateError> {
+    // Topology::new requires in-range indices.
+    check_indices(mesh)?;
     let topology = Topology::new(mesh);
     decimate_with(
         mesh,
@@ -277,6 +279,7 @@ pub fn decimate_with(
             continue; // superseded by a cheaper entry, or u is gone
         }
         state.queued[u as usize] = f64::INFINITY;
+        state.refresh_choice(u);
         let v = state.target[u as usize];
         if v == NONE {
             continue; // stuck until its neighbourhood changes
@@ -323,18 +326,23 @@ fn check_options(o: &DecimateOptions) -> Result<(), DecimateError> {
     Ok(())
 }
 
+fn check_indices(mesh: &TriMesh) -> Result<(), DecimateError> {
+    match mesh.first_invalid_index() {
+        Some((t, k)) => Err(DecimateError::IndexOutOfRange {
+            triangle: t,
+            vertex: mesh.triangles[t][k],
+            vertices: mesh.positions.len(),
+        }),
+        None => Ok(()),
+    }
+}
+
 /// One manifold, consistently oriented disc with finite coordinates and proper faces.
 fn check_disc(mesh: &TriMesh, topology: &Topology) -> Result<(), DecimateError> {
     if mesh.triangles.is_empty() {
         return Err(DecimateError::NoFaces);
     }
-    if let Some((t, k)) = mesh.first_invalid_index() {
-        return Err(DecimateError::IndexOutOfRange {
-            triangle: t,
-            vertex: mesh.triangles[t][k],
-            vertices: mesh.positions.len(),
-        });
-    }
+    check_indices(mesh)?;
     if topology.face_edges.len() != mesh.triangles.len() {
         return Err(DecimateError::InvalidOption(
             "the topology does not belong to this mesh",
@@ -599,8 +607,10 @@ struct State {
     corners: Vec<u32>,
     ring: Vec<u32>,
     candidates: Vec<(f64, u32)>,
-    to_requeue: Vec<u32>,
     old_ring: Vec<u32>,
+    scratch: Vec<u32>,
+    /// The choice may be worse than recorded (refresh before use).
+    dirty: Vec<bool>,
 }
 
 impl State {
@@ -697,8 +707,9 @@ impl State {
             corners: Vec::new(),
             ring: Vec::new(),
             candidates: Vec::new(),
-            to_requeue: Vec::new(),
             old_ring: Vec::new(),
+            scratch: Vec::new(),
+            dirty: vec![false; nv],
         };
         for i in 0..m {
             let (a, b) = (boundary[i], boundary[(i + 1) % m]);
@@ -1066,36 +1077,105 @@ impl State {
             changed_start,
             changed_end: self.changed_faces.len() as u32,
         });
-        // Requeue v and those of its new ring whose cheapest choice may have changed.
-        // A former neighbour of v (not of u) keeps its quadric and its other
-        // neighbours, and its cost to v only grew (Q_v grew by the positive
-        // semi-definite Q_u), so its queued choice stands unless it was v. Former
-        // neighbours of u have v as a new neighbour; stuck vertices (no valid choice
-        // when last popped) are retried since their neighbourhood changed.
+        // Update the choices that may have become cheaper now and mark those that may
+        // have grown (refreshed when popped; queued entries stay lower bounds). Only a
+        // new neighbour can make a choice cheaper: v's (the former neighbours of u)
+        // and v for the former neighbours of u. Every other change removes a
+        // candidate (u) or raises a cost (to v: Q_v grew by the positive
+        // semi-definite Q_u). Stuck vertices (no valid choice when last popped) are
+        // retried since their neighbourhood changed.
         let mut ring = std::mem::take(&mut self.ring);
-        self.neighbours_of(v, &mut ring);
-        let mut to_requeue = std::mem::take(&mut self.to_requeue);
-        to_requeue.clear();
-        to_requeue.push(v);
-        to_requeue.extend(ring.iter().copied().filter(|&w| {
-            let t = self.target[w as usize];
-            t == v || t == NONE || old_ring.contains(&w)
-        }));
+        self.requeue(v, &mut ring);
+        for &w in &ring {
+            let wi = w as usize;
+            if self.target[wi] == NONE {
+                let mut scratch = std::mem::take(&mut self.scratch);
+                self.requeue(w, &mut scratch);
+                self.scratch = scratch;
+            } else if !old_ring.contains(&w) {
+                // Its cost to v grew: checked when popped (refresh_choice).
+            } else if deleted_faces[..num_deleted as usize]
+                .iter()
+                .any(|d| d.vertices.contains(&w))
+            {
+                // An opposite vertex: lost u, its cost to v grew.
+                if self.target[wi] == u || self.target[wi] == v {
+                    self.dirty[wi] = true;
+                }
+            } else {
+                // A former neighbour of u only: v is a new neighbour.
+                if self.target[wi] == u {
+                    self.dirty[wi] = true;
+                    self.target[wi] = NONE;
+                    self.cost_now[wi] = f64::INFINITY;
+                }
+                if self.cheap_allowed(w, v) {
+                    let c = self.cost(w, v);
+                    if c < self.cost_now[wi] {
+                        self.target[wi] = v;
+                        self.cost_now[wi] = c;
+                        if c < self.queued[wi] {
+                            self.enqueue(w);
+                        }
+                    }
+                }
+                if self.target[wi] == NONE {
+                    // Its only choice was u: find another now.
+                    let mut scratch = std::mem::take(&mut self.scratch);
+                    self.requeue(w, &mut scratch);
+                    self.scratch = scratch;
+                }
+            }
+        }
         self.old_ring = old_ring;
         self.ring = ring;
-        for &w in &to_requeue {
-            self.requeue(w);
-        }
-        self.to_requeue = to_requeue;
     }
 
-    /// Recomputes the cheap choice of `w` and queues it if it got cheaper.
-    fn requeue(&mut self, w: u32) {
-        let best = self.cheapest_target(w);
+    /// Whether `w → v` passes the boundary rules (a boundary vertex only along the
+    /// boundary, while the loop has more than 4 vertices); `v` must be a neighbour.
+    fn cheap_allowed(&self, w: u32, v: u32) -> bool {
+        !self.is_boundary(w)
+            || (self.loop_len > 4 && (self.bnext[w as usize] == v || self.bprev[w as usize] == v))
+    }
+
+    /// Recomputes the cheap choice of `w` exactly (filling `ring` with its
+    /// neighbours) and queues it if it got cheaper than its queued entry.
+    fn requeue(&mut self, w: u32, ring: &mut Vec<u32>) {
+        let mut candidates = std::mem::take(&mut self.candidates);
+        self.candidates_of(w, &mut candidates, ring);
+        let best = candidates
+            .iter()
+            .copied()
+            .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        self.candidates = candidates;
         self.set_choice(w, best);
+        self.dirty[w as usize] = false;
         if self.cost_now[w as usize] < self.queued[w as usize] {
             self.enqueue(w);
         }
+    }
+
+    /// Makes the choice of `u` exact before it is used: recomputed when marked dirty or
+    /// when the cost to its target changed (the target absorbed a vertex).
+    fn refresh_choice(&mut self, u: u32) {
+        let ui = u as usize;
+        let t = self.target[ui];
+        if !self.dirty[ui] && (t == NONE || self.cost(u, t) == self.cost_now[ui]) {
+            return;
+        }
+        let (mut candidates, mut ring) = (
+            std::mem::take(&mut self.candidates),
+            std::mem::take(&mut self.scratch),
+        );
+        self.candidates_of(u, &mut candidates, &mut ring);
+        let best = candidates
+            .iter()
+            .copied()
+            .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        self.candidates = candidates;
+        self.scratch = ring;
+        self.set_choice(u, best);
+        self.dirty[ui] = false;
     }
 
     fn set_choice(&mut self, w: u32, choice: Option<(f64, u32)>) {
@@ -1142,5 +1222,503 @@ impl State {
             num_vertices: self.live,
             reached_target: self.live <= target,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::generate::{
+        bumpy_disc, cylinder_patch, disc_boundary, grid_disc, polar_disc, spherical_cap,
+        unit_square,
+    };
+    use crate::mesh::validate::validate;
+
+    fn all_some(tris: &[[u32; 3]]) -> Vec<Option<[u32; 3]>> {
+        tris.iter().map(|&t| Some(t)).collect()
+    }
+
+    fn alive(faces: &[Option<[u32; 3]>]) -> Vec<[u32; 3]> {
+        faces.iter().flatten().copied().collect()
+    }
+
+    /// Number of distinct neighbours of every vertex.
+    fn valences(num_vertices: usize, triangles: &[[u32; 3]]) -> Vec<usize> {
+        let mut neighbours = vec![Vec::new(); num_vertices];
+        for t in triangles {
+            for k in 0..3 {
+                for j in 1..3 {
+                    let (a, b) = (t[k], t[(k + j) % 3]);
+                    if !neighbours[a as usize].contains(&b) {
+                        neighbours[a as usize].push(b);
+                    }
+                }
+            }
+        }
+        neighbours.iter().map(Vec::len).collect()
+    }
+
+    /// A face state (original indices) is a manifold, consistently oriented disc with
+    /// no degenerate face, and no vertex has dropped below valence 3 (a vertex may keep
+    /// a lower valence it had in `input`, e.g. a grid corner).
+    fn assert_disc(
+        positions: &[[f64; 3]],
+        faces: &[Option<[u32; 3]>],
+        input: &[[u32; 3]],
+        context: &str,
+    ) {
+        let mesh = TriMesh::new(positions.to_vec(), alive(faces));
+        let topo = Topology::new(&mesh);
+        assert!(topo.is_disc(), "{context}: not a disc");
+        assert!(topo.inconsistent_edges.is_empty(), "{context}: orientation");
+        let blocking: Vec<_> = validate(&mesh, &topo)
+            .into_iter()
+            .filter(|d| {
+                d.blocks_flattening
+                    && d.kind != crate::mesh::validate::DefectKind::UnreferencedVertices
+            })
+            .collect();
+        assert!(blocking.is_empty(), "{context}: {blocking:?}");
+        let before = valences(positions.len(), input);
+        for (v, &n) in valences(positions.len(), &mesh.triangles)
+            .iter()
+            .enumerate()
+        {
+            assert!(
+                n == 0 || n >= before[v].min(3),
+                "{context}: vertex {v} has valence {n}"
+            );
+        }
+    }
+
+    fn normal(p: [[f64; 3]; 3]) -> [f64; 3] {
+        cross(sub(p[1], p[0]), sub(p[2], p[0]))
+    }
+
+    #[test]
+    fn coarse_mesh_is_a_disc_and_undo_restores_the_input() {
+        let mesh = bumpy_disc(12, 0.5);
+        let dec = decimate(&mesh, 60).unwrap();
+        assert!(dec.reached_target);
+        assert_eq!(dec.num_vertices, 60);
+        assert_eq!(dec.collapses.len(), mesh.positions.len() - 60);
+        let (coarse, original) = dec.coarse_mesh(&mesh);
+        assert_eq!(coarse.positions.len(), 60);
+        assert!(original.windows(2).all(|w| w[0] < w[1]));
+        for (i, &o) in original.iter().enumerate() {
+            assert_eq!(coarse.positions[i], mesh.positions[o as usize]);
+        }
+        // A disc: V − E + F = 1 and the coarse triangles are the alive faces.
+        assert_eq!(coarse.triangles.len(), alive(&dec.faces).len());
+        assert_disc(&mesh.positions, &dec.faces, &mesh.triangles, "coarse");
+        assert_eq!(
+            Topology::new(&coarse).boundary_loops.len(),
+            1,
+            "compact coarse mesh"
+        );
+        assert_eq!(dec.original_faces(), all_some(&mesh.triangles));
+    }
+
+    #[test]
+    fn every_intermediate_state_is_a_disc_and_redo_reaches_the_coarse_state() {
+        let mesh = spherical_cap(1.0, 2.0, 6, 16);
+        let dec = decimate(&mesh, 8).unwrap();
+        let mut faces = all_some(&mesh.triangles);
+        for (i, c) in dec.collapses.iter().enumerate() {
+            dec.redo(&mut faces, c);
+            if i % 4 == 0 || i + 1 == dec.collapses.len() {
+                assert_disc(
+                    &mesh.positions,
+                    &faces,
+                    &mesh.triangles,
+                    &format!("after collapse {i}"),
+                );
+            }
+        }
+        assert_eq!(faces, dec.faces);
+        for c in dec.collapses.iter().rev() {
+            dec.undo(&mut faces, c);
+        }
+        assert_eq!(faces, all_some(&mesh.triangles));
+    }
+
+    #[test]
+    fn the_link_condition_refuses_a_collapse_that_would_pinch() {
+        // Triangle u v x with three inner vertices a, b, c (valence 4 each), inside an
+        // outer triangle o1 o2 o3: u and v share the neighbour x, which is not opposite
+        // to edge uv, so u → v would glue edges ux and vx. Every other rule passes.
+        let positions = vec![
+            [0., 0., 0.],   // 0 u
+            [6., 0., 0.],   // 1 v
+            [3., 6., 0.],   // 2 x
+            [3., 1., 0.],   // 3 a
+            [4., 2.5, 0.],  // 4 b
+            [2., 2.5, 0.],  // 5 c
+            [-3., -3., 0.], // 6 o1
+            [9., -3., 0.],  // 7 o2
+            [3., 10., 0.],  // 8 o3
+        ];
+        let triangles = vec![
+            [0, 1, 3],
+            [1, 4, 3],
+            [1, 2, 4],
+            [2, 5, 4],
+            [2, 0, 5],
+            [0, 3, 5],
+            [3, 4, 5],
+            [6, 7, 1],
+            [6, 1, 0],
+            [7, 8, 2],
+            [7, 2, 1],
+            [8, 6, 0],
+            [8, 0, 2],
+        ];
+        let mesh = TriMesh::new(positions, triangles);
+        let topology = Topology::new(&mesh);
+        assert!(topology.is_disc());
+        let geometry_off = DecimateOptions {
+            max_normal_change_deg: 180.0,
+            min_quality: 0.0,
+            ..Default::default()
+        };
+        let mut state = State::new(&mesh, &topology, &geometry_off);
+        assert!(!state.can_collapse(0, 1), "u → v breaks the link condition");
+        assert!(state.can_collapse(3, 0), "a → u is a valid collapse");
+    }
+
+    #[test]
+    fn topology_rules_alone_keep_a_disc() {
+        // Geometric checks off: only the link condition, the boundary rules and the
+        // valence bound stand between the collapses and a broken mesh.
+        let options = DecimateOptions {
+            target_vertices: 0,
+            max_normal_change_deg: 180.0,
+            min_quality: 0.0,
+            ..Default::default()
+        };
+        for mesh in [
+            bumpy_disc(7, 0.5),
+            grid_disc(8),
+            spherical_cap(1.0, 2.5, 5, 9),
+        ] {
+            let dec = decimate_with(&mesh, &Topology::new(&mesh), &options).unwrap();
+            let mut faces = all_some(&mesh.triangles);
+            for (i, c) in dec.collapses.iter().enumerate() {
+                dec.redo(&mut faces, c);
+                assert_disc(
+                    &mesh.positions,
+                    &faces,
+                    &mesh.triangles,
+                    &format!("after collapse {i}"),
+                );
+            }
+            assert!(dec.num_vertices <= 6, "{} vertices left", dec.num_vertices);
+            let boundary = disc_boundary(&alive(&faces)).unwrap();
+            assert!(boundary.len() >= 4, "boundary loop of {}", boundary.len());
+        }
+    }
+
+    #[test]
+    fn collapses_respect_the_normal_and_quality_limits() {
+        let options = |target_vertices, length_weight| DecimateOptions {
+            target_vertices,
+            length_weight,
+            ..Default::default()
+        };
+        // Without the length term a flat grid has all costs 0: only the quality floor
+        // keeps the collapse order from making slivers.
+        for (mesh, options) in [
+            (bumpy_disc(10, 0.8), options(20, 0.01)),
+            (cylinder_patch(1.0, 3.0, 4.0, 12, 6), options(8, 0.01)),
+            (grid_disc(12), options(10, 0.0)),
+        ] {
+            check_normal_and_quality_limits(&mesh, options);
+        }
+    }
+
+    fn check_normal_and_quality_limits(mesh: &TriMesh, options: DecimateOptions) {
+        let dec = decimate_with(mesh, &Topology::new(mesh), &options).unwrap();
+        let cos_limit = options.max_normal_change_deg.to_radians().cos();
+        let mut faces = all_some(&mesh.triangles);
+        let tri = |t: [u32; 3]| t.map(|v| mesh.positions[v as usize]);
+        for c in &dec.collapses {
+            let before: Vec<[u32; 3]> = dec
+                .changed(c)
+                .iter()
+                .map(|&f| faces[f as usize].unwrap())
+                .collect();
+            dec.redo(&mut faces, c);
+            for (k, &f) in dec.changed(c).iter().enumerate() {
+                let after = faces[f as usize].unwrap();
+                assert!(before[k].contains(&c.removed) && after.contains(&c.into));
+                let (n0, n1) = (normal(tri(before[k])), normal(tri(after)));
+                let cos = dot(n0, n1) / (dot(n0, n0) * dot(n1, n1)).sqrt();
+                assert!(
+                    cos >= cos_limit - 1e-12,
+                    "normal turned by {}°",
+                    cos.acos().to_degrees()
+                );
+                let (_, q0) = normal_and_quality_ref(tri(before[k]));
+                let (_, q1) = normal_and_quality_ref(tri(after));
+                assert!(
+                    q1 >= options.min_quality.min(q0) - 1e-12,
+                    "quality {q0} → {q1}"
+                );
+            }
+        }
+    }
+
+    /// Quality `4√3·A/Σl²` from Heron's formula (independent of the module's cross
+    /// product form).
+    fn normal_and_quality_ref(p: [[f64; 3]; 3]) -> ((), f64) {
+        let l: Vec<f64> = (0..3)
+            .map(|k| dot(sub(p[(k + 1) % 3], p[k]), sub(p[(k + 1) % 3], p[k])).sqrt())
+            .collect();
+        let s = 0.5 * (l[0] + l[1] + l[2]);
+        let area = (s * (s - l[0]) * (s - l[1]) * (s - l[2])).max(0.0).sqrt();
+        (
+            (),
+            4.0 * 3f64.sqrt() * area / l.iter().map(|x| x * x).sum::<f64>(),
+        )
+    }
+
+    #[test]
+    fn a_flat_grid_decimates_without_flips_and_keeps_its_corners() {
+        let mesh = grid_disc(16);
+        let dec = decimate(&mesh, 30).unwrap();
+        let mut faces = all_some(&mesh.triangles);
+        let signed_area = |t: [u32; 3]| {
+            let [a, b, c] = t.map(|v| mesh.positions[v as usize]);
+            0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
+        };
+        for c in &dec.collapses {
+            dec.redo(&mut faces, c);
+            for t in faces.iter().flatten() {
+                assert!(signed_area(*t) > 0.0, "flipped or degenerate face {t:?}");
+            }
+        }
+        // The boundary planes keep the square: its 4 corners survive, area stays 1.
+        let (coarse, original) = dec.coarse_mesh(&mesh);
+        for corner in [0u32, 16, 17 * 16, 17 * 17 - 1] {
+            assert!(original.contains(&corner), "corner {corner} was removed");
+        }
+        let area: f64 = alive(&dec.faces).iter().map(|&t| signed_area(t)).sum();
+        assert!((area - 1.0).abs() < 1e-12, "area {area}");
+        assert_eq!(coarse.positions.len(), 30);
+    }
+
+    #[test]
+    fn boundary_vertices_only_merge_along_the_boundary() {
+        for mesh in [bumpy_disc(8, 0.5), polar_disc(5, 12), grid_disc(9)] {
+            let dec = decimate(&mesh, 6).unwrap();
+            let mut faces = all_some(&mesh.triangles);
+            let mut boundary_collapses = 0;
+            for c in &dec.collapses {
+                let boundary = disc_boundary(&alive(&faces)).expect("one boundary loop");
+                let n = boundary.len();
+                if let Some(i) = boundary.iter().position(|&v| v == c.removed) {
+                    let (prev, next) = (boundary[(i + n - 1) % n], boundary[(i + 1) % n]);
+                    assert!(
+                        c.into == prev || c.into == next,
+                        "boundary vertex {} into {}",
+                        c.removed,
+                        c.into
+                    );
+                    assert_eq!(c.deleted().len(), 1);
+                    assert!(n > 4);
+                    boundary_collapses += 1;
+                } else {
+                    assert_eq!(c.deleted().len(), 2);
+                }
+                dec.redo(&mut faces, c);
+            }
+            assert!(
+                boundary_collapses > 0,
+                "the test should exercise boundary collapses"
+            );
+            assert!(disc_boundary(&alive(&faces)).unwrap().len() >= 4);
+        }
+    }
+
+    #[test]
+    fn stops_when_no_valid_collapse_is_left() {
+        let mesh = bumpy_disc(4, 0.3);
+        let dec = decimate(&mesh, 0).unwrap();
+        assert!(!dec.reached_target);
+        assert!(dec.num_vertices >= 4);
+        let (coarse, _) = dec.coarse_mesh(&mesh);
+        assert_eq!(coarse.positions.len(), dec.num_vertices);
+        assert_disc(&mesh.positions, &dec.faces, &mesh.triangles, "minimal");
+        // A mesh already at the target is returned unchanged.
+        let same = decimate(&mesh, mesh.positions.len()).unwrap();
+        assert!(same.collapses.is_empty() && same.reached_target);
+        assert_eq!(same.faces, all_some(&mesh.triangles));
+    }
+
+    #[test]
+    fn decimation_is_deterministic() {
+        let mesh = bumpy_disc(10, 0.6);
+        assert_eq!(decimate(&mesh, 40).unwrap(), decimate(&mesh, 40).unwrap());
+    }
+
+    #[test]
+    fn non_disc_input_is_refused_with_the_reason() {
+        let octahedron = TriMesh::new(
+            vec![
+                [1., 0., 0.],
+                [-1., 0., 0.],
+                [0., 1., 0.],
+                [0., -1., 0.],
+                [0., 0., 1.],
+                [0., 0., -1.],
+            ],
+            vec![
+                [0, 2, 4],
+                [2, 1, 4],
+                [1, 3, 4],
+                [3, 0, 4],
+                [2, 0, 5],
+                [1, 2, 5],
+                [3, 1, 5],
+                [0, 3, 5],
+            ],
+        );
+        assert_eq!(decimate(&octahedron, 3), Err(DecimateError::Closed));
+
+        // Annulus: a polar disc without its center fan.
+        let mut annulus = polar_disc(3, 10);
+        annulus.triangles.retain(|t| !t.contains(&0));
+        let e = decimate(&annulus, 5).unwrap_err();
+        assert_eq!(e, DecimateError::SeveralBoundaryLoops(2));
+        assert!(e.to_string().contains("2 boundary loops"));
+
+        let mut two = unit_square();
+        two.positions
+            .extend([[5., 0., 0.], [6., 0., 0.], [5., 1., 0.]]);
+        two.triangles.push([4, 5, 6]);
+        assert_eq!(decimate(&two, 3), Err(DecimateError::SeveralComponents(2)));
+
+        let mut flipped = grid_disc(3);
+        flipped.triangles[4].swap(1, 2);
+        assert!(
+            matches!(decimate(&flipped, 4), Err(DecimateError::InconsistentOrientation(n)) if n > 0)
+        );
+
+        let mut fin = unit_square();
+        fin.positions.push([0.5, 0.5, 1.0]);
+        fin.triangles.push([0, 2, 4]);
+        assert!(matches!(
+            decimate(&fin, 3),
+            Err(DecimateError::NonManifold { edges: 1, .. })
+        ));
+
+        let mut repeated = grid_disc(2);
+        repeated.triangles[1] = [0, 0, 3];
+        assert!(matches!(
+            decimate(&repeated, 4),
+            Err(DecimateError::RepeatedIndexFace { triangle: 1, .. })
+        ));
+
+        let mut nan = grid_disc(2);
+        nan.positions[4][2] = f64::NAN;
+        assert_eq!(
+            decimate(&nan, 4),
+            Err(DecimateError::NonFiniteCoordinates { vertex: 4 })
+        );
+
+        let mut out_of_range = grid_disc(2);
+        out_of_range.triangles[0][2] = 99;
+        assert!(matches!(
+            decimate(&out_of_range, 4),
+            Err(DecimateError::IndexOutOfRange {
+                triangle: 0,
+                vertex: 99,
+                ..
+            })
+        ));
+
+        assert_eq!(
+            decimate(&TriMesh::default(), 4),
+            Err(DecimateError::NoFaces)
+        );
+
+        let mesh = grid_disc(2);
+        let bad = DecimateOptions {
+            min_quality: 1.5,
+            ..Default::default()
+        };
+        assert!(matches!(
+            decimate_with(&mesh, &Topology::new(&mesh), &bad),
+            Err(DecimateError::InvalidOption(_))
+        ));
+    }
+
+    #[test]
+    fn quadric_is_the_weighted_squared_plane_distance() {
+        // Plane through (1, 2, 3) with normal (2, −1, 2)/3, weight 5.
+        let n = [2.0 / 3.0, -1.0 / 3.0, 2.0 / 3.0];
+        let d = -dot(n, [1.0, 2.0, 3.0]);
+        let mut q = Quadric::plane(n, d, 5.0);
+        for x in [[0.0, 0.0, 0.0], [1.0, 2.0, 3.0], [-4.0, 7.5, 0.25]] {
+            let dist = dot(n, sub(x, [1.0, 2.0, 3.0]));
+            assert!((q.at(x) - 5.0 * dist * dist).abs() < 1e-12 * (1.0 + dist * dist));
+        }
+        // Sum of two planes: x = 0 and y = 0 (weight 1) measure x² + y².
+        q = Quadric::plane([1.0, 0.0, 0.0], 0.0, 1.0);
+        q.add(&Quadric::plane([0.0, 1.0, 0.0], 0.0, 1.0));
+        assert!((q.at([3.0, 4.0, 9.0]) - 25.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn min_heap_pops_in_sorted_order() {
+        let mut rng = crate::testing::Rng(0x9e3779b97f4a7c15);
+        let entries: Vec<Entry> = (0..500)
+            .map(|i| Entry {
+                cost: (rng.uniform() * 50.0).floor(),
+                vertex: i,
+                stamp: 0,
+            })
+            .collect();
+        let mut heap = MinHeap::from_vec(entries[..200].to_vec());
+        for e in &entries[200..] {
+            heap.push(*e);
+        }
+        heap.retain(|e| e.vertex % 7 != 3);
+        let mut expected: Vec<(f64, u32)> = entries
+            .iter()
+            .filter(|e| e.vertex % 7 != 3)
+            .map(|e| (e.cost, e.vertex))
+            .collect();
+        expected.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let popped: Vec<(f64, u32)> = std::iter::from_fn(|| heap.pop())
+            .map(|e| (e.cost, e.vertex))
+            .collect();
+        assert_eq!(popped, expected);
+    }
+
+    #[test]
+    fn real_mesh_decimates_to_a_disc_and_back() {
+        let crate_dir = env!("CARGO_MANIFEST_DIR");
+        let Some(path) = [
+            format!("{crate_dir}/../../../shared/data/camelhead.off"),
+            format!("{crate_dir}/../../../../shared/data/camelhead.off"),
+        ]
+        .into_iter()
+        .map(std::path::PathBuf::from)
+        .find(|p| p.is_file()) else {
+            eprintln!("note: shared/data/camelhead.off not found; skipping real-mesh test");
+            return;
+        };
+        let mesh = crate::mesh::io::read_mesh(&path).unwrap().mesh;
+        let dec = decimate(&mesh, 1500).unwrap();
+        assert!(dec.reached_target);
+        assert_eq!(dec.coarse_mesh(&mesh).0.positions.len(), 1500);
+        assert_disc(
+            &mesh.positions,
+            &dec.faces,
+            &mesh.triangles,
+            "camelhead coarse",
+        );
+        assert_eq!(dec.original_faces(), all_some(&mesh.triangles));
     }
 }
