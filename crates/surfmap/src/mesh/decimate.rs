@@ -7,14 +7,16 @@
 //! is either deleted or has one corner replaced, so its identity persists, and undoing
 //! the collapses in reverse order gives back the input face list exactly.
 //!
-//! Collapses are taken cheapest first (lazy priority queue with version stamps) by the
-//! quadric error of Garland & Heckbert (*Surface simplification using quadric error
+//! Collapses are taken cheapest first by the quadric error of Garland & Heckbert (*Surface simplification using quadric error
 //! metrics*, SIGGRAPH 1997): each vertex carries `Q = Σ w·(n·x + d)²` over the planes
 //! of its (merged) faces, area-weighted, plus planes through its boundary edges
 //! perpendicular to their face (weight `boundary_weight·|e|²`) so the boundary keeps its
 //! shape. The cost of `u → v` is `(Q_u + Q_v)(p_v) + length_weight·|p_u − p_v|⁴`; the
 //! length term (same units, L⁴) orders collapses by edge length where the surface is
-//! flat, which keeps the coarse triangles near uniform in size.
+//! flat, which keeps the coarse triangles near uniform in size. Each vertex has one
+//! choice (its cheapest allowed target) in a lazy priority queue: a 4-ary heap whose
+//! entries are lower bounds, refreshed when popped, with version stamps to drop
+//! superseded ones.
 //!
 //! A collapse is allowed only if the mesh stays a manifold, consistently oriented disc
 //! with sensible triangles (see [`DecimateOptions`] and `can_collapse`):
@@ -23,14 +25,20 @@
 //!   contraction*, 1999); with the boundary treated as a virtual vertex this also
 //!   means: a boundary vertex only collapses along a boundary edge into its boundary
 //!   neighbour, and an interior edge with both ends on the boundary is never collapsed;
-//! - the boundary loop keeps at least 4 vertices, and no vertex ends with valence < 3;
+//! - the boundary loop keeps at least 4 vertices, and no vertex drops below valence 3
+//!   (a boundary vertex that starts with valence 2, like a grid corner, keeps it);
 //! - no face of `u`'s star turns its 3D normal by more than `max_normal_change_deg` or
 //!   drops below the quality floor `4√3·A/Σl² ≥ min_quality` (unless it was already
 //!   below and does not get worse).
 //!
-//! Cost: `O(F log F)` for the topology check, then `O(log F)` per collapse (bounded
-//! valence); the vertex–face adjacency is a circular doubly linked list over corners,
-//! so the collapse loop does not allocate once its buffers are warm.
+//! Cost: `O(F log F)` for the topology check ([`Topology::new`], which
+//! [`decimate_with`] takes from the caller), then `O(log F)` per collapse (bounded
+//! valence). The vertex–face adjacency is a circular doubly linked list over corners
+//! and the history is packed (fixed-size [`Collapse`] records plus one flat list of
+//! changed faces), so the collapse loop makes no per-collapse allocation (only the
+//! amortized growth of its output vectors and the heap). Lionhead subdivided 3×
+//! (534k vertices) to 20k: about 1.2 s in release on one core, plus 0.4 s for
+//! [`Topology::new`] (`examples/decimate_bench.rs`).
 
 use super::{Topology, TriMesh};
 
