@@ -1,6 +1,7 @@
 //! Triangle meshes: positions and triangles (connectivity kept apart from derived
 //! topology), file input/output, validation and opt-in repairs.
 
+pub mod decimate;
 pub mod generate;
 pub mod io;
 pub mod repair;
