@@ -216,3 +216,58 @@ fn normalize_and_uv_as_positions_write_the_flat_unit_layout() {
     assert!(min_signed_uv_area(&out).0 > 0.0);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn multilevel_start_reaches_the_single_level_minimum_on_a_real_scan() {
+    let Some(data) = data_dir() else { return };
+    let dir = temp_dir("multilevel");
+    let input = data.join("faces/face_bff.obj");
+    let mut energies = Vec::new();
+    for (name, options) in [
+        ("single", vec!["--multilevel", "off"]),
+        (
+            "multi",
+            vec!["--multilevel", "on", "--coarse-vertices", "2000"],
+        ),
+    ] {
+        let out = dir.join(format!("{name}.obj"));
+        let report = dir.join(format!("{name}.json"));
+        let mut options: Vec<&str> = options;
+        let report_arg = report.to_str().unwrap().to_string();
+        options.extend(["--report", &report_arg]);
+        let run = flatten(&input, &options, &out);
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let stdout = String::from_utf8_lossy(&run.stdout);
+        let r: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+        assert_eq!(r["converged"], true, "{name}");
+        assert_eq!(r["flipped_triangles"], 0, "{name}");
+        assert!(min_signed_uv_area(&out).0 > 0.0, "{name}");
+        if name == "multi" {
+            assert_eq!(r["start"], "multilevel");
+            assert!(
+                stdout.contains("multilevel (2000 coarse vertices)"),
+                "{stdout}"
+            );
+            let m = &r["multilevel"];
+            assert_eq!(m["abandoned"], serde_json::Value::Null);
+            assert_eq!(m["coarse_vertices"], 2000);
+            assert_eq!(
+                m["prolongation"]["inserted"].as_u64().unwrap() + 2000,
+                r["vertices"].as_u64().unwrap()
+            );
+        } else {
+            assert_eq!(r["multilevel"], serde_json::Value::Null);
+        }
+        energies.push(r["energy"].as_f64().unwrap());
+    }
+    assert!(
+        (energies[0] - energies[1]).abs() <= 1e-9 * energies[0],
+        "{energies:?}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

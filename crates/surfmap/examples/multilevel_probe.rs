@@ -1,58 +1,97 @@
-//! Probe: how many fine-level Newton iterations remain from an ideal coarse start?
-use surfmap::mesh::TriMesh;
+//! Probe: energy of the multilevel start map (before the fine-level Newton) for
+//! different re-insertion settings.
+//! `cargo run --release -p surfmap --example multilevel_probe -- MESH LEVELS COARSE POLISH...`
+use surfmap::mesh::Topology;
+use surfmap::mesh::decimate::{DecimateOptions, decimate_with};
 use surfmap::mesh::io::read_mesh;
 use surfmap::mesh::subdivide::subdivide_midpoint;
-use surfmap::param::flatten::{FlattenOptions, flatten};
+use surfmap::param::density::Litke;
+use surfmap::param::element::rest_triangles;
+use surfmap::param::flatten::{FlattenOptions, MultilevelOptions, flatten};
+use surfmap::param::multilevel::prolongate;
+use surfmap::param::newton::NewtonSolver;
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let levels: usize = args[1].parse().unwrap();
-    let coarse_levels: usize = args[2].parse().unwrap();
+    let coarse_vertices: usize = args[2].parse().unwrap();
     let mut mesh = read_mesh(std::path::Path::new(&args[0])).unwrap().mesh;
-    for _ in 0..coarse_levels {
+    for _ in 0..levels {
         mesh = subdivide_midpoint(&mesh);
     }
+    let topo = Topology::new(&mesh);
     let t = std::time::Instant::now();
-    let c = flatten(&mesh, &FlattenOptions::default()).unwrap();
-    println!(
-        "coarse {} faces: {} its, E {:.6}, {:.2} s",
-        mesh.triangles.len(),
-        c.iterations,
-        c.energy,
-        t.elapsed().as_secs_f64()
-    );
-    let mut uvmesh = TriMesh {
-        positions: c.uvs.iter().map(|p| [p[0], p[1], 0.0]).collect(),
-        triangles: mesh.triangles.clone(),
-        uvs: None,
-    };
-    for _ in coarse_levels..levels {
-        mesh = subdivide_midpoint(&mesh);
-        uvmesh = subdivide_midpoint(&uvmesh);
-    }
-    let uv: Vec<[f64; 2]> = uvmesh.positions.iter().map(|p| [p[0], p[1]]).collect();
-    let t = std::time::Instant::now();
-    let f = flatten(
+    let dec = decimate_with(
         &mesh,
-        &FlattenOptions {
-            initial_uv: Some(uv),
-            warm_start: false,
+        &topo,
+        &DecimateOptions {
+            target_vertices: coarse_vertices,
             ..Default::default()
         },
     )
     .unwrap();
-    println!(
-        "fine {} faces: {} its, E {:.6}, {:.2} s",
-        mesh.triangles.len(),
-        f.iterations,
-        f.energy,
-        t.elapsed().as_secs_f64()
-    );
-    for l in &f.log {
+    let (coarse, orig) = dec.coarse_mesh(&mesh);
+    println!("decimate {:.2} s", t.elapsed().as_secs_f64());
+    let flat = flatten(
+        &coarse,
+        &FlattenOptions {
+            multilevel: MultilevelOptions::off(),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let scale = mesh.area().sqrt();
+    let pos: Vec<[f64; 3]> = mesh
+        .positions
+        .iter()
+        .map(|p| p.map(|x| x / scale))
+        .collect();
+    let rest = rest_triangles(&pos, &mesh.triangles).unwrap();
+    let energy = NewtonSolver::energy_of(&rest, &mesh.triangles);
+    println!("coarse E {:.6}", flat.energy);
+    let sweeps: usize = std::env::var("SWEEPS").map_or(0, |s| s.parse().unwrap());
+    for polish in args[3..].iter().map(|s| s.parse::<usize>().unwrap()) {
+        let mut uv = vec![[f64::NAN; 2]; mesh.positions.len()];
+        for (c, &v) in orig.iter().enumerate() {
+            uv[v as usize] = flat.uvs[c];
+        }
+        let t = std::time::Instant::now();
+        let stats = prolongate(
+            &mesh.positions,
+            &dec,
+            &mut uv,
+            &Litke::balanced(),
+            polish,
+            sweeps,
+        )
+        .unwrap();
+        let el = t.elapsed().as_secs_f64();
+        let uvn: Vec<[f64; 2]> = uv.iter().map(|p| [p[0] / scale, p[1] / scale]).collect();
         println!(
-            "{:>3} {:.8} {:.3e} {:.3}",
-            l.iteration, l.energy, l.newton_decrement, l.step
+            "polish {polish} sweeps {sweeps}: E {:.6}, {:.2} s, {:?}",
+            energy(&uvn, &Litke::balanced()),
+            el,
+            stats
         );
+        if std::env::var("RUN_FINE").is_ok() {
+            let t = std::time::Instant::now();
+            let f = flatten(
+                &mesh,
+                &FlattenOptions {
+                    initial_uv: Some(uv),
+                    multilevel: MultilevelOptions::off(),
+                    ..Default::default()
+                },
+            )
+            .unwrap();
+            println!(
+                "   fine: {} iterations, E {:.6}, {:.2} s",
+                f.iterations,
+                f.energy,
+                t.elapsed().as_secs_f64()
+            );
+            let steps: Vec<String> = f.log.iter().map(|l| format!("{:.2}", l.step)).collect();
+            println!("   steps {}", steps.join(" "));
+        }
     }
-    println!("{:?}", f.newton_timings);
 }

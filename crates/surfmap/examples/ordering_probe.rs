@@ -1,6 +1,6 @@
 //! One vertex ordering for all per-vertex systems versus AMD on each system: ordering
 //! time, rest of the symbolic phase, fill of `L`, numeric factorization time.
-//! `cargo run --release -p surfmap --example ordering_probe -- MESH`
+//! `cargo run --release -p surfmap --example ordering_probe -- MESH [LEVELS]`
 use std::time::Instant;
 use surfmap::linsolve::{Ordering, SpdSystem, VertexOrdering};
 
@@ -73,9 +73,16 @@ fn time<T>(f: impl Fn() -> T) -> (f64, T) {
 
 fn main() {
     let path = std::env::args().nth(1).expect("MESH");
-    let mesh = surfmap::mesh::io::read_mesh(path.as_ref())
+    let mut mesh = surfmap::mesh::io::read_mesh(path.as_ref())
         .expect("readable")
         .mesh;
+    // Optional: subdivide (midpoint 1 → 4) this many times first.
+    let levels: usize = std::env::args()
+        .nth(2)
+        .map_or(0, |s| s.parse().expect("LEVELS"));
+    for _ in 0..levels {
+        mesh = surfmap::mesh::subdivide::subdivide_midpoint(&mesh);
+    }
     let nv = mesh.positions.len();
     // Pins as in a flattening: vertex 0 (both coordinates; alone in the Laplacian),
     // the v coordinate of the last vertex.

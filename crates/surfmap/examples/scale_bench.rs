@@ -56,4 +56,13 @@ fn main() {
         peak_rss_mib()
     );
     println!("{:?}", r.newton_timings);
+    if let Some(m) = &r.multilevel {
+        println!("{m:?}");
+    }
+    for l in &r.log {
+        println!(
+            "{:>3} {:.8} {:.3e} {:.3} {:.2}",
+            l.iteration, l.energy, l.newton_decrement, l.step, l.time
+        );
+    }
 }

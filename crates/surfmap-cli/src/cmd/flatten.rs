@@ -52,6 +52,14 @@ pub enum Start {
     MeanValue,
 }
 
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum MultilevelChoice {
+    /// For meshes of 200k faces and more.
+    Auto,
+    On,
+    Off,
+}
+
 #[derive(clap::Args)]
 pub struct Args {
     /// Input mesh (OBJ, OFF or PLY) with disc topology.
@@ -74,6 +82,13 @@ pub struct Args {
     /// Initial map.
     #[arg(long, value_enum, default_value = "auto")]
     pub start: Start,
+    /// Multilevel start: flatten a decimated copy, re-insert the removed vertices
+    /// flip-free, then run Newton on the full mesh (far fewer full-size iterations).
+    #[arg(long, value_enum, default_value = "auto")]
+    pub multilevel: MultilevelChoice,
+    /// Vertices of the decimated copy for --multilevel.
+    #[arg(long, default_value_t = surfmap::param::flatten::MULTILEVEL_COARSE_VERTICES)]
+    pub coarse_vertices: usize,
     /// Scale and translate the UVs into [0,1]² (aspect ratio kept).
     #[arg(long)]
     pub normalize: bool,
@@ -164,6 +179,21 @@ pub fn options(args: &Args) -> anyhow::Result<FlattenOptions> {
     if !(args.armijo_c > 0.0 && args.armijo_c < 1.0) {
         bail!("--armijo-c must be in (0, 1), got {}", args.armijo_c);
     }
+    if args.coarse_vertices < 16 {
+        bail!(
+            "--coarse-vertices must be at least 16, got {}",
+            args.coarse_vertices
+        );
+    }
+    opts.multilevel = surfmap::param::flatten::MultilevelOptions {
+        min_faces: match args.multilevel {
+            MultilevelChoice::Auto => surfmap::param::flatten::MULTILEVEL_MIN_FACES,
+            MultilevelChoice::On => 0,
+            MultilevelChoice::Off => usize::MAX,
+        },
+        coarse_vertices: args.coarse_vertices,
+        ..opts.multilevel
+    };
     opts.newton.max_iterations = args.max_iters;
     opts.newton.tolerance = args.tolerance;
     opts.newton.armijo_c = args.armijo_c;
@@ -289,6 +319,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
     }
     if !args.quiet {
+        if let Some(reason) = result
+            .multilevel
+            .as_ref()
+            .and_then(|m| m.abandoned.as_ref())
+        {
+            eprintln!("note: multilevel start abandoned ({reason}); used the single-level start");
+        }
         outln!(
             "{}: start {} + {} ARAP steps, {} iterations, {}, energy {:.6}, flipped triangles {}, {:.3} s → {}",
             args.input.display(),
@@ -315,8 +352,10 @@ pub struct FlattenReport<'a> {
     pub input: String,
     pub vertices: usize,
     pub triangles: usize,
-    /// Initial map used: `lscm` or `mean_value`.
+    /// Initial map used: `lscm`, `mean_value`, `given` or `multilevel`.
     pub start: surfmap::param::flatten::StartMap,
+    /// The multilevel start's coarse level, re-insertion and timings (when tried).
+    pub multilevel: Option<&'a surfmap::param::flatten::MultilevelReport>,
     pub lscm_flipped_triangles: usize,
     /// ARAP warm-start steps accepted before Newton.
     pub warm_start_iterations: usize,
@@ -352,6 +391,7 @@ impl<'a> FlattenReport<'a> {
             vertices: mesh.positions.len(),
             triangles: mesh.triangles.len(),
             start: r.start,
+            multilevel: r.multilevel.as_ref(),
             lscm_flipped_triangles: r.lscm_flipped,
             warm_start_iterations: r.warm_start_iterations,
             iterations: r.iterations,

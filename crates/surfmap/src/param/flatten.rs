@@ -37,6 +37,66 @@ pub enum StartMap {
     MeanValue,
     /// The caller's map ([`FlattenOptions::initial_uv`]).
     Given,
+    /// The flattening of a decimated copy, refined vertex by vertex
+    /// ([`super::multilevel`]; details in [`Flattening::multilevel`]).
+    Multilevel,
+}
+
+/// When to use the multilevel start ([`super::multilevel`]): flatten a decimated copy
+/// of about `coarse_vertices` vertices, re-insert the removed vertices, then run Newton
+/// on the full mesh from there.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MultilevelOptions {
+    /// Meshes with at least this many faces use it (`usize::MAX`: never, `0`: always).
+    pub min_faces: usize,
+    pub coarse_vertices: usize,
+    /// Local Newton steps per re-inserted vertex.
+    pub polish_steps: usize,
+    /// Relaxation sweeps over the full mesh after the re-insertion.
+    pub sweeps: usize,
+}
+
+impl Default for MultilevelOptions {
+    fn default() -> Self {
+        Self {
+            min_faces: MULTILEVEL_MIN_FACES,
+            coarse_vertices: MULTILEVEL_COARSE_VERTICES,
+            polish_steps: super::multilevel::DEFAULT_POLISH_STEPS,
+            sweeps: super::multilevel::DEFAULT_SWEEPS,
+        }
+    }
+}
+
+impl MultilevelOptions {
+    /// Never use the multilevel start.
+    pub fn off() -> Self {
+        Self {
+            min_faces: usize::MAX,
+            ..Self::default()
+        }
+    }
+}
+
+/// Default size from which the multilevel start is used, and the coarse size.
+pub const MULTILEVEL_MIN_FACES: usize = 200_000;
+pub const MULTILEVEL_COARSE_VERTICES: usize = 20_000;
+
+/// What the multilevel start did (or why it was abandoned).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct MultilevelReport {
+    pub coarse_vertices: usize,
+    pub coarse_faces: usize,
+    /// Newton iterations on the coarse mesh.
+    pub coarse_iterations: usize,
+    /// Vertices re-inserted, of them placed at their star's kernel centroid, and local
+    /// Newton steps taken.
+    pub prolongation: super::multilevel::ProlongationStats,
+    /// Seconds: decimation, coarse flattening, re-insertion.
+    pub time_decimate: f64,
+    pub time_coarse: f64,
+    pub time_prolongate: f64,
+    /// Set when the multilevel start failed and the single-level start was used instead.
+    pub abandoned: Option<String>,
 }
 
 /// Options of [`flatten`].
@@ -56,6 +116,8 @@ pub struct FlattenOptions {
     /// [`Flattening::uvs`], no flipped triangle)
     /// instead of computing one; `start` is then ignored.
     pub initial_uv: Option<Vec<[f64; 2]>>,
+    /// Multilevel start for large meshes (used when no `initial_uv` is given).
+    pub multilevel: MultilevelOptions,
 }
 
 impl Default for FlattenOptions {
@@ -67,6 +129,7 @@ impl Default for FlattenOptions {
             newton: NewtonSettings::default(),
             warm_start: true,
             initial_uv: None,
+            multilevel: MultilevelOptions::default(),
         }
     }
 }
@@ -99,6 +162,8 @@ pub struct Flattening {
     pub time_total: f64,
     /// Newton time by phase.
     pub newton_timings: NewtonTimings,
+    /// The multilevel start, when it was tried.
+    pub multilevel: Option<MultilevelReport>,
 }
 
 impl Flattening {
@@ -109,6 +174,10 @@ impl Flattening {
             StartMap::Lscm => "lscm".to_string(),
             StartMap::MeanValue => format!("mean-value (LSCM flipped {})", self.lscm_flipped),
             StartMap::Given => "given".to_string(),
+            StartMap::Multilevel => match &self.multilevel {
+                Some(m) => format!("multilevel ({} coarse vertices)", m.coarse_vertices),
+                None => "multilevel".to_string(),
+            },
         }
     }
 }
@@ -233,10 +302,17 @@ pub fn flatten_with_progress(
         count_flipped(uv, &mesh.triangles)
     };
     let mut lscm_flipped = 0;
-    let (mut uv, start) = match (&options.initial_uv, options.start) {
-        (Some(given), _) => {
-            check_given_length(given, mesh)?;
-            (given.clone(), StartMap::Given)
+    let mut multilevel = None;
+    let mut given = options.initial_uv.clone().map(|uv| (uv, StartMap::Given));
+    if given.is_none() && mesh.triangles.len() >= options.multilevel.min_faces {
+        let (uv, report) = multilevel_start(mesh, &topo, options);
+        given = uv.map(|uv| (uv, StartMap::Multilevel));
+        multilevel = Some(report);
+    }
+    let (mut uv, start) = match (given, options.start) {
+        (Some((given, kind)), _) => {
+            check_given_length(&given, mesh)?;
+            (given, kind)
         }
         (None, StartChoice::MeanValue) => (
             tutte::mean_value(&positions, &mesh.triangles, boundary)?,
@@ -256,7 +332,7 @@ pub fn flatten_with_progress(
         }
     };
     let start_flipped = admissible(&mut uv);
-    if start_flipped > 0 && start == StartMap::Given {
+    if start_flipped > 0 && start != StartMap::Lscm && start != StartMap::MeanValue {
         return Err(FlattenError::GivenStartFlipped(start_flipped));
     }
     if start_flipped > 0 {
@@ -273,7 +349,7 @@ pub fn flatten_with_progress(
         .map(|t| signed_uv_area([uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]]))
         .sum();
     // A given map is in the mesh's units: only the normalization applies to it.
-    let s = if start == StartMap::Given {
+    let s = if matches!(start, StartMap::Given | StartMap::Multilevel) {
         1.0 / scale
     } else {
         (1.0 / uv_area).sqrt()
@@ -289,8 +365,11 @@ pub fn flatten_with_progress(
     // ARAP warm start: only as search directions, accepted when flip-free and when
     // they lower the energy being minimized first (see `arap`).
     let mut warm_start_iterations = 0;
-    if options.warm_start {
-        let first_energy = match (&options.energy, &options.from_alpha) {
+    // A multilevel start is already close to the minimum: no warm start, and no
+    // continuation (the coarse level did it).
+    let from_alpha = options.from_alpha.filter(|_| start != StartMap::Multilevel);
+    if options.warm_start && start != StartMap::Multilevel {
+        let first_energy = match (&options.energy, &from_alpha) {
             (_, Some(from)) => EnergyKind::Litke(*from),
             (e, None) => *e,
         };
@@ -350,7 +429,7 @@ pub fn flatten_with_progress(
     };
     let mut iterations = 0;
     let mut continuation = Vec::new();
-    let (stop, energy) = match (&options.energy, &options.from_alpha) {
+    let (stop, energy) = match (&options.energy, &from_alpha) {
         (EnergyKind::Litke(target), Some(from)) => {
             // Continuation (§3.1.3): θ from 0 to 1, halving the step when a stage locks.
             // Stage 0 only prepares a start: a locked or capped stage 0 is still a
@@ -417,7 +496,73 @@ pub fn flatten_with_progress(
         time_newton,
         time_total: clock.elapsed().as_secs_f64(),
         newton_timings: solver.timings,
+        multilevel,
     })
+}
+
+/// The multilevel start (see [`super::multilevel`]) in the mesh's units, or `None`
+/// (with the reason in the report) when any stage failed.
+fn multilevel_start(
+    mesh: &TriMesh,
+    topo: &Topology,
+    options: &FlattenOptions,
+) -> (Option<Vec<[f64; 2]>>, MultilevelReport) {
+    use crate::mesh::decimate::{DecimateOptions, decimate_with};
+    let mut report = MultilevelReport::default();
+    let clock = Instant::now();
+    let run = |report: &mut MultilevelReport| -> Result<Vec<[f64; 2]>, String> {
+        if mesh.positions.len() < 2 * options.multilevel.coarse_vertices {
+            return Err(format!(
+                "the mesh has {} vertices, not even twice the {} of the coarse level",
+                mesh.positions.len(),
+                options.multilevel.coarse_vertices
+            ));
+        }
+        let decimation = decimate_with(
+            mesh,
+            topo,
+            &DecimateOptions {
+                target_vertices: options.multilevel.coarse_vertices,
+                ..Default::default()
+            },
+        )
+        .map_err(|e| format!("decimation: {e}"))?;
+        let (coarse, original_of_coarse) = decimation.coarse_mesh(mesh);
+        report.coarse_vertices = coarse.positions.len();
+        report.coarse_faces = coarse.triangles.len();
+        report.time_decimate = clock.elapsed().as_secs_f64();
+        let coarse_options = FlattenOptions {
+            multilevel: MultilevelOptions::off(),
+            initial_uv: None,
+            ..options.clone()
+        };
+        let flat = flatten(&coarse, &coarse_options).map_err(|e| format!("coarse mesh: {e}"))?;
+        report.coarse_iterations = flat.iterations;
+        report.time_coarse = clock.elapsed().as_secs_f64() - report.time_decimate;
+        let mut uv = vec![[f64::NAN; 2]; mesh.positions.len()];
+        for (c, &v) in original_of_coarse.iter().enumerate() {
+            uv[v as usize] = flat.uvs[c];
+        }
+        report.prolongation = super::multilevel::prolongate(
+            &mesh.positions,
+            &decimation,
+            &mut uv,
+            &options.energy,
+            options.multilevel.polish_steps,
+            options.multilevel.sweeps,
+        )
+        .map_err(|e| format!("re-insertion: {e}"))?;
+        report.time_prolongate =
+            clock.elapsed().as_secs_f64() - report.time_decimate - report.time_coarse;
+        Ok(uv)
+    };
+    match run(&mut report) {
+        Ok(uv) => (Some(uv), report),
+        Err(reason) => {
+            report.abandoned = Some(reason);
+            (None, report)
+        }
+    }
 }
 
 fn check_given_length(given: &[[f64; 2]], mesh: &TriMesh) -> Result<(), FlattenError> {

@@ -8,6 +8,7 @@ pub mod element;
 pub mod flatten;
 pub mod flip_free;
 pub mod lscm;
+pub mod multilevel;
 pub mod newton;
 pub mod tutte;
 

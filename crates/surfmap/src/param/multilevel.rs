@@ -1,0 +1,626 @@
+//! Multilevel start for large meshes: flatten a decimated copy, then bring the removed
+//! vertices back one at a time, in the reverse order of their collapses, keeping the
+//! map flip-free after every insertion (hierarchical parameterization in the manner
+//! of Hormann, Labsik & Greiner 2000 and Sander et al. 2002).
+//!
+//! Undoing the half-edge collapse `v → u` restores `v`'s star: the faces in which `u`
+//! had replaced `v`, and the one or two faces of the edge `uv`. `v` is placed
+//!
+//! 1. at the conformal least-squares position: for each star face `(v, a, b)` (counter-
+//!    clockwise), the 3D triangle gives the complex ratio `z = (v − a)/(b − a)` in its
+//!    own plane; the UV point that makes the face similar to its 3D shape is
+//!    `a' + z·(b' − a')` (primes: UVs), and `v'` is their mean — `v`'s part of the LSCM
+//!    energy (§3.1.1) minimized with everything else fixed;
+//! 2. if that flips a star face, at the centroid of the star's kernel (the convex
+//!    polygon where every star face `(v, a, b)` is counter-clockwise: `v` left of
+//!    `a' → b'`), which is non-empty because `u` was inside its own star before the
+//!    split;
+//! 3. then moved by a few projected-Newton steps on the energy of its star (the same
+//!    element energy, gradient and PSD-projected Hessian as the global solver, 2 unknowns),
+//!    each step capped below the first flip (star face areas are linear in `v'`).
+//!
+//! Every insertion is checked (all star faces strictly counter-clockwise); a failure is
+//! an error, and the caller falls back to the single-level start. The prolongation
+//! needs no linear solve: cost O(faces · polish steps).
+
+use super::density::Density;
+use super::element::{self, RestTriangle};
+use super::signed_uv_area;
+use crate::mesh::decimate::Decimation;
+use crate::vec3::{cross3, dot3, sub3};
+
+/// Why a prolongation stopped.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ProlongationError {
+    #[error(
+        "re-inserting vertex {vertex}: its star has no admissible position (empty kernel in UV)"
+    )]
+    EmptyKernel { vertex: u32 },
+    #[error("re-inserting vertex {vertex}: a face of its star is degenerate in 3D")]
+    DegenerateFace { vertex: u32 },
+    #[error("the coarse map gives vertex {vertex} a non-finite UV")]
+    NonFiniteCoarseUv { vertex: u32 },
+}
+
+/// What the prolongation did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct ProlongationStats {
+    /// Vertices re-inserted.
+    pub inserted: usize,
+    /// Of them, placed at the kernel centroid because the conformal position flipped a face.
+    pub kernel_fallbacks: usize,
+    /// Local Newton steps taken in total.
+    pub polish_steps: usize,
+}
+
+/// Local Newton steps per re-inserted vertex.
+pub const DEFAULT_POLISH_STEPS: usize = 4;
+/// Relaxation sweeps over the full mesh after the re-insertion.
+pub const DEFAULT_SWEEPS: usize = 8;
+
+/// Undoes every collapse of `decimation` in reverse order on `faces` (which must be
+/// the coarse state, `decimation.faces`), placing each re-inserted vertex in `uv`
+/// (module docs). `uv` holds one entry per original vertex; on entry the coarse
+/// vertices must be set (a flip-free map of the coarse mesh); on success every vertex
+/// is set and the map of the original mesh is flip-free.
+pub fn prolongate<D: Density + ?Sized>(
+    positions: &[[f64; 3]],
+    decimation: &Decimation,
+    uv: &mut [[f64; 2]],
+    density: &D,
+    polish_steps: usize,
+    sweeps: usize,
+) -> Result<ProlongationStats, ProlongationError> {
+    let mut faces = decimation.faces.clone();
+    // Faces around each vertex in the current state (updated by every undo).
+    let mut incident: Vec<Vec<u32>> = vec![Vec::new(); uv.len()];
+    for (f, tri) in faces.iter().enumerate() {
+        for &v in tri.iter().flatten() {
+            incident[v as usize].push(f as u32);
+        }
+    }
+    let mut stats = ProlongationStats::default();
+    let (mut star, mut rest) = (Vec::with_capacity(16), Vec::with_capacity(16));
+    for collapse in decimation.collapses.iter().rev() {
+        let (v, u) = (collapse.removed, collapse.into);
+        decimation.undo(&mut faces, collapse);
+        for &f in decimation.changed(collapse) {
+            incident[u as usize].retain(|&g| g != f);
+            incident[v as usize].push(f);
+        }
+        for d in collapse.deleted() {
+            for &w in &d.vertices {
+                incident[w as usize].push(d.face);
+            }
+        }
+        let into = uv[u as usize];
+        if !(into[0].is_finite() && into[1].is_finite()) {
+            return Err(ProlongationError::NonFiniteCoarseUv { vertex: u });
+        }
+        star_of(&faces, &incident[v as usize], v, &mut star);
+        let mut p = conformal_position(positions, uv, &star, v)
+            .ok_or(ProlongationError::DegenerateFace { vertex: v })?;
+        if !admissible(uv, &star, p) {
+            p = kernel_centroid(uv, &star).ok_or(ProlongationError::EmptyKernel { vertex: v })?;
+            stats.kernel_fallbacks += 1;
+        }
+        uv[v as usize] = p;
+        // Relax the new vertex, then the one it was split from (its star shrank).
+        for w in [v, u] {
+            star_of(&faces, &incident[w as usize], w, &mut star);
+            rest_of(positions, &star, &mut rest)
+                .ok_or(ProlongationError::DegenerateFace { vertex: w })?;
+            let (p, taken) = polish(uv, &star, &rest, uv[w as usize], density, polish_steps);
+            if !admissible(uv, &star, p) {
+                return Err(ProlongationError::EmptyKernel { vertex: w });
+            }
+            uv[w as usize] = p;
+            stats.polish_steps += taken;
+        }
+        stats.inserted += 1;
+    }
+    drop(incident);
+    if sweeps > 0 {
+        let triangles: Vec<[u32; 3]> = faces.iter().flatten().copied().collect();
+        stats.polish_steps += relax(positions, &triangles, uv, density, sweeps)?;
+    }
+    Ok(stats)
+}
+
+/// `sweeps` Gauss–Seidel sweeps of one local Newton step per vertex over the mesh.
+/// Vertices are greedily coloured so that no two of one colour share a face; a colour
+/// class is relaxed in parallel (each vertex reads only other colours), the classes
+/// one after the other. Returns the steps taken.
+fn relax<D: Density + ?Sized>(
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    uv: &mut [[f64; 2]],
+    density: &D,
+    sweeps: usize,
+) -> Result<usize, ProlongationError> {
+    use rayon::prelude::*;
+    let n = uv.len();
+    // Stars as CSR: every face once per corner, rotated to start at that corner, with
+    // its rest triangle in that corner order.
+    let mut offsets = vec![0u32; n + 1];
+    for t in triangles {
+        for &v in t {
+            offsets[v as usize + 1] += 1;
+        }
+    }
+    for v in 0..n {
+        offsets[v + 1] += offsets[v];
+    }
+    let mut fill = offsets.clone();
+    let mut star = vec![[0u32; 3]; 3 * triangles.len()];
+    for t in triangles {
+        for k in 0..3 {
+            let v = t[k] as usize;
+            star[fill[v] as usize] = [t[k], t[(k + 1) % 3], t[(k + 2) % 3]];
+            fill[v] += 1;
+        }
+    }
+    drop(fill);
+    let rest: Vec<RestTriangle> = star
+        .par_iter()
+        .map(|f| {
+            RestTriangle::new(
+                positions[f[0] as usize],
+                positions[f[1] as usize],
+                positions[f[2] as usize],
+            )
+            .ok_or(ProlongationError::DegenerateFace { vertex: f[0] })
+        })
+        .collect::<Result<_, _>>()?;
+    let range = |v: usize| offsets[v] as usize..offsets[v + 1] as usize;
+    // Greedy colouring of the vertex graph (neighbours: the star's other corners).
+    let mut colour = vec![u8::MAX; n];
+    let mut classes: Vec<Vec<u32>> = Vec::new();
+    for v in 0..n {
+        if offsets[v] == offsets[v + 1] {
+            continue;
+        }
+        let mut used = 0u64;
+        for f in &star[range(v)] {
+            for &w in &f[1..] {
+                let c = colour[w as usize];
+                if c < 64 {
+                    used |= 1 << c;
+                }
+            }
+        }
+        let c = (!used).trailing_zeros() as usize;
+        if c >= 64 {
+            // Valence beyond 63 neighbours of distinct colours: leave it alone.
+            continue;
+        }
+        colour[v] = c as u8;
+        if classes.len() <= c {
+            classes.resize_with(c + 1, Vec::new);
+        }
+        classes[c].push(v as u32);
+    }
+    let mut steps = 0;
+    let mut moved: Vec<([f64; 2], usize)> = Vec::new();
+    for _ in 0..sweeps {
+        for class in &classes {
+            let current: &[[f64; 2]] = uv;
+            class
+                .par_iter()
+                .with_min_len(256)
+                .map(|&v| {
+                    let r = range(v as usize);
+                    polish(
+                        current,
+                        &star[r.clone()],
+                        &rest[r],
+                        current[v as usize],
+                        density,
+                        1,
+                    )
+                })
+                .collect_into_vec(&mut moved);
+            for (&v, &(p, taken)) in class.iter().zip(&moved) {
+                uv[v as usize] = p;
+                steps += taken;
+            }
+        }
+    }
+    Ok(steps)
+}
+
+/// The current faces around `v` (from its incident face ids), each rotated to
+/// `(v, a, b)` (counter-clockwise).
+fn star_of(faces: &[Option<[u32; 3]>], incident: &[u32], v: u32, star: &mut Vec<[u32; 3]>) {
+    star.clear();
+    star.extend(incident.iter().filter_map(|&f| {
+        let mut t = faces[f as usize]?;
+        while t[0] != v {
+            t.rotate_left(1);
+        }
+        Some(t)
+    }));
+}
+
+/// Rest triangles of `star` (same corner order); `None` if one is degenerate.
+fn rest_of(positions: &[[f64; 3]], star: &[[u32; 3]], rest: &mut Vec<RestTriangle>) -> Option<()> {
+    rest.clear();
+    for f in star {
+        rest.push(RestTriangle::new(
+            positions[f[0] as usize],
+            positions[f[1] as usize],
+            positions[f[2] as usize],
+        )?);
+    }
+    Some(())
+}
+
+/// All star faces `(v, a, b)` strictly counter-clockwise with `v` at `p`.
+fn admissible(uv: &[[f64; 2]], star: &[[u32; 3]], p: [f64; 2]) -> bool {
+    star.iter().all(|f| {
+        let area = signed_uv_area([p, uv[f[1] as usize], uv[f[2] as usize]]);
+        area > 0.0 && area.is_finite()
+    })
+}
+
+/// The conformal least-squares position of `v` (module docs, step 1); `None` if a star
+/// face is degenerate in 3D.
+fn conformal_position(
+    positions: &[[f64; 3]],
+    uv: &[[f64; 2]],
+    star: &[[u32; 3]],
+    v: u32,
+) -> Option<[f64; 2]> {
+    let pv = positions[v as usize];
+    let mut sum = [0.0; 2];
+    for f in star {
+        let (pa, pb) = (positions[f[1] as usize], positions[f[2] as usize]);
+        let e = sub3(pb, pa);
+        let g = sub3(pv, pa);
+        let e2 = dot3(e, e);
+        let n = cross3(e, g);
+        let n_len = dot3(n, n).sqrt();
+        if !(e2 > 0.0 && n_len > 0.0) {
+            return None;
+        }
+        // z = (v − a)/(b − a) in the face's plane, v to the left of a → b.
+        let (zr, zi) = (dot3(g, e) / e2, n_len / e2);
+        let (a, b) = (uv[f[1] as usize], uv[f[2] as usize]);
+        let d = [b[0] - a[0], b[1] - a[1]];
+        sum[0] += a[0] + zr * d[0] - zi * d[1];
+        sum[1] += a[1] + zr * d[1] + zi * d[0];
+    }
+    let k = star.len() as f64;
+    Some([sum[0] / k, sum[1] / k])
+}
+
+/// Centroid of the kernel of the star: the convex polygon of points `p` with every
+/// `(p, a, b)` counter-clockwise, clipped to a box around the ring (an open star, at
+/// the boundary, has an unbounded kernel). `None` if the kernel has no area.
+fn kernel_centroid(uv: &[[f64; 2]], star: &[[u32; 3]]) -> Option<[f64; 2]> {
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for f in star {
+        for &w in &f[1..] {
+            for c in 0..2 {
+                lo[c] = lo[c].min(uv[w as usize][c]);
+                hi[c] = hi[c].max(uv[w as usize][c]);
+            }
+        }
+    }
+    let pad = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+    let mut poly = vec![
+        [lo[0] - pad, lo[1] - pad],
+        [hi[0] + pad, lo[1] - pad],
+        [hi[0] + pad, hi[1] + pad],
+        [lo[0] - pad, hi[1] + pad],
+    ];
+    let mut next = Vec::with_capacity(poly.len() + star.len());
+    for f in star {
+        let (a, b) = (uv[f[1] as usize], uv[f[2] as usize]);
+        // Keep the side where (p, a, b) is counter-clockwise: left of a → b.
+        let side = |p: [f64; 2]| (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]);
+        next.clear();
+        for k in 0..poly.len() {
+            let (p, q) = (poly[k], poly[(k + 1) % poly.len()]);
+            let (sp, sq) = (side(p), side(q));
+            if sp > 0.0 {
+                next.push(p);
+            }
+            if (sp > 0.0) != (sq > 0.0) {
+                let t = sp / (sp - sq);
+                next.push([p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])]);
+            }
+        }
+        std::mem::swap(&mut poly, &mut next);
+        if poly.len() < 3 {
+            return None;
+        }
+    }
+    // Area-weighted centroid of the convex polygon.
+    let (mut area, mut cx, mut cy) = (0.0, 0.0, 0.0);
+    let o = poly[0];
+    for k in 1..poly.len() - 1 {
+        let (p, q) = (poly[k], poly[k + 1]);
+        let a = 0.5 * ((p[0] - o[0]) * (q[1] - o[1]) - (p[1] - o[1]) * (q[0] - o[0]));
+        area += a;
+        cx += a * (o[0] + p[0] + q[0]) / 3.0;
+        cy += a * (o[1] + p[1] + q[1]) / 3.0;
+    }
+    (area > 0.0 && area.is_finite()).then(|| [cx / area, cy / area])
+}
+
+/// Up to `steps` projected-Newton steps on the star energy `Σ area·W(J)` of a vertex
+/// at `p`, the other vertices fixed at `uv`; `star` lists its faces rotated to
+/// `(v, a, b)` and `rest` their rest triangles (same corner order). Returns the new
+/// position and the steps taken; every step stays below the first flip.
+fn polish<D: Density + ?Sized>(
+    uv: &[[f64; 2]],
+    star: &[[u32; 3]],
+    rest: &[RestTriangle],
+    p: [f64; 2],
+    density: &D,
+    steps: usize,
+) -> ([f64; 2], usize) {
+    let energy_at = |uv: &[[f64; 2]], p: [f64; 2]| -> f64 {
+        star.iter()
+            .zip(rest)
+            .map(|(f, r)| element::energy(r, &[p, uv[f[1] as usize], uv[f[2] as usize]], density))
+            .sum()
+    };
+    let mut p = p;
+    let mut energy = energy_at(uv, p);
+    let mut taken = 0;
+    for _ in 0..steps {
+        // Gradient and Hessian of v's corner (the first one of every face).
+        let (mut g, mut h) = ([0.0; 2], [[0.0; 2]; 2]);
+        for (f, r) in star.iter().zip(rest) {
+            let corners = [p, uv[f[1] as usize], uv[f[2] as usize]];
+            let (mut eg, mut eh) = ([0.0; 6], [[0.0; 6]; 6]);
+            element::gradient_and_projected_hessian(r, &corners, density, &mut eg, &mut eh);
+            g[0] += eg[0];
+            g[1] += eg[1];
+            for i in 0..2 {
+                for j in 0..2 {
+                    h[i][j] += eh[i][j];
+                }
+            }
+        }
+        let det = h[0][0] * h[1][1] - h[0][1] * h[1][0];
+        if !(det > 0.0 && det.is_finite()) {
+            break;
+        }
+        let d = [
+            -(h[1][1] * g[0] - h[0][1] * g[1]) / det,
+            -(-h[1][0] * g[0] + h[0][0] * g[1]) / det,
+        ];
+        let decrement = -(g[0] * d[0] + g[1] * d[1]);
+        if decrement.is_nan() || decrement <= 1e-14 * energy.abs() {
+            break;
+        }
+        // Star face areas are linear in v: the first flip along d is at
+        // min over shrinking faces of area / shrink rate.
+        let mut t_max = f64::INFINITY;
+        for f in star {
+            let (a, b) = (uv[f[1] as usize], uv[f[2] as usize]);
+            let area = signed_uv_area([p, a, b]);
+            let rate = 0.5 * (d[0] * (a[1] - b[1]) - d[1] * (a[0] - b[0]));
+            if rate < 0.0 {
+                t_max = t_max.min(area / -rate);
+            }
+        }
+        let mut t = 1.0f64.min(0.9 * t_max);
+        let mut accepted = false;
+        for _ in 0..30 {
+            let q = [p[0] + t * d[0], p[1] + t * d[1]];
+            let e = energy_at(uv, q);
+            if e.is_finite() && e <= energy - 1e-4 * t * decrement {
+                p = q;
+                energy = e;
+                accepted = true;
+                break;
+            }
+            t *= 0.5;
+        }
+        if !accepted {
+            break;
+        }
+        taken += 1;
+    }
+    (p, taken)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::generate::{bumpy_disc, spherical_cap};
+    use crate::param::count_flipped;
+    use crate::param::density::{EnergyKind, Litke};
+    use crate::param::flatten::{FlattenOptions, MultilevelOptions, StartMap, flatten};
+
+    /// A ring of `k` vertices around vertex 0 (counter-clockwise faces `(0, i, i+1)`).
+    fn fan(ring: &[[f64; 2]]) -> (Vec<[f64; 2]>, Vec<[u32; 3]>) {
+        let mut uv = vec![[f64::NAN; 2]];
+        uv.extend_from_slice(ring);
+        let k = ring.len() as u32;
+        let star = (0..k).map(|i| [0, 1 + i, 1 + (i + 1) % k]).collect();
+        (uv, star)
+    }
+
+    #[test]
+    fn conformal_position_reproduces_a_similarity() {
+        // Planar 3D star; UVs are a rotated, scaled, shifted copy: v's conformal
+        // least-squares position is the same similarity applied to v.
+        let ring3: Vec<[f64; 3]> = [
+            [1.0, 0.1],
+            [0.4, 0.9],
+            [-0.8, 0.7],
+            [-0.9, -0.5],
+            [0.3, -1.0],
+        ]
+        .iter()
+        .map(|p| [p[0], p[1], 0.0])
+        .collect();
+        let v3 = [0.05, -0.1, 0.0];
+        let (c, s, t) = (0.6 * 1.7, 0.8 * 1.7, [3.0, -2.0]);
+        let sim = |p: [f64; 3]| [c * p[0] - s * p[1] + t[0], s * p[0] + c * p[1] + t[1]];
+        let (mut uv, star) = fan(&ring3.iter().map(|&p| sim(p)).collect::<Vec<_>>());
+        let mut positions = vec![v3];
+        positions.extend_from_slice(&ring3);
+        let p = conformal_position(&positions, &uv, &star, 0).unwrap();
+        let expected = sim(v3);
+        assert!((p[0] - expected[0]).abs() < 1e-12 && (p[1] - expected[1]).abs() < 1e-12);
+        uv[0] = p;
+        assert!(admissible(&uv, &star, p));
+    }
+
+    #[test]
+    fn kernel_centroid_is_inside_a_non_convex_star() {
+        // A star-shaped but non-convex ring (a four-pointed star): its kernel is the
+        // small square-like region around the origin.
+        let ring = [
+            [2.0, 0.0],
+            [0.2, 0.2],
+            [0.0, 2.0],
+            [-0.2, 0.2],
+            [-2.0, 0.0],
+            [-0.2, -0.2],
+            [0.0, -2.0],
+            [0.2, -0.2],
+        ];
+        let (uv, star) = fan(&ring);
+        let p = kernel_centroid(&uv, &star).unwrap();
+        assert!(admissible(&uv, &star, p), "{p:?}");
+        // By symmetry the kernel's centroid is the origin.
+        assert!(p[0].abs() < 1e-12 && p[1].abs() < 1e-12, "{p:?}");
+        // A ring that winds the wrong way has no kernel.
+        let reversed: Vec<[f64; 2]> = ring.iter().rev().copied().collect();
+        let (uv, star) = fan(&reversed);
+        assert_eq!(kernel_centroid(&uv, &star), None);
+    }
+
+    #[test]
+    fn polishing_lowers_the_star_energy_and_keeps_it_flip_free() {
+        let ring = [
+            [1.0, 0.0],
+            [0.5, 0.8],
+            [-0.5, 0.8],
+            [-1.0, 0.0],
+            [-0.5, -0.8],
+            [0.5, -0.8],
+        ];
+        let (mut uv, star) = fan(&ring);
+        let mut positions = vec![[0.0, 0.0, 0.0]];
+        positions.extend(ring.iter().map(|p| [p[0], p[1], 0.0]));
+        // Start far off-centre (still admissible): the optimum for this symmetric
+        // planar star is the centre (the identity map).
+        uv[0] = [0.6, 0.1];
+        let density = Litke::balanced();
+        let before: f64 = star_energy(&positions, &uv, &star, &density);
+        let mut rest = Vec::new();
+        rest_of(&positions, &star, &mut rest).unwrap();
+        let (p, taken) = polish(&uv, &star, &rest, uv[0], &density, 20);
+        uv[0] = p;
+        let after = star_energy(&positions, &uv, &star, &density);
+        assert!(taken > 0 && after < before);
+        assert!(
+            uv[0][0].abs() < 1e-6 && uv[0][1].abs() < 1e-6,
+            "{:?}",
+            uv[0]
+        );
+        assert!(admissible(&uv, &star, uv[0]));
+    }
+
+    fn star_energy(
+        positions: &[[f64; 3]],
+        uv: &[[f64; 2]],
+        star: &[[u32; 3]],
+        density: &Litke,
+    ) -> f64 {
+        star.iter()
+            .map(|f| {
+                let r = RestTriangle::new(
+                    positions[f[0] as usize],
+                    positions[f[1] as usize],
+                    positions[f[2] as usize],
+                )
+                .unwrap();
+                element::energy(
+                    &r,
+                    &[uv[f[0] as usize], uv[f[1] as usize], uv[f[2] as usize]],
+                    density,
+                )
+            })
+            .sum()
+    }
+
+    #[test]
+    fn a_coarse_level_that_is_not_coarser_is_abandoned_with_the_reason() {
+        let mesh = bumpy_disc(6, 0.3);
+        let r = flatten(
+            &mesh,
+            &FlattenOptions {
+                multilevel: MultilevelOptions {
+                    min_faces: 0,
+                    coarse_vertices: mesh.positions.len(),
+                    ..Default::default()
+                },
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        assert_ne!(r.start, StartMap::Multilevel);
+        let reason = r.multilevel.unwrap().abandoned.unwrap();
+        assert!(reason.contains("not even twice"), "{reason}");
+        assert_eq!(r.flipped_triangles, 0);
+    }
+
+    #[test]
+    fn multilevel_flattening_reaches_the_single_level_minimum() {
+        for mesh in [bumpy_disc(24, 0.4), spherical_cap(1.0, 1.6, 20, 60)] {
+            for energy in [
+                EnergyKind::Litke(Litke::balanced()),
+                EnergyKind::Litke(Litke::conformal()),
+                EnergyKind::SymmetricDirichlet,
+            ] {
+                let single = flatten(
+                    &mesh,
+                    &FlattenOptions {
+                        energy,
+                        multilevel: MultilevelOptions::off(),
+                        ..Default::default()
+                    },
+                )
+                .unwrap();
+                let multi = flatten(
+                    &mesh,
+                    &FlattenOptions {
+                        energy,
+                        multilevel: MultilevelOptions {
+                            min_faces: 0,
+                            coarse_vertices: mesh.positions.len() / 8,
+                            ..Default::default()
+                        },
+                        ..Default::default()
+                    },
+                )
+                .unwrap();
+                let report = multi.multilevel.as_ref().unwrap();
+                assert_eq!(report.abandoned, None);
+                assert_eq!(multi.start, StartMap::Multilevel);
+                assert!(report.coarse_vertices <= mesh.positions.len() / 4);
+                assert_eq!(
+                    report.prolongation.inserted + report.coarse_vertices,
+                    mesh.positions.len()
+                );
+                assert!(multi.converged && single.converged);
+                assert_eq!(count_flipped(&multi.uvs, &mesh.triangles), 0);
+                assert!(
+                    (multi.energy - single.energy).abs() <= 1e-9 * single.energy,
+                    "{energy:?}: {} vs {}",
+                    multi.energy,
+                    single.energy
+                );
+            }
+        }
+    }
+}
