@@ -1,14 +1,23 @@
 //! Scaling benchmark: a real disc mesh subdivided in code (midpoint 1 → 4, `k` times;
 //! the result is synthetic) and flattened with the balanced preset. Prints size,
-//! iterations, time by phase and peak resident memory.
+//! iterations, time by phase and peak resident memory, with the multilevel start and
+//! without it (same run; the multilevel run first, so the peak memory line of the
+//! first run is its own).
 //!
-//! `cargo run --release -p surfmap --example scale_bench -- MESH LEVELS`
+//! `cargo run --release -p surfmap --example scale_bench -- MESH LEVELS [multi|single|both]`
 //! e.g. `../shared/data/faces/face_bff.obj 3` (34k → 2.2M faces).
 
 use surfmap::mesh::io::read_mesh;
 use surfmap::mesh::subdivide::subdivide_midpoint;
 use surfmap::param::count_flipped;
-use surfmap::param::flatten::{FlattenOptions, flatten};
+use surfmap::param::flatten::{FlattenOptions, MultilevelOptions, flatten};
+
+fn multilevel_on() -> MultilevelOptions {
+    MultilevelOptions {
+        min_faces: 0,
+        ..Default::default()
+    }
+}
 
 fn peak_rss_mib() -> f64 {
     std::fs::read_to_string("/proc/self/status")
@@ -41,28 +50,54 @@ fn main() {
         mesh.positions.len(),
         mesh.triangles.len()
     );
-    let t = std::time::Instant::now();
-    let r = flatten(&mesh, &FlattenOptions::default()).expect("flattened");
-    let total = t.elapsed().as_secs_f64();
-    println!(
-        "balanced: start {:?}, {} iterations, converged {}, energy {:.6}, flipped {}, total {:.2} s (start map {:.2} s), peak RSS {:.0} MiB",
-        r.start,
-        r.iterations,
-        r.converged,
-        r.energy,
-        count_flipped(&r.uvs, &mesh.triangles),
-        total,
-        r.time_start,
-        peak_rss_mib()
-    );
-    println!("{:?}", r.newton_timings);
-    if let Some(m) = &r.multilevel {
-        println!("{m:?}");
-    }
-    for l in &r.log {
+    let which = args.get(2).map_or("both", String::as_str);
+    let runs: Vec<(&str, MultilevelOptions)> = match which {
+        "single" => vec![("single-level", MultilevelOptions::off())],
+        "multi" => vec![("multilevel", multilevel_on())],
+        _ => vec![
+            ("multilevel", multilevel_on()),
+            ("single-level", MultilevelOptions::off()),
+        ],
+    };
+    let mut totals = Vec::new();
+    for (name, multilevel) in runs {
+        let t = std::time::Instant::now();
+        let r = flatten(
+            &mesh,
+            &FlattenOptions {
+                multilevel,
+                ..Default::default()
+            },
+        )
+        .expect("flattened");
+        let total = t.elapsed().as_secs_f64();
+        totals.push(total);
         println!(
-            "{:>3} {:.8} {:.3e} {:.3} {:.2}",
-            l.iteration, l.energy, l.newton_decrement, l.step, l.time
+            "{name}, balanced: start {}, {} iterations, converged {}, energy {:.6}, flipped {}, total {:.2} s (start map {:.2} s), peak RSS so far {:.0} MiB",
+            r.start_description(),
+            r.iterations,
+            r.converged,
+            r.energy,
+            count_flipped(&r.uvs, &mesh.triangles),
+            total,
+            r.time_start,
+            peak_rss_mib()
+        );
+        println!("  {:?}", r.newton_timings);
+        if let Some(m) = &r.multilevel {
+            println!("  {m:?}");
+        }
+        for l in &r.log {
+            println!(
+                "  {:>3} {:.8} {:.3e} {:.3} {:.2}",
+                l.iteration, l.energy, l.newton_decrement, l.step, l.time
+            );
+        }
+    }
+    if totals.len() == 2 {
+        println!(
+            "single-level / multilevel time: {:.2}×",
+            totals[1] / totals[0]
         );
     }
 }

@@ -54,7 +54,7 @@ pub enum Start {
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 pub enum MultilevelChoice {
-    /// For meshes of 200k faces and more.
+    /// For meshes of 15k faces and more.
     Auto,
     On,
     Off,
@@ -86,9 +86,10 @@ pub struct Args {
     /// flip-free, then run Newton on the full mesh (far fewer full-size iterations).
     #[arg(long, value_enum, default_value = "auto")]
     pub multilevel: MultilevelChoice,
-    /// Vertices of the decimated copy for --multilevel.
-    #[arg(long, default_value_t = surfmap::param::flatten::MULTILEVEL_COARSE_VERTICES)]
-    pub coarse_vertices: usize,
+    /// Vertices of the decimated copy for --multilevel (default: 1/20 of the mesh,
+    /// between 500 and 20000).
+    #[arg(long)]
+    pub coarse_vertices: Option<usize>,
     /// Scale and translate the UVs into [0,1]² (aspect ratio kept).
     #[arg(long)]
     pub normalize: bool,
@@ -179,11 +180,8 @@ pub fn options(args: &Args) -> anyhow::Result<FlattenOptions> {
     if !(args.armijo_c > 0.0 && args.armijo_c < 1.0) {
         bail!("--armijo-c must be in (0, 1), got {}", args.armijo_c);
     }
-    if args.coarse_vertices < 16 {
-        bail!(
-            "--coarse-vertices must be at least 16, got {}",
-            args.coarse_vertices
-        );
+    if let Some(n) = args.coarse_vertices.filter(|&n| n < 16) {
+        bail!("--coarse-vertices must be at least 16, got {n}");
     }
     opts.multilevel = surfmap::param::flatten::MultilevelOptions {
         min_faces: match args.multilevel {

@@ -43,13 +43,14 @@ pub enum StartMap {
 }
 
 /// When to use the multilevel start ([`super::multilevel`]): flatten a decimated copy
-/// of about `coarse_vertices` vertices, re-insert the removed vertices, then run Newton
+/// (about `coarse_vertices` vertices), re-insert the removed vertices, then run Newton
 /// on the full mesh from there.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MultilevelOptions {
     /// Meshes with at least this many faces use it (`usize::MAX`: never, `0`: always).
     pub min_faces: usize,
-    pub coarse_vertices: usize,
+    /// Vertices of the coarse copy; `None`: [`MultilevelOptions::coarse_size`].
+    pub coarse_vertices: Option<usize>,
     /// Local Newton steps per re-inserted vertex.
     pub polish_steps: usize,
     /// Relaxation sweeps over the full mesh after the re-insertion.
@@ -60,7 +61,7 @@ impl Default for MultilevelOptions {
     fn default() -> Self {
         Self {
             min_faces: MULTILEVEL_MIN_FACES,
-            coarse_vertices: MULTILEVEL_COARSE_VERTICES,
+            coarse_vertices: None,
             polish_steps: super::multilevel::DEFAULT_POLISH_STEPS,
             sweeps: super::multilevel::DEFAULT_SWEEPS,
         }
@@ -68,6 +69,15 @@ impl Default for MultilevelOptions {
 }
 
 impl MultilevelOptions {
+    /// The coarse size for a mesh of `vertices` vertices: the given one, or by default
+    /// 1/20 of the mesh, between 500 and 20 000 vertices.
+    pub fn coarse_size(&self, vertices: usize) -> usize {
+        self.coarse_vertices.unwrap_or((vertices / 20).clamp(
+            MULTILEVEL_MIN_COARSE_VERTICES,
+            MULTILEVEL_MAX_COARSE_VERTICES,
+        ))
+    }
+
     /// Never use the multilevel start.
     pub fn off() -> Self {
         Self {
@@ -77,9 +87,12 @@ impl MultilevelOptions {
     }
 }
 
-/// Default size from which the multilevel start is used, and the coarse size.
-pub const MULTILEVEL_MIN_FACES: usize = 200_000;
-pub const MULTILEVEL_COARSE_VERTICES: usize = 20_000;
+/// Default size from which the multilevel start is used (measured in BENCHMARKS.md:
+/// from ~15k faces it needs fewer full-size Newton iterations than the start map), and
+/// the bounds of the default coarse size.
+pub const MULTILEVEL_MIN_FACES: usize = 15_000;
+pub const MULTILEVEL_MIN_COARSE_VERTICES: usize = 500;
+pub const MULTILEVEL_MAX_COARSE_VERTICES: usize = 20_000;
 
 /// What the multilevel start did (or why it was abandoned).
 #[derive(Clone, Debug, Default, Serialize)]
@@ -511,18 +524,18 @@ fn multilevel_start(
     let mut report = MultilevelReport::default();
     let clock = Instant::now();
     let run = |report: &mut MultilevelReport| -> Result<Vec<[f64; 2]>, String> {
-        if mesh.positions.len() < 2 * options.multilevel.coarse_vertices {
+        let coarse_size = options.multilevel.coarse_size(mesh.positions.len());
+        if mesh.positions.len() < 2 * coarse_size {
             return Err(format!(
-                "the mesh has {} vertices, not even twice the {} of the coarse level",
+                "the mesh has {} vertices, not even twice the {coarse_size} of the coarse level",
                 mesh.positions.len(),
-                options.multilevel.coarse_vertices
             ));
         }
         let decimation = decimate_with(
             mesh,
             topo,
             &DecimateOptions {
-                target_vertices: options.multilevel.coarse_vertices,
+                target_vertices: coarse_size,
                 ..Default::default()
             },
         )

@@ -561,7 +561,7 @@ mod tests {
             &FlattenOptions {
                 multilevel: MultilevelOptions {
                     min_faces: 0,
-                    coarse_vertices: mesh.positions.len(),
+                    coarse_vertices: Some(mesh.positions.len()),
                     ..Default::default()
                 },
                 ..Default::default()
@@ -597,7 +597,7 @@ mod tests {
                         energy,
                         multilevel: MultilevelOptions {
                             min_faces: 0,
-                            coarse_vertices: mesh.positions.len() / 8,
+                            coarse_vertices: Some(mesh.positions.len() / 8),
                             ..Default::default()
                         },
                         ..Default::default()
