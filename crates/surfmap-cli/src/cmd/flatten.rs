@@ -325,10 +325,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             eprintln!("note: multilevel start abandoned ({reason}); used the single-level start");
         }
         outln!(
-            "{}: start {} + {} ARAP steps, {} iterations, {}, energy {:.6}, flipped triangles {}, {:.3} s → {}",
+            "{}: start {}{}, {} iterations, {}, energy {:.6}, flipped triangles {}, {:.3} s → {}",
             args.input.display(),
             result.start_description(),
-            result.warm_start_iterations,
+            match result.warm_start_iterations {
+                0 => String::new(),
+                n => format!(" + {n} ARAP steps"),
+            },
             result.iterations,
             if result.converged {
                 "converged"
