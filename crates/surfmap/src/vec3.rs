@@ -19,3 +19,8 @@ pub(crate) fn cross3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
         a[0] * b[1] - a[1] * b[0],
     ]
 }
+
+#[inline(always)]
+pub(crate) fn norm3(a: [f64; 3]) -> f64 {
+    dot3(a, a).sqrt()
+}

@@ -41,6 +41,7 @@
 //! [`Topology::new`] (`examples/decimate_bench.rs`).
 
 use super::{Topology, TriMesh};
+use crate::vec3::{cross3, dot3, sub3};
 
 /// No vertex / no face.
 const NONE: u32 = u32::MAX;
@@ -443,32 +444,16 @@ impl Quadric {
 fn xyz(p: [f64; 4]) -> [f64; 3] {
     [p[0], p[1], p[2]]
 }
-#[inline]
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-#[inline]
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-#[inline]
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
 
 /// Twice the area vector `(q − p) × (r − p)` and the quality `4√3·A/Σl²` of triangle
 /// `pqr`.
 #[inline]
 fn normal_and_quality(p: [f64; 3], q: [f64; 3], r: [f64; 3]) -> ([f64; 3], f64) {
-    let (e1, e2, e3) = (sub(q, p), sub(r, p), sub(r, q));
-    let n = cross(e1, e2);
-    let l2 = dot(e1, e1) + dot(e2, e2) + dot(e3, e3);
+    let (e1, e2, e3) = (sub3(q, p), sub3(r, p), sub3(r, q));
+    let n = cross3(e1, e2);
+    let l2 = dot3(e1, e1) + dot3(e2, e2) + dot3(e3, e3);
     let quality = if l2 > 0.0 {
-        2.0 * 3f64.sqrt() * dot(n, n).sqrt() / l2
+        2.0 * 3f64.sqrt() * dot3(n, n).sqrt() / l2
     } else {
         0.0
     };
@@ -633,7 +618,7 @@ impl State {
             .positions
             .iter()
             .map(|&p| {
-                let [x, y, z] = sub(p, center);
+                let [x, y, z] = sub3(p, center);
                 [x, y, z, 0.0]
             })
             .collect();
@@ -669,11 +654,11 @@ impl State {
         let mut quadric = vec![Quadric::default(); nv];
         for tri in &mesh.triangles {
             let [a, b, c] = tri.map(|v| xyz(pos[v as usize]));
-            let n = cross(sub(b, a), sub(c, a));
-            let len = dot(n, n).sqrt();
+            let n = cross3(sub3(b, a), sub3(c, a));
+            let len = dot3(n, n).sqrt();
             if len > 0.0 {
                 let unit = n.map(|x| x / len);
-                let q = Quadric::plane(unit, -dot(unit, a), 0.5 * len);
+                let q = Quadric::plane(unit, -dot3(unit, a), 0.5 * len);
                 for &v in tri {
                     quadric[v as usize].add(&q);
                 }
@@ -726,14 +711,14 @@ impl State {
                 continue;
             };
             let [p, q, r] = state.faces[f as usize].map(|v| state.p(v));
-            let n = cross(sub(q, p), sub(r, p));
+            let n = cross3(sub3(q, p), sub3(r, p));
             let (pa, pb) = (state.p(a), state.p(b));
-            let e = sub(pb, pa);
-            let m = cross(e, n);
-            let len = dot(m, m).sqrt();
+            let e = sub3(pb, pa);
+            let m = cross3(e, n);
+            let len = dot3(m, m).sqrt();
             if len > 0.0 {
                 let unit = m.map(|x| x / len);
-                let q = Quadric::plane(unit, -dot(unit, pa), o.boundary_weight * dot(e, e));
+                let q = Quadric::plane(unit, -dot3(unit, pa), o.boundary_weight * dot3(e, e));
                 state.quadric[a as usize].add(&q);
                 state.quadric[b as usize].add(&q);
             }
@@ -836,8 +821,8 @@ impl State {
     fn cost(&self, u: u32, v: u32) -> f64 {
         let (pu, [x, y, z, own]) = (self.p(u), self.pos[v as usize]);
         let pv = [x, y, z];
-        let e = sub(pu, pv);
-        let l2 = dot(e, e);
+        let e = sub3(pu, pv);
+        let l2 = dot3(e, e);
         self.quadric[u as usize].at(pv) + own + self.length_weight * l2 * l2
     }
 
@@ -987,8 +972,8 @@ impl State {
             let (a, b) = (self.p(tri[(k + 1) % 3]), self.p(tri[(k + 2) % 3]));
             let (n0, q0) = normal_and_quality(self.p(u), a, b);
             let (n1, q1) = normal_and_quality(pv, a, b);
-            let (l0, l1) = (dot(n0, n0).sqrt(), dot(n1, n1).sqrt());
-            if l1 == 0.0 || dot(n0, n1) < self.cos_max_turn * l0 * l1 {
+            let (l0, l1) = (dot3(n0, n0).sqrt(), dot3(n1, n1).sqrt());
+            if l1 == 0.0 || dot3(n0, n1) < self.cos_max_turn * l0 * l1 {
                 return false;
             }
             if q1 < self.min_quality.min(q0) {
@@ -1300,7 +1285,7 @@ mod tests {
     }
 
     fn normal(p: [[f64; 3]; 3]) -> [f64; 3] {
-        cross(sub(p[1], p[0]), sub(p[2], p[0]))
+        cross3(sub3(p[1], p[0]), sub3(p[2], p[0]))
     }
 
     #[test]
@@ -1460,7 +1445,7 @@ mod tests {
                 let after = faces[f as usize].unwrap();
                 assert!(before[k].contains(&c.removed) && after.contains(&c.into));
                 let (n0, n1) = (normal(tri(before[k])), normal(tri(after)));
-                let cos = dot(n0, n1) / (dot(n0, n0) * dot(n1, n1)).sqrt();
+                let cos = dot3(n0, n1) / (dot3(n0, n0) * dot3(n1, n1)).sqrt();
                 assert!(
                     cos >= cos_limit - 1e-12,
                     "normal turned by {}°",
@@ -1480,7 +1465,7 @@ mod tests {
     /// product form).
     fn normal_and_quality_ref(p: [[f64; 3]; 3]) -> ((), f64) {
         let l: Vec<f64> = (0..3)
-            .map(|k| dot(sub(p[(k + 1) % 3], p[k]), sub(p[(k + 1) % 3], p[k])).sqrt())
+            .map(|k| dot3(sub3(p[(k + 1) % 3], p[k]), sub3(p[(k + 1) % 3], p[k])).sqrt())
             .collect();
         let s = 0.5 * (l[0] + l[1] + l[2]);
         let area = (s * (s - l[0]) * (s - l[1]) * (s - l[2])).max(0.0).sqrt();
@@ -1665,10 +1650,10 @@ mod tests {
     fn quadric_is_the_weighted_squared_plane_distance() {
         // Plane through (1, 2, 3) with normal (2, −1, 2)/3, weight 5.
         let n = [2.0 / 3.0, -1.0 / 3.0, 2.0 / 3.0];
-        let d = -dot(n, [1.0, 2.0, 3.0]);
+        let d = -dot3(n, [1.0, 2.0, 3.0]);
         let mut q = Quadric::plane(n, d, 5.0);
         for x in [[0.0, 0.0, 0.0], [1.0, 2.0, 3.0], [-4.0, 7.5, 0.25]] {
-            let dist = dot(n, sub(x, [1.0, 2.0, 3.0]));
+            let dist = dot3(n, sub3(x, [1.0, 2.0, 3.0]));
             assert!((q.at(x) - 5.0 * dist * dist).abs() < 1e-12 * (1.0 + dist * dist));
         }
         // Sum of two planes: x = 0 and y = 0 (weight 1) measure x² + y².

@@ -215,19 +215,7 @@ pub fn disc_boundary(triangles: &[[u32; 3]]) -> Option<Vec<u32>> {
 mod tests {
     use super::*;
 
-    fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-        [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-    }
-    fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-        [
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ]
-    }
-    fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-        a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-    }
+    use crate::vec3::{cross3 as cross, dot3 as dot, sub3 as sub};
 
     /// Disc checks: Euler characteristic 1, one boundary loop, every triangle
     /// non-degenerate with its normal on the side given by `outward(centroid)`.

@@ -221,12 +221,7 @@ mod tests {
         lscm(&mesh.positions, &mesh.triangles, &b).unwrap()
     }
 
-    fn sub3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-        [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-    }
-    fn len3(a: [f64; 3]) -> f64 {
-        (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
-    }
+    use crate::vec3::{norm3 as len3, sub3};
     fn lift(p: [f64; 2]) -> [f64; 3] {
         [p[0], p[1], 0.0]
     }

@@ -11,6 +11,7 @@
 
 use super::{InitialMapError, check_disc_input};
 use crate::linsolve::{solve_general, solve_spd};
+use crate::vec3::{norm3 as norm, sub3 as sub};
 use std::f64::consts::TAU;
 
 /// Boundary fixed on the unit circle by arc length: boundary vertex `k` goes to angle
@@ -231,14 +232,6 @@ fn solve_fixed_boundary(
         }
     }
     Ok(uv)
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn norm(a: [f64; 3]) -> f64 {
-    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
 }
 
 #[cfg(test)]
