@@ -180,8 +180,8 @@ pub struct Flattening {
 }
 
 impl Flattening {
-    /// The start map for people: `lscm`, `mean-value (LSCM flipped N)`, `given`,
-    /// ….
+    /// The start map for people: `lscm`, `mean-value (LSCM flipped N)`, `given` or
+    /// `multilevel (N coarse vertices)`.
     pub fn start_description(&self) -> String {
         match self.start {
             StartMap::Lscm => "lscm".to_string(),
