@@ -101,6 +101,9 @@ pub struct MultilevelReport {
     pub coarse_faces: usize,
     /// Newton iterations on the coarse mesh.
     pub coarse_iterations: usize,
+    /// α values of the continuation stages solved on the coarse mesh (with
+    /// `from_alpha`; the full mesh then goes straight to the target α).
+    pub coarse_continuation: Vec<[f64; 3]>,
     /// Vertices re-inserted, of them placed at their star's kernel centroid, and local
     /// Newton steps taken.
     pub prolongation: super::multilevel::ProlongationStats,
@@ -551,6 +554,7 @@ fn multilevel_start(
         };
         let flat = flatten(&coarse, &coarse_options).map_err(|e| format!("coarse mesh: {e}"))?;
         report.coarse_iterations = flat.iterations;
+        report.coarse_continuation = flat.continuation;
         report.time_coarse = clock.elapsed().as_secs_f64() - report.time_decimate;
         let mut uv = vec![[f64::NAN; 2]; mesh.positions.len()];
         for (c, &v) in original_of_coarse.iter().enumerate() {

@@ -575,6 +575,35 @@ mod tests {
     }
 
     #[test]
+    fn continuation_runs_on_the_coarse_level_and_reaches_the_same_minimum() {
+        let mesh = bumpy_disc(20, 0.4);
+        let options = |multilevel| FlattenOptions {
+            from_alpha: Some(Litke::conformal()),
+            multilevel,
+            ..Default::default()
+        };
+        let single = flatten(&mesh, &options(MultilevelOptions::off())).unwrap();
+        let multi = flatten(
+            &mesh,
+            &options(MultilevelOptions {
+                min_faces: 0,
+                ..Default::default()
+            }),
+        )
+        .unwrap();
+        assert_eq!(multi.start, StartMap::Multilevel);
+        let report = multi.multilevel.unwrap();
+        assert_eq!(
+            report.coarse_continuation.last(),
+            single.continuation.last(),
+            "both end at the target α"
+        );
+        assert!(report.coarse_continuation.len() >= 2);
+        assert!((multi.energy - single.energy).abs() <= 1e-9 * single.energy);
+        assert_eq!(multi.flipped_triangles, 0);
+    }
+
+    #[test]
     fn multilevel_flattening_reaches_the_single_level_minimum() {
         for mesh in [bumpy_disc(24, 0.4), spherical_cap(1.0, 1.6, 20, 60)] {
             for energy in [
