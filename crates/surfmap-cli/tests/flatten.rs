@@ -271,3 +271,28 @@ fn multilevel_start_reaches_the_single_level_minimum_on_a_real_scan() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn an_explicit_start_is_honoured_and_its_failure_explained() {
+    let Some(data) = data_dir() else { return };
+    let dir = temp_dir("explicit-start");
+    let out = dir.join("out.obj");
+    // Auto multilevel (camelhead has 22.7k faces) yields to an explicit --start.
+    let run = flatten(&data.join("camelhead.off"), &["--start", "lscm"], &out);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(stdout.contains("start lscm"), "{stdout}");
+    // LSCM flips triangles on three_peaks: forced, that is an error naming the remedy.
+    let run = flatten(&data.join("three_peaks.off"), &["--start", "lscm"], &out);
+    assert_eq!(run.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        stderr.contains("LSCM start flips") && stderr.contains("--start auto"),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -54,7 +54,7 @@ pub enum Start {
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 pub enum MultilevelChoice {
-    /// For meshes of 15k faces and more.
+    /// For meshes of 15k faces and more, unless --start names a start map.
     Auto,
     On,
     Off,
@@ -185,6 +185,8 @@ pub fn options(args: &Args) -> anyhow::Result<FlattenOptions> {
     }
     opts.multilevel = surfmap::param::flatten::MultilevelOptions {
         min_faces: match args.multilevel {
+            // An explicit --start is a request for that start on the full mesh.
+            MultilevelChoice::Auto if !matches!(args.start, Start::Auto) => usize::MAX,
             MultilevelChoice::Auto => surfmap::param::flatten::MULTILEVEL_MIN_FACES,
             MultilevelChoice::On => 0,
             MultilevelChoice::Off => usize::MAX,

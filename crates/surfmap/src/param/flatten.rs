@@ -223,6 +223,10 @@ pub enum FlattenError {
         "both initial maps flipped triangles (LSCM: {lscm}, mean-value: {mean_value}); the mesh geometry is probably broken (non-finite or coincident vertices)"
     )]
     NoAdmissibleStart { lscm: usize, mean_value: usize },
+    #[error(
+        "the LSCM start flips or degenerates {0} triangles; use --start auto (falls back to mean-value coordinates, injective by construction)"
+    )]
+    LscmFlipped(usize),
     #[error("the given initial map has {uvs} UVs, but the mesh has {vertices} vertices")]
     GivenStartLength { uvs: usize, vertices: usize },
     #[error(
@@ -350,6 +354,9 @@ pub fn flatten_with_progress(
     let start_flipped = admissible(&mut uv);
     if start_flipped > 0 && start != StartMap::Lscm && start != StartMap::MeanValue {
         return Err(FlattenError::GivenStartFlipped(start_flipped));
+    }
+    if start_flipped > 0 && options.start == StartChoice::Lscm {
+        return Err(FlattenError::LscmFlipped(start_flipped));
     }
     if start_flipped > 0 {
         return Err(FlattenError::NoAdmissibleStart {
