@@ -576,6 +576,10 @@ fn multilevel_start(
             options.multilevel.sweeps,
         )
         .map_err(|e| format!("re-insertion: {e}"))?;
+        let flipped = count_flipped(&uv, &mesh.triangles);
+        if flipped > 0 {
+            return Err(format!("re-insertion left {flipped} flipped triangles"));
+        }
         report.time_prolongate =
             clock.elapsed().as_secs_f64() - report.time_decimate - report.time_coarse;
         Ok(uv)

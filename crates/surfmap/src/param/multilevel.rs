@@ -17,11 +17,19 @@
 //!    split;
 //! 3. then moved by a few projected-Newton steps on the energy of its star (the same
 //!    element energy, gradient and PSD-projected Hessian as the global solver, 2 unknowns),
-//!    each step capped below the first flip (star face areas are linear in `v'`).
+//!    each step capped below the first flip (star face areas are linear in `v'`); `u`,
+//!    whose star shrank, gets the same treatment.
 //!
-//! Every insertion is checked (all star faces strictly counter-clockwise); a failure is
-//! an error, and the caller falls back to the single-level start. The prolongation
-//! needs no linear solve: cost O(faces · polish steps).
+//! After the last insertion, a few Gauss–Seidel sweeps of one such local step per vertex
+//! smooth out what one-vertex-at-a-time placement leaves (a few squeezed triangles
+//! that would otherwise cost the full-size Newton many barrier-limited iterations; see
+//! BENCHMARKS.md for the measured effect). Vertices are coloured so that one colour
+//! class runs in parallel.
+//!
+//! Every insertion is checked (all star faces strictly counter-clockwise) and every
+//! local step stays flip-free; a failure is an error, and the caller falls back to the
+//! single-level start. The prolongation needs no linear solve: cost
+//! O(faces · (polish steps + sweeps)).
 
 use super::density::Density;
 use super::element::{self, RestTriangle};
