@@ -33,27 +33,8 @@ fn main() {
         for &s in &slots {
             v[s as usize] -= 1.0;
         }
-        let diag: Vec<f64> = vec![0.0; dim];
-        let _ = diag;
         // Make it diagonally dominant: add |row sum| + 1 to every diagonal.
-        let (cp, ri) = {
-            let (a, b) = sys.pattern();
-            (a.to_vec(), b.to_vec())
-        };
-        let mut rowsum = vec![0.0; dim];
-        let v = sys.values_mut();
-        for j in 0..dim {
-            for k in cp[j] as usize..cp[j + 1] as usize {
-                let i = ri[k] as usize;
-                if i != j {
-                    rowsum[i] += v[k].abs();
-                    rowsum[j] += v[k].abs();
-                }
-            }
-        }
-        for j in 0..dim {
-            v[cp[j] as usize] = rowsum[j] + 1.0;
-        }
+        surfmap::testing::make_diagonally_dominant(&mut sys);
         let mut times = Vec::new();
         for _ in 0..5 {
             let t = Instant::now();

@@ -25,24 +25,7 @@ fn measure(dim: usize, entries: &[(u32, u32)], ordering: &Ordering) -> (f64, usi
     for &s in &slots {
         v[s as usize] -= 1.0;
     }
-    let (cp, ri) = {
-        let (a, b) = sys.pattern();
-        (a.to_vec(), b.to_vec())
-    };
-    let mut rowsum = vec![0.0; dim];
-    let v = sys.values_mut();
-    for j in 0..dim {
-        for k in cp[j] as usize..cp[j + 1] as usize {
-            let i = ri[k] as usize;
-            if i != j {
-                rowsum[i] += v[k].abs();
-                rowsum[j] += v[k].abs();
-            }
-        }
-    }
-    for j in 0..dim {
-        v[cp[j] as usize] = rowsum[j] + 1.0;
-    }
+    surfmap::testing::make_diagonally_dominant(&mut sys);
     let t = Instant::now();
     sys.factorize().unwrap();
     let first = t.elapsed().as_secs_f64();

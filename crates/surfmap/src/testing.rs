@@ -19,6 +19,11 @@ impl Rng {
         lo + (hi - lo) * self.uniform()
     }
 
+    /// Uniform index in `0..n` (`n > 0`).
+    pub fn below(&mut self, n: usize) -> usize {
+        ((self.uniform() * n as f64) as usize).min(n - 1)
+    }
+
     /// A point with both coordinates uniform in `[-r, r)`.
     pub fn point(&mut self, r: f64) -> [f64; 2] {
         [self.range(-r, r), self.range(-r, r)]
@@ -38,4 +43,29 @@ pub fn all_energies() -> Vec<(&'static str, crate::param::density::EnergyKind)> 
         ("mips", EnergyKind::Mips),
         ("arap", EnergyKind::Arap),
     ]
+}
+
+/// Makes a system's matrix strictly diagonally dominant (so positive definite): every
+/// diagonal entry becomes 1 + the sum of |off-diagonal| entries of its row and column.
+/// For benchmarks of factorization cost on a given pattern.
+pub fn make_diagonally_dominant(sys: &mut crate::linsolve::SpdSystem) {
+    let (col_ptr, row_idx) = {
+        let (a, b) = sys.pattern();
+        (a.to_vec(), b.to_vec())
+    };
+    let dim = col_ptr.len() - 1;
+    let mut rowsum = vec![0.0; dim];
+    let v = sys.values_mut();
+    for j in 0..dim {
+        for k in col_ptr[j] as usize..col_ptr[j + 1] as usize {
+            let i = row_idx[k] as usize;
+            if i != j {
+                rowsum[i] += v[k].abs();
+                rowsum[j] += v[k].abs();
+            }
+        }
+    }
+    for j in 0..dim {
+        v[col_ptr[j] as usize] = rowsum[j] + 1.0;
+    }
 }

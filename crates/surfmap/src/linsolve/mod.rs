@@ -628,20 +628,7 @@ pub fn solve_general(
 mod tests {
     use super::*;
 
-    /// Deterministic pseudo-random numbers in [0, 1) (splitmix64).
-    struct Rng(u64);
-    impl Rng {
-        fn next(&mut self) -> f64 {
-            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-        }
-        fn below(&mut self, n: usize) -> usize {
-            (self.next() * n as f64) as usize
-        }
-    }
+    use crate::testing::Rng;
 
     /// Dense Gaussian elimination with partial pivoting (the independent oracle).
     fn dense_solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Vec<f64> {
@@ -683,12 +670,12 @@ mod tests {
             if i == j {
                 continue;
             }
-            let w = 0.1 + rng.next();
+            let w = 0.1 + rng.uniform();
             dense[i][j] -= w;
             dense[j][i] -= w;
             dense[i][i] += w;
             dense[j][j] += w;
-            let (r, c) = if rng.next() < 0.5 { (i, j) } else { (j, i) };
+            let (r, c) = if rng.uniform() < 0.5 { (i, j) } else { (j, i) };
             // split into two duplicates
             t.push((r as u32, c as u32, -0.3 * w));
             t.push((r as u32, c as u32, -0.7 * w));
@@ -696,7 +683,7 @@ mod tests {
             t.push((j as u32, j as u32, w));
         }
         for (i, row) in dense.iter_mut().enumerate() {
-            let d = 0.05 + rng.next();
+            let d = 0.05 + rng.uniform();
             row[i] += d;
             t.push((i as u32, i as u32, d));
         }
@@ -715,8 +702,8 @@ mod tests {
         let mut rng = Rng(7);
         for &n in &[1usize, 2, 5, 30, 80] {
             let (t, dense) = random_spd(n, 3 * n, &mut rng);
-            let b1: Vec<f64> = (0..n).map(|_| rng.next() - 0.5).collect();
-            let b2: Vec<f64> = (0..n).map(|_| rng.next() * 3.0).collect();
+            let b1: Vec<f64> = (0..n).map(|_| rng.uniform() - 0.5).collect();
+            let b2: Vec<f64> = (0..n).map(|_| rng.uniform() * 3.0).collect();
             let (mut x1, mut x2) = (b1.clone(), b2.clone());
             solve_spd(n, &t, &mut [&mut x1, &mut x2]).unwrap();
             let e1 = dense_solve(dense.clone(), b1);
@@ -745,7 +732,7 @@ mod tests {
                 let (i, j, _) = t[k];
                 if i != j {
                     // pattern from random_spd: two duplicates then two diagonals
-                    let w = 0.1 + rng.next() * (round + 1) as f64;
+                    let w = 0.1 + rng.uniform() * (round + 1) as f64;
                     let (a, b) = (i as usize, j as usize);
                     for (kk, v) in [(k, -0.5 * w), (k + 1, -0.5 * w), (k + 2, w), (k + 3, w)] {
                         vals[slots[kk] as usize] += v;
@@ -756,7 +743,7 @@ mod tests {
                     dense[b][b] += w;
                     k += 4;
                 } else {
-                    let d = 0.05 + rng.next();
+                    let d = 0.05 + rng.uniform();
                     vals[slots[k] as usize] += d;
                     dense[i as usize][i as usize] += d;
                     k += 1;
@@ -765,7 +752,7 @@ mod tests {
             let info = sys.factorize().unwrap();
             assert_eq!(info.shift, 0.0);
             assert_eq!(sys.nnz_factor(), nnz_factor);
-            let b: Vec<f64> = (0..n).map(|_| rng.next() - 0.5).collect();
+            let b: Vec<f64> = (0..n).map(|_| rng.uniform() - 0.5).collect();
             let mut x = b.clone();
             sys.solve_in_place(&mut x).unwrap();
             let expect = dense_solve(dense, b);
@@ -810,7 +797,7 @@ mod tests {
         for (&(_, _, v), &s) in t.iter().zip(&slots) {
             sys.values_mut()[s as usize] += v;
         }
-        let x: Vec<f64> = (0..n).map(|_| rng.next()).collect();
+        let x: Vec<f64> = (0..n).map(|_| rng.uniform()).collect();
         let mut y = vec![0.0; n];
         sys.mul_vec(&x, &mut y).unwrap();
         let expect: Vec<f64> = dense
@@ -941,7 +928,7 @@ mod tests {
                 for _ in 0..4 {
                     let j = rng.below(n);
                     if j != i {
-                        let v = rng.next() - 0.7;
+                        let v = rng.uniform() - 0.7;
                         row[j] += v;
                         off += v.abs();
                         t.push((i as u32, j as u32, v));
@@ -951,7 +938,7 @@ mod tests {
                 t.push((i as u32, i as u32, 0.5 * (off + 0.5)));
                 t.push((i as u32, i as u32, 0.5 * (off + 0.5)));
             }
-            let b: Vec<f64> = (0..n).map(|_| rng.next() - 0.5).collect();
+            let b: Vec<f64> = (0..n).map(|_| rng.uniform() - 0.5).collect();
             let mut x = b.clone();
             let mut y = b.iter().map(|v| 2.0 * v).collect::<Vec<_>>();
             solve_general(n, &t, &mut [&mut x, &mut y]).unwrap();

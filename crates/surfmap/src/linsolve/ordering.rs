@@ -156,17 +156,7 @@ mod tests {
     use super::*;
     use crate::mesh::generate::grid_disc;
 
-    /// Deterministic pseudo-random numbers in [0, 1) (splitmix64).
-    struct Rng(u64);
-    impl Rng {
-        fn next(&mut self) -> f64 {
-            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-        }
-    }
+    use crate::testing::Rng;
 
     /// A random SPD matrix on the 2×2-block pattern of a grid mesh (every vertex pair of
     /// a triangle couples all components), with vertex 0 and the `v` of vertex `last`
@@ -193,7 +183,7 @@ mod tests {
                     for (ci, cj) in [(0, 0), (0, 1), (1, 0), (1, 1)] {
                         let (a, b) = (dof[2 * tri[i] as usize + ci], dof[2 * tri[j] as usize + cj]);
                         if a != u32::MAX && b != u32::MAX {
-                            let w = rng.next() - 0.5;
+                            let w = rng.uniform() - 0.5;
                             t.push((a, b, w));
                             diag[a as usize] += w.abs();
                             diag[b as usize] += w.abs();
@@ -230,7 +220,7 @@ mod tests {
         let nv = mesh.num_vertices();
         let (dof, t) = block_system(&mesh.triangles, nv, &mut rng);
         let n = 2 * nv - 3;
-        let b: Vec<f64> = (0..n).map(|_| rng.next() - 0.5).collect();
+        let b: Vec<f64> = (0..n).map(|_| rng.uniform() - 0.5).collect();
         let vertices = VertexOrdering::of_triangles(nv, &mesh.triangles).unwrap();
         let expanded = vertices.expand(2, &dof).unwrap();
         // A reversed identity as a third, arbitrary permutation.

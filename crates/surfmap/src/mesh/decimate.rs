@@ -1156,17 +1156,7 @@ impl State {
         if !self.dirty[ui] && (t == NONE || self.cost(u, t) == self.cost_now[ui]) {
             return;
         }
-        let (mut candidates, mut ring) = (
-            std::mem::take(&mut self.candidates),
-            std::mem::take(&mut self.scratch),
-        );
-        self.candidates_of(u, &mut candidates, &mut ring);
-        let best = candidates
-            .iter()
-            .copied()
-            .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        self.candidates = candidates;
-        self.scratch = ring;
+        let best = self.cheapest_target(u);
         self.set_choice(u, best);
         self.dirty[ui] = false;
     }

@@ -352,7 +352,7 @@ pub fn flatten_with_progress(
         }
     };
     let start_flipped = admissible(&mut uv);
-    if start_flipped > 0 && start != StartMap::Lscm && start != StartMap::MeanValue {
+    if start_flipped > 0 && matches!(start, StartMap::Given | StartMap::Multilevel) {
         return Err(FlattenError::GivenStartFlipped(start_flipped));
     }
     if start_flipped > 0 && options.start == StartChoice::Lscm {
