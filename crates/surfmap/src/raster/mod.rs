@@ -44,12 +44,8 @@ pub enum RasterError {
     DegenerateDomain,
     #[error("{count} UVs given for a mesh with {num_vertices} vertices")]
     UvCount { count: usize, num_vertices: usize },
-    #[error("triangle {triangle} uses vertex {vertex}, but the mesh has {num_vertices} vertices")]
-    BadVertexIndex {
-        triangle: usize,
-        vertex: usize,
-        num_vertices: usize,
-    },
+    #[error(transparent)]
+    Index(#[from] crate::mesh::IndexError),
     #[error(
         "triangle {triangle} is flipped or degenerate in the flattening (signed area {signed_area:e}); geometry images need a flip-free flattening"
     )]
