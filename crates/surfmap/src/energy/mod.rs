@@ -17,7 +17,7 @@
 //!
 //! Every density is defined for `a > 0, d > 0` and returns its value with first and
 //! second partial derivatives in `(a, d)` ([`Density::eval`]); nothing here knows about
-//! triangles, so the same call serves a grid tensor. [`crate::param::element`] pulls the
+//! triangles, so the same call serves a grid tensor. `param::element` pulls the
 //! derivatives back to a triangle's UV coordinates.
 //!
 //! One file per density: [`litke`] (2.5) with its weights [`Alpha`],

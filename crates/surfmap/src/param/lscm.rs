@@ -14,9 +14,10 @@
 //! conformal (similarity-per-triangle) map. `E_C(x) = xᵀ Q x` is a positive semi-definite
 //! quadratic form whose null space on a disc is the 4-dimensional group of similarities;
 //! pinning two vertices removes it and the reduced system `Q_ff x_f = −Q_fp x_p` is
-//! symmetric positive definite (solved with [`crate::linsolve::solve_spd`]).
+//! symmetric positive definite (solved with `linsolve::solve_spd`).
 //!
-//! LSCM has no guarantee against flipped triangles (NOTES.md §1): check the result
+//! LSCM has no guarantee against flipped triangles (the thesis assumes an admissible
+//! start, §3.1.1; CGAL's documentation says LSCM can fold): check the result
 //! with [`super::count_flipped`] and fall back to [`super::tutte::mean_value`].
 
 use super::{InitialMapError, check_positions};

@@ -4,7 +4,7 @@
 //! Each iteration:
 //! 1. assembles the gradient and the per-triangle Hessians, each projected to positive
 //!    semi-definite in closed form ([`element::gradient_and_projected_hessian`]);
-//! 2. solves `H p = −∇E` (the sign NOTES.md §1 corrects in thesis (3.1)) with a sparse
+//! 2. solves `H p = −∇E` (thesis (3.1) prints `+∇E`; the descent direction needs `−∇E`) with a sparse
 //!    Cholesky whose symbolic factorization is computed once, in [`NewtonSolver::new`];
 //! 3. steps along `p` with Armijo backtracking (thesis fig. 3.3) started at or below
 //!    the largest flip-free step, so no accepted iterate has `det J ≤ 0` anywhere; an

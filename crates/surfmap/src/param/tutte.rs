@@ -7,7 +7,7 @@
 //! triangles) for any disc mesh when the boundary polygon is convex and (strictly)
 //! every interior vertex has positive weights — which both weightings guarantee.
 //! These are the fallback when the free-boundary conformal map of thesis §3.1.1
-//! ([`super::lscm`]) is not admissible (NOTES.md §1).
+//! ([`super::lscm`]) is not admissible (flips a triangle).
 
 use super::{InitialMapError, check_positions};
 use crate::linsolve::{Unknowns, solve_general, solve_spd};

@@ -11,7 +11,7 @@
 //! `faces/flame/flame_scan.obj` as 47591 instead of 47653 vertices); `ply-rs-bw` is fast enough
 //! (igea.ply in 20–40 ms) but reports binary errors by element index, not byte offset.
 //!
-//! Writers go through [`crate::fsutil::write_atomically`]; text formats print every `f64` with
+//! Writers go through `fsutil::write_atomically`; text formats print every `f64` with
 //! `{}` (the shortest string that parses back to the same bits), PLY writes doubles.
 
 mod obj;
