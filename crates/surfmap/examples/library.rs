@@ -58,7 +58,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             for d in &defects {
                 println!("refused: {}", d.message());
             }
-            assert!(defects.iter().any(|d| d.kind == DefectKind::SeveralBoundaryLoops));
+            assert!(
+                defects
+                    .iter()
+                    .any(|d| d.kind == DefectKind::SeveralBoundaryLoops)
+            );
         }
         other => panic!("expected a refusal, got {other:?}"),
     }
@@ -73,7 +77,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         map.start_description(),
         map.warm_start_iterations,
         map.iterations,
-        if map.converged { "converged" } else { "NOT converged" },
+        if map.converged {
+            "converged"
+        } else {
+            "NOT converged"
+        },
         map.energy,
         map.flipped_triangles,
         map.time_total

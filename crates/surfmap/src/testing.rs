@@ -70,6 +70,16 @@ impl Rng {
     }
 }
 
+/// The largest coordinate difference `max_i max(|p_i.u − q_i.u|, |p_i.v − q_i.v|)` of two
+/// lists of UVs of the same length.
+pub fn max_uv_difference(p: &[[f64; 2]], q: &[[f64; 2]]) -> f64 {
+    assert_eq!(p.len(), q.len(), "UV lists of different lengths");
+    p.iter()
+        .zip(q)
+        .map(|(p, q)| (p[0] - q[0]).abs().max((p[1] - q[1]).abs()))
+        .fold(0.0, f64::max)
+}
+
 /// Every energy density with a name: the four Litke presets, Litke without the angle
 /// term (matching's regularization (2.8)), symmetric Dirichlet, MIPS and ARAP (tests
 /// run each property over all of them).

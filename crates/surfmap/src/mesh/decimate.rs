@@ -40,7 +40,7 @@
 //! (534k vertices) to 20k: about 1.2 s in release on one core, plus 0.4 s for
 //! [`Disc::new`] (`examples/decimate_bench.rs`).
 
-use super::{Disc, NotADisc, TriMesh};
+use super::{Disc, NotADisc, PositionError, TriMesh};
 use crate::vec3::{cross3, dot3, sub3};
 
 /// No vertex / no face.
@@ -85,12 +85,8 @@ impl Default for DecimateOptions {
 pub enum DecimateError {
     #[error(transparent)]
     NotADisc(#[from] NotADisc),
-    #[error(
-        "{positions} positions for a disc of {vertices} vertices; give one position per vertex"
-    )]
-    PositionCount { positions: usize, vertices: usize },
-    #[error("vertex {vertex} has a NaN or infinite coordinate")]
-    NonFiniteCoordinates { vertex: u32 },
+    #[error(transparent)]
+    Positions(#[from] PositionError),
     #[error("invalid decimation option: {0}")]
     InvalidOption(&'static str),
 }
@@ -248,18 +244,7 @@ pub fn decimate_with(
     options: &DecimateOptions,
 ) -> Result<Decimation, DecimateError> {
     check_options(options)?;
-    if positions.len() != disc.num_vertices() {
-        return Err(DecimateError::PositionCount {
-            positions: positions.len(),
-            vertices: disc.num_vertices(),
-        });
-    }
-    if let Some(v) = positions
-        .iter()
-        .position(|p| p.iter().any(|x| !x.is_finite()))
-    {
-        return Err(DecimateError::NonFiniteCoordinates { vertex: v as u32 });
-    }
+    disc.check_positions(positions)?;
     let mut state = State::new(positions, disc, options);
     let target = options.target_vertices;
     while state.live > target {
@@ -1129,8 +1114,8 @@ mod tests {
     use super::*;
     use crate::mesh::Topology;
     use crate::mesh::generate::{
-        bumpy_disc, cylinder_patch, disc_boundary, grid_disc, polar_disc, spherical_cap,
-        unit_square,
+        bumpy_disc, cylinder_patch, disc_boundary, grid_disc, octahedron, polar_disc,
+        spherical_cap, unit_square,
     };
     use crate::mesh::validate::{DefectKind, validate};
 
@@ -1474,26 +1459,7 @@ mod tests {
 
     #[test]
     fn non_disc_input_is_refused_with_the_reason() {
-        let octahedron = TriMesh::new(
-            vec![
-                [1., 0., 0.],
-                [-1., 0., 0.],
-                [0., 1., 0.],
-                [0., -1., 0.],
-                [0., 0., 1.],
-                [0., 0., -1.],
-            ],
-            vec![
-                [0, 2, 4],
-                [2, 1, 4],
-                [1, 3, 4],
-                [3, 0, 4],
-                [2, 0, 5],
-                [1, 2, 5],
-                [3, 1, 5],
-                [0, 3, 5],
-            ],
-        );
+        let octahedron = octahedron();
         assert_eq!(
             refused(decimate(&octahedron, 3)),
             [DefectKind::ClosedSurface]
@@ -1566,16 +1532,18 @@ mod tests {
         // Positions that do not fit the disc.
         assert!(matches!(
             decimate_with(&mesh.positions[1..], &disc, &DecimateOptions::default()),
-            Err(DecimateError::PositionCount {
+            Err(DecimateError::Positions(PositionError::Count {
                 positions: 8,
                 vertices: 9
-            })
+            }))
         ));
         let mut moved = mesh.positions.clone();
         moved[2][0] = f64::INFINITY;
         assert!(matches!(
             decimate_with(&moved, &disc, &DecimateOptions::default()),
-            Err(DecimateError::NonFiniteCoordinates { vertex: 2 })
+            Err(DecimateError::Positions(PositionError::NonFinite {
+                vertex: 2
+            }))
         ));
     }
 

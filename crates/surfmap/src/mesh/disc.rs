@@ -36,6 +36,17 @@ pub enum NotADisc {
     Defects(Vec<Defect>),
 }
 
+/// Positions that do not fit a disc ([`Disc::check_positions`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum PositionError {
+    #[error(
+        "{positions} positions for a disc of {vertices} vertices; give one position per vertex"
+    )]
+    Count { positions: usize, vertices: usize },
+    #[error("position of vertex {vertex} is not finite; fix or remove it")]
+    NonFinite { vertex: u32 },
+}
+
 /// Defects as an indented list, one `  - message` line each.
 pub(crate) fn list_defects(defects: &[Defect]) -> String {
     defects
@@ -121,6 +132,24 @@ impl<'m> Disc<'m> {
         &self.topology
     }
 
+    /// Checks positions passed beside the disc (its own, or a rescaled copy): one per
+    /// vertex, all finite.
+    pub fn check_positions(&self, positions: &[[f64; 3]]) -> Result<(), PositionError> {
+        if positions.len() != self.num_vertices {
+            return Err(PositionError::Count {
+                positions: positions.len(),
+                vertices: self.num_vertices,
+            });
+        }
+        match positions
+            .iter()
+            .position(|p| p.iter().any(|x| !x.is_finite()))
+        {
+            Some(v) => Err(PositionError::NonFinite { vertex: v as u32 }),
+            None => Ok(()),
+        }
+    }
+
     /// Whether some vertex is used by no triangle.
     pub fn has_unreferenced_vertices(&self) -> bool {
         self.topology.num_used_vertices < self.num_vertices
@@ -165,7 +194,7 @@ fn surface_on_the_left(triangles: &[[u32; 3]], num_vertices: usize, boundary: &[
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::generate::{disc_boundary, grid_disc, polar_disc, unit_square};
+    use crate::mesh::generate::{disc_boundary, grid_disc, octahedron, polar_disc, unit_square};
     use crate::mesh::validate::DefectKind;
 
     fn kinds(err: NotADisc) -> Vec<DefectKind> {
@@ -195,26 +224,7 @@ mod tests {
 
     #[test]
     fn every_blocking_defect_is_listed_with_its_remedy() {
-        let octahedron = TriMesh::new(
-            vec![
-                [1., 0., 0.],
-                [-1., 0., 0.],
-                [0., 1., 0.],
-                [0., -1., 0.],
-                [0., 0., 1.],
-                [0., 0., -1.],
-            ],
-            vec![
-                [0, 2, 4],
-                [2, 1, 4],
-                [1, 3, 4],
-                [3, 0, 4],
-                [2, 0, 5],
-                [1, 2, 5],
-                [3, 1, 5],
-                [0, 3, 5],
-            ],
-        );
+        let octahedron = octahedron();
         assert_eq!(
             kinds(Disc::new(&octahedron).unwrap_err()),
             [DefectKind::ClosedSurface]

@@ -11,7 +11,7 @@ pub mod subdivide;
 pub mod topology;
 pub mod validate;
 
-pub use disc::{Disc, NotADisc};
+pub use disc::{Disc, NotADisc, PositionError};
 pub use topology::{BoundaryLoop, Topology};
 
 use crate::vec3::{cross3, norm3, sub3};

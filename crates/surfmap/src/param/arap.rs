@@ -228,11 +228,7 @@ mod tests {
             .unwrap()
             .target(&uv, &mut b)
             .unwrap();
-        let diff = a
-            .iter()
-            .zip(&b)
-            .map(|(p, q)| (p[0] - q[0]).abs().max((p[1] - q[1]).abs()))
-            .fold(0.0, f64::max);
+        let diff = crate::testing::max_uv_difference(&a, &b);
         assert!(diff < 1e-9, "{diff}");
         assert!(a.iter().zip(&uv).any(|(p, q)| (p[0] - q[0]).abs() > 1e-3));
         let other = VertexOrdering::of_triangles(n + 1, &mesh.triangles).unwrap();

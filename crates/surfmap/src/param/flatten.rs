@@ -222,7 +222,7 @@ impl FlattenOptions {
     /// Checks the numeric settings (called by [`flatten`]).
     pub fn validate(&self) -> Result<(), OptionError> {
         let n = &self.newton;
-        if !(n.tolerance > 0.0) {
+        if n.tolerance.is_nan() || n.tolerance <= 0.0 {
             return Err(OptionError::Tolerance(n.tolerance));
         }
         if !(n.armijo_c > 0.0 && n.armijo_c < 1.0) {

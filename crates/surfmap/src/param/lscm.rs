@@ -297,27 +297,14 @@ mod tests {
 
     #[test]
     fn positions_must_fit_the_disc() {
+        // The checks themselves are tested with `check_positions`; here only that LSCM
+        // runs them.
         let mesh = grid_disc(2);
         let disc = Disc::new(&mesh).unwrap();
-        assert_eq!(
+        assert!(matches!(
             lscm(&mesh.positions[1..], &disc),
-            Err(InitialMapError::PositionCount {
-                positions: 8,
-                vertices: 9
-            })
-        );
-        let mut nan = mesh.positions.clone();
-        nan[4][1] = f64::NAN;
-        assert_eq!(
-            lscm(&nan, &disc),
-            Err(InitialMapError::NonFinitePosition { vertex: 4 })
-        );
-        let mut extra = mesh.clone();
-        extra.positions.push([0.0; 3]);
-        assert_eq!(
-            lscm(&extra.positions, &Disc::new(&extra).unwrap()),
-            Err(InitialMapError::UnreferencedVertex { vertex: 9 })
-        );
+            Err(InitialMapError::Positions(_))
+        ));
     }
 
     fn gcd(a: usize, b: usize) -> usize {

@@ -15,7 +15,7 @@ pub mod newton;
 pub mod tutte;
 
 use crate::linsolve::SolveError;
-use crate::mesh::Disc;
+use crate::mesh::{Disc, PositionError};
 
 /// Signed area of a UV triangle, `½ ((b − a) × (c − a))`: positive when `a, b, c` turn
 /// counter-clockwise.
@@ -40,12 +40,8 @@ pub fn count_flipped(uvs: &[[f64; 2]], triangles: &[[u32; 3]]) -> usize {
 /// Why an initial map ([`lscm`], [`tutte`]) could not be computed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum InitialMapError {
-    #[error(
-        "{positions} positions for a disc of {vertices} vertices; give one position per vertex"
-    )]
-    PositionCount { positions: usize, vertices: usize },
-    #[error("position of vertex {vertex} is not finite; fix or remove it")]
-    NonFinitePosition { vertex: u32 },
+    #[error(transparent)]
+    Positions(#[from] PositionError),
     #[error(
         "vertex {vertex} is used by no triangle; remove unreferenced vertices first (`repair::drop_unreferenced`)"
     )]
@@ -62,21 +58,11 @@ pub enum InitialMapError {
     Solve(#[from] SolveError),
 }
 
-/// Checks what the initial maps need beyond a [`Disc`]: one finite position per vertex,
-/// and every vertex used by a triangle (an unused one would make the systems singular).
+/// Checks what the initial maps need beyond a [`Disc`]: one finite position per vertex
+/// ([`Disc::check_positions`]), and every vertex used by a triangle (an unused one would
+/// make the systems singular).
 pub(crate) fn check_positions(positions: &[[f64; 3]], disc: &Disc) -> Result<(), InitialMapError> {
-    if positions.len() != disc.num_vertices() {
-        return Err(InitialMapError::PositionCount {
-            positions: positions.len(),
-            vertices: disc.num_vertices(),
-        });
-    }
-    if let Some(v) = positions
-        .iter()
-        .position(|p| p.iter().any(|x| !x.is_finite()))
-    {
-        return Err(InitialMapError::NonFinitePosition { vertex: v as u32 });
-    }
+    disc.check_positions(positions)?;
     match disc.first_unreferenced_vertex() {
         Some(vertex) => Err(InitialMapError::UnreferencedVertex { vertex }),
         None => Ok(()),
@@ -203,16 +189,18 @@ mod tests {
         assert_eq!(check_positions(&mesh.positions, &disc), Ok(()));
         assert_eq!(
             check_positions(&mesh.positions[..8], &disc),
-            Err(InitialMapError::PositionCount {
+            Err(InitialMapError::Positions(PositionError::Count {
                 positions: 8,
                 vertices: 9
-            })
+            }))
         );
         let mut nan = mesh.positions.clone();
         nan[4][1] = f64::NAN;
         assert_eq!(
             check_positions(&nan, &disc),
-            Err(InitialMapError::NonFinitePosition { vertex: 4 })
+            Err(InitialMapError::Positions(PositionError::NonFinite {
+                vertex: 4
+            }))
         );
         let mut extra = mesh.clone();
         extra.positions.push([0.0; 3]);

@@ -634,11 +634,7 @@ mod tests {
         let (b, it_b, e_b) = run(Some(&ordering));
         assert_eq!(it_a, it_b);
         assert!(it_a > 0 && (e_a - e_b).abs() <= 1e-12 * e_a.abs());
-        let diff = a
-            .iter()
-            .zip(&b)
-            .map(|(p, q)| (p[0] - q[0]).abs().max((p[1] - q[1]).abs()))
-            .fold(0.0, f64::max);
+        let diff = crate::testing::max_uv_difference(&a, &b);
         assert!(diff < 1e-9, "{diff}");
     }
 }
