@@ -365,16 +365,7 @@ fn check_writable(path: &Path, mesh: &TriMesh) -> Result<(), WriteError> {
     if nv > u32::MAX as usize {
         return Err(invalid(format!("{nv} vertices cannot be indexed by u32")));
     }
-    if let Some((t, tri)) = mesh
-        .triangles
-        .iter()
-        .enumerate()
-        .find(|(_, tri)| tri.iter().any(|&i| i as usize >= nv))
-    {
-        return Err(invalid(format!(
-            "triangle {t} {tri:?} uses a vertex beyond the {nv} vertices"
-        )));
-    }
+    mesh.check_indices().map_err(|e| invalid(e.to_string()))?;
     match &mesh.uvs {
         None => {}
         Some(Uvs::PerVertex(uv)) if uv.len() != nv => {
