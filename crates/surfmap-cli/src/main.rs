@@ -52,15 +52,48 @@ fn main() {
         Command::Images(a) => cmd::images::run(a),
     };
     if let Err(e) = result {
-        // Print the chain of causes, skipping a cause its parent already quotes.
-        let mut message = e.to_string();
-        for cause in e.chain().skip(1) {
-            let c = cause.to_string();
-            if !message.contains(&c) {
-                message = format!("{message}: {c}");
-            }
-        }
-        eprintln!("error: {message}");
+        eprintln!("error: {}", error_message(&e));
         std::process::exit(1);
+    }
+}
+
+/// The chain of causes in one line, each piece once: a cause the message already quotes
+/// is skipped, and a context that its cause quotes (such as "cannot write X" around an
+/// error that names X itself) gives way to the cause.
+fn error_message(e: &anyhow::Error) -> String {
+    let mut pieces = vec![e.to_string()];
+    for cause in e.chain().skip(1) {
+        let c = cause.to_string();
+        if pieces.join(": ").contains(&c) {
+            continue;
+        }
+        let last = pieces.last_mut().expect("one piece at least");
+        if c.contains(last.as_str()) {
+            *last = c;
+        } else {
+            pieces.push(c);
+        }
+    }
+    pieces.join(": ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::error_message;
+    use anyhow::Context;
+
+    #[test]
+    fn each_piece_of_an_error_appears_once() {
+        let io = std::io::Error::other("permission denied");
+        let inner: anyhow::Result<()> = Err(anyhow::Error::new(io).context("cannot write a.obj"));
+        // A context that repeats its cause's own text.
+        let e = inner.context("cannot write a.obj").unwrap_err();
+        assert_eq!(error_message(&e), "cannot write a.obj: permission denied");
+        // A cause that repeats the context: the cause alone.
+        let e = anyhow::anyhow!("cannot write b.obj: disk full").context("cannot write b.obj");
+        assert_eq!(error_message(&e), "cannot write b.obj: disk full");
+        // Distinct pieces are all kept, in order.
+        let e = anyhow::anyhow!("no such file").context("cannot read c.off");
+        assert_eq!(error_message(&e), "cannot read c.off: no such file");
     }
 }

@@ -88,7 +88,7 @@ fn every_disc_mesh_flattens_without_flips_at_both_presets() {
 
 #[test]
 fn non_disc_inputs_get_a_clear_error() {
-    let Some(data) = data_dir() else { return };
+    let Some(data) = shared_data() else { return };
     let dir = temp_dir("flatten-nondisc");
     for (file, says) in [
         ("bunny.off", "closed"),
@@ -157,7 +157,7 @@ fn invalid_alpha_is_rejected_with_a_reason() {
 
 #[test]
 fn face_scans_with_open_eyes_and_mouth_flatten_with_fill_holes() {
-    let Some(data) = data_dir() else { return };
+    let Some(data) = shared_data() else { return };
     let dir = temp_dir("fill-holes");
     for (file, extra) in [
         ("faces/ict/ict_neutral.obj", vec![]),
@@ -219,7 +219,7 @@ fn normalize_and_uv_as_positions_write_the_flat_unit_layout() {
 
 #[test]
 fn multilevel_start_reaches_the_single_level_minimum_on_a_real_scan() {
-    let Some(data) = data_dir() else { return };
+    let Some(data) = shared_data() else { return };
     let dir = temp_dir("multilevel");
     let input = data.join("faces/face_bff.obj");
     let mut energies = Vec::new();
@@ -274,7 +274,7 @@ fn multilevel_start_reaches_the_single_level_minimum_on_a_real_scan() {
 
 #[test]
 fn an_explicit_start_is_honoured_and_its_failure_explained() {
-    let Some(data) = data_dir() else { return };
+    let Some(data) = shared_data() else { return };
     let dir = temp_dir("explicit-start");
     let out = dir.join("out.obj");
     // Auto multilevel (camelhead has 22.7k faces) yields to an explicit --start.
@@ -294,5 +294,43 @@ fn an_explicit_start_is_honoured_and_its_failure_explained() {
         stderr.contains("LSCM start flips") && stderr.contains("--start auto"),
         "{stderr}"
     );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_failed_write_is_reported_once_and_contradictory_flags_are_refused() {
+    let dir = temp_dir("write-fail");
+    run_demo(&dir, 4);
+    let out = dir.join("no-such-folder").join("x.obj");
+    let run = flatten(&dir.join("surface.obj"), &["--quiet"], &out);
+    assert_eq!(run.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(err.matches("cannot write").count(), 1, "{err}");
+    assert!(err.contains("no-such-folder"), "{err}");
+    // The library's checks, worded as flags.
+    for (flags, says) in [
+        (vec!["--tolerance", "0"], "--tolerance must be positive"),
+        (
+            vec!["--coarse-vertices", "3"],
+            "--coarse-vertices must be at least 16",
+        ),
+        (
+            vec!["--start", "lscm", "--multilevel", "on"],
+            "needs --start auto",
+        ),
+        (
+            vec!["--energy", "sd", "--from-alpha", "1,1,1"],
+            "needs --energy litke",
+        ),
+    ] {
+        let run = flatten(&dir.join("surface.obj"), &flags, &dir.join("y.obj"));
+        assert_eq!(run.status.code(), Some(1), "{flags:?}");
+        let err = String::from_utf8_lossy(&run.stderr);
+        assert!(err.contains(says), "{flags:?}: {err}");
+        assert!(
+            !err.contains("FlattenOptions") && !err.contains("CoarseLevel"),
+            "{err}"
+        );
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }

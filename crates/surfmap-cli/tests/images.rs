@@ -285,12 +285,9 @@ fn bad_input_fails_with_a_message_naming_the_problem() {
 #[test]
 fn real_face_if_present() {
     // A small real mesh with its own UVs (MediaPipe canonical face); skipped without data.
-    let Some(d) = data_dir() else { return };
-    let mesh = d.join("faces/mp_canonical.obj");
-    if !mesh.is_file() {
-        eprintln!("note: {} missing; skipped", mesh.display());
+    let Some(mesh) = shared_file("faces/mp_canonical.obj") else {
         return;
-    }
+    };
     let dir = temp_dir("images-face");
     let out = run(&[
         mesh.as_os_str(),
@@ -309,7 +306,7 @@ fn real_face_if_present() {
 fn face_with_open_eyes_and_mouth_with_fill_holes() {
     // ICT face crop: 4 boundary loops (outer rim, mouth, two eyes). Without
     // --fill-holes it is refused; with it, the holes stay outside the surface mask.
-    let Some(d) = data_dir() else { return };
+    let Some(d) = shared_data() else { return };
     let mesh = d.join("faces/ict/ict_neutral.obj");
     let dir = temp_dir("images-ict");
     let size: &std::ffi::OsStr = "65".as_ref();

@@ -127,7 +127,7 @@ fn inspect_json_agrees_with_manifest_on_every_mesh() {
 
 #[test]
 fn messy_mesh_report_locates_defects() {
-    let Some(dir) = data_dir() else { return };
+    let Some(dir) = shared_data() else { return };
     let out = surfmap()
         .arg("inspect")
         .arg(dir.join("beetle_messy.obj"))

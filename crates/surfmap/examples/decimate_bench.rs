@@ -7,10 +7,10 @@
 //! distance to that (coarse) face; this over-estimates its distance to the coarse
 //! surface, so the max is an upper bound over those vertices.
 use std::time::Instant;
-use surfmap::mesh::Topology;
 use surfmap::mesh::decimate::{DecimateOptions, decimate_with};
 use surfmap::mesh::io::read_mesh;
 use surfmap::mesh::subdivide::subdivide_midpoint;
+use surfmap::{Disc, Topology};
 
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
@@ -100,14 +100,20 @@ fn main() {
         mesh.triangles.len()
     );
     let t = Instant::now();
-    let topology = Topology::new(&mesh);
+    let disc = match Disc::new(&mesh) {
+        Ok(d) => d,
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::exit(1);
+        }
+    };
     let t_topology = t.elapsed().as_secs_f64();
     let t = Instant::now();
     let options = DecimateOptions {
         target_vertices: target,
         ..Default::default()
     };
-    let dec = match decimate_with(&mesh, &topology, &options) {
+    let dec = match decimate_with(&mesh.positions, &disc, &options) {
         Ok(d) => d,
         Err(e) => {
             eprintln!("error: {e}");
@@ -117,7 +123,7 @@ fn main() {
     let t_decimate = t.elapsed().as_secs_f64();
     let (coarse, _) = dec.coarse_mesh(&mesh);
     println!(
-        "Topology::new {t_topology:.3} s, decimate_with {t_decimate:.3} s ({} collapses, {} changed-face records)",
+        "Disc::new {t_topology:.3} s, decimate_with {t_decimate:.3} s ({} collapses, {} changed-face records)",
         dec.collapses.len(),
         dec.changed_faces.len()
     );

@@ -6,9 +6,9 @@
 use std::hint::black_box;
 use std::time::Instant;
 
-use surfmap::param::density::{EnergyKind, Litke};
 use surfmap::param::element::{RestTriangle, energy, gradient_and_projected_hessian};
 use surfmap::param::flip_free::flip_free_step;
+use surfmap::{Alpha, Energy};
 
 use surfmap::testing::Rng;
 
@@ -52,7 +52,7 @@ fn main() {
             [rng.uniform() - 0.5, rng.uniform() - 0.5]
         }));
     }
-    let density = EnergyKind::Litke(Litke::balanced());
+    let density = Energy::litke(Alpha::balanced());
     let runs = 9;
 
     let e_ns = median_ns_per_item(runs, n, || {

@@ -6,10 +6,8 @@
 
 use std::path::PathBuf;
 use std::time::Instant;
-use surfmap::mesh::io::read_mesh;
 use surfmap::param::count_flipped;
-use surfmap::param::density::{EnergyKind, Litke};
-use surfmap::param::flatten::{FlattenOptions, flatten};
+use surfmap::{Alpha, Energy, FlattenOptions, flatten, read_mesh};
 
 fn main() {
     let mut args: Vec<String> = std::env::args().skip(1).collect();
@@ -18,10 +16,12 @@ fn main() {
         repeat = args[i + 1].parse().expect("--repeat N");
         args.drain(i..i + 2);
     }
-    let data = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data"));
     let meshes: Vec<PathBuf> = if args.is_empty() {
+        let Some(data) = surfmap::testing::shared_data() else {
+            return;
+        };
         let m: serde_json::Value = serde_json::from_str(
-            &std::fs::read_to_string(data.join("manifest.json")).expect("../shared/data"),
+            &std::fs::read_to_string(data.join("manifest.json")).expect("readable manifest"),
         )
         .unwrap();
         m["files"]
@@ -42,14 +42,11 @@ fn main() {
         let file = read_mesh(&path).expect("readable");
         let mesh = file.mesh;
         for (label, energy) in [
-            ("conformal", EnergyKind::Litke(Litke::conformal())),
-            ("balanced", EnergyKind::Litke(Litke::balanced())),
-            ("sd", EnergyKind::SymmetricDirichlet),
+            ("conformal", Energy::litke(Alpha::conformal())),
+            ("balanced", Energy::litke(Alpha::balanced())),
+            ("sd", Energy::SymmetricDirichlet),
         ] {
-            let opts = FlattenOptions {
-                energy,
-                ..Default::default()
-            };
+            let opts = FlattenOptions::new(energy);
             let mut times = Vec::new();
             let mut last = None;
             for _ in 0..repeat {

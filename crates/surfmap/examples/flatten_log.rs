@@ -1,7 +1,6 @@
 //! Prints the per-iteration Newton log of one flattening (thesis fig. 4.1 data).
 //! `cargo run --release -p surfmap --example flatten_log -- MESH [conformal|balanced|sd]`
-use surfmap::param::density::{EnergyKind, Litke};
-use surfmap::param::flatten::{FlattenOptions, flatten};
+use surfmap::{Alpha, Energy, FlattenOptions, flatten};
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -9,18 +8,11 @@ fn main() {
         .expect("readable")
         .mesh;
     let energy = match args.get(1).map(String::as_str) {
-        Some("conformal") => EnergyKind::Litke(Litke::conformal()),
-        Some("sd") => EnergyKind::SymmetricDirichlet,
-        _ => EnergyKind::Litke(Litke::balanced()),
+        Some("conformal") => Energy::litke(Alpha::conformal()),
+        Some("sd") => Energy::SymmetricDirichlet,
+        _ => Energy::litke(Alpha::balanced()),
     };
-    let r = flatten(
-        &mesh,
-        &FlattenOptions {
-            energy,
-            ..Default::default()
-        },
-    )
-    .expect("flattened");
+    let r = flatten(&mesh, &FlattenOptions::new(energy)).expect("flattened");
     println!(
         "start {:?}, {} warm-start steps, {} iterations, stop {:?}, total {:.3} s (start map + warm start {:.3} s)",
         r.start, r.warm_start_iterations, r.iterations, r.stop_reason, r.time_total, r.time_start

@@ -10,8 +10,6 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use surfmap::mesh::io::read_mesh;
-use surfmap::param::flatten::{FlattenOptions, flatten};
 use surfmap::raster::output::position_picture;
 use surfmap::raster::picture::{
     contact_sheet, distance_picture, diverging_picture, metric_picture,
@@ -19,26 +17,17 @@ use surfmap::raster::picture::{
 use surfmap::raster::{
     FeatureCurve, FeatureFile, FeatureSource, GeometryImages, GeometryImagesOptions,
 };
+use surfmap::{FlattenOptions, flatten, read_mesh};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    // The shared data folder sits three or four levels above the crate (main checkout or worktree).
-    let path = args
-        .get(1)
-        .filter(|s| !s.is_empty())
-        .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            ["/../../../shared/data", "/../../../../shared/data"]
-                .iter()
-                .map(|d| {
-                    PathBuf::from(format!(
-                        "{}{d}/faces/face_igl.obj",
-                        env!("CARGO_MANIFEST_DIR")
-                    ))
-                })
-                .find(|p| p.exists())
-                .unwrap_or_default()
-        });
+    let path = match args.get(1).filter(|s| !s.is_empty()) {
+        Some(p) => PathBuf::from(p),
+        None => match surfmap::testing::shared_file("faces/face_igl.obj") {
+            Some(p) => p,
+            None => return,
+        },
+    };
     if !path.is_file() {
         println!("note: {} not found; nothing to benchmark", path.display());
         return;

@@ -5,7 +5,8 @@
 //! Run: `cargo run --release -p surfmap --example initial_maps_bench [n]`
 
 use std::time::Instant;
-use surfmap::mesh::generate::{bumpy_disc, disc_boundary};
+use surfmap::Disc;
+use surfmap::mesh::generate::bumpy_disc;
 use surfmap::param::{count_flipped, lscm::lscm, tutte};
 
 fn main() {
@@ -14,14 +15,14 @@ fn main() {
         .and_then(|s| s.parse().ok())
         .unwrap_or(258);
     let mesh = bumpy_disc(n, 0.5);
-    let boundary = disc_boundary(&mesh.triangles).expect("disc");
+    let disc = Disc::new(&mesh).expect("disc");
     println!(
         "bumpy_disc({n}, 0.5): {} vertices, {} triangles, {} boundary vertices",
         mesh.num_vertices(),
         mesh.num_triangles(),
-        boundary.len()
+        disc.boundary().len()
     );
-    let (p, t, b) = (&mesh.positions, &mesh.triangles, &boundary);
+    let (p, t, d) = (&mesh.positions, &mesh.triangles, &disc);
     let time = |name: &str, f: &dyn Fn() -> Vec<[f64; 2]>| {
         let start = Instant::now();
         let uv = f();
@@ -31,11 +32,9 @@ fn main() {
             count_flipped(&uv, t)
         );
     };
-    time("lscm", &|| lscm(p, t, b).expect("lscm").uv);
+    time("lscm", &|| lscm(p, d).expect("lscm").uv);
     time("mean_value", &|| {
-        tutte::mean_value(p, t, b).expect("mean value")
+        tutte::mean_value(p, d).expect("mean value")
     });
-    time("uniform", &|| {
-        tutte::tutte_uniform(p, t, b).expect("uniform")
-    });
+    time("uniform", &|| tutte::tutte_uniform(p, d).expect("uniform"));
 }

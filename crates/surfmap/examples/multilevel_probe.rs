@@ -1,15 +1,22 @@
 //! Probe: energy of the multilevel start map (before the fine-level Newton) for
 //! different re-insertion settings.
 //! `cargo run --release -p surfmap --example multilevel_probe -- MESH LEVELS COARSE POLISH...`
-use surfmap::mesh::Topology;
 use surfmap::mesh::decimate::{DecimateOptions, decimate_with};
 use surfmap::mesh::io::read_mesh;
 use surfmap::mesh::subdivide::subdivide_midpoint;
-use surfmap::param::density::Litke;
 use surfmap::param::element::rest_triangles;
-use surfmap::param::flatten::{FlattenOptions, MultilevelOptions, flatten};
 use surfmap::param::multilevel::prolongate;
 use surfmap::param::newton::NewtonSolver;
+use surfmap::{Alpha, Disc, FlattenOptions, Multilevel, Start, flatten};
+
+fn single_level(start: Start) -> FlattenOptions {
+    match start {
+        Start::Auto { .. } => FlattenOptions::default().with_start(Start::Auto {
+            multilevel: Multilevel::Never,
+        }),
+        given => FlattenOptions::default().with_start(given),
+    }
+}
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -19,11 +26,11 @@ fn main() {
     for _ in 0..levels {
         mesh = subdivide_midpoint(&mesh);
     }
-    let topo = Topology::new(&mesh);
+    let disc = Disc::new(&mesh).unwrap();
     let t = std::time::Instant::now();
     let dec = decimate_with(
-        &mesh,
-        &topo,
+        &mesh.positions,
+        &disc,
         &DecimateOptions {
             target_vertices: coarse_vertices,
             ..Default::default()
@@ -32,14 +39,7 @@ fn main() {
     .unwrap();
     let (coarse, orig) = dec.coarse_mesh(&mesh);
     println!("decimate {:.2} s", t.elapsed().as_secs_f64());
-    let flat = flatten(
-        &coarse,
-        &FlattenOptions {
-            multilevel: MultilevelOptions::off(),
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let flat = flatten(&coarse, &single_level(Start::default())).unwrap();
     let scale = mesh.area().sqrt();
     let pos: Vec<[f64; 3]> = mesh
         .positions
@@ -60,7 +60,7 @@ fn main() {
             &mesh.positions,
             &dec,
             &mut uv,
-            &Litke::balanced(),
+            &Alpha::balanced(),
             polish,
             sweeps,
         )
@@ -69,21 +69,13 @@ fn main() {
         let uvn: Vec<[f64; 2]> = uv.iter().map(|p| [p[0] / scale, p[1] / scale]).collect();
         println!(
             "polish {polish} sweeps {sweeps}: E {:.6}, {:.2} s, {:?}",
-            energy(&uvn, &Litke::balanced()),
+            energy(&uvn, &Alpha::balanced()),
             el,
             stats
         );
         if std::env::var("RUN_FINE").is_ok() {
             let t = std::time::Instant::now();
-            let f = flatten(
-                &mesh,
-                &FlattenOptions {
-                    initial_uv: Some(uv),
-                    multilevel: MultilevelOptions::off(),
-                    ..Default::default()
-                },
-            )
-            .unwrap();
+            let f = flatten(&mesh, &single_level(Start::Given(uv))).unwrap();
             println!(
                 "   fine: {} iterations, E {:.6}, {:.2} s",
                 f.iterations,

@@ -2,7 +2,7 @@
 //! time, rest of the symbolic phase, fill of `L`, numeric factorization time.
 //! `cargo run --release -p surfmap --example ordering_probe -- MESH [LEVELS]`
 use std::time::Instant;
-use surfmap::linsolve::{Ordering, SpdSystem, VertexOrdering};
+use surfmap::linsolve::{Ordering, SpdSystem, Unknowns, VertexOrdering};
 
 fn median(mut t: Vec<f64>) -> f64 {
     t.sort_by(f64::total_cmp);
@@ -69,29 +69,19 @@ fn main() {
     let nv = mesh.positions.len();
     // Pins as in a flattening: vertex 0 (both coordinates; alone in the Laplacian),
     // the v coordinate of the last vertex.
-    let mut dof1 = vec![0u32; nv];
-    let mut dof2 = vec![0u32; 2 * nv];
-    dof1[0] = u32::MAX;
-    dof2[0] = u32::MAX;
-    dof2[1] = u32::MAX;
-    dof2[2 * nv - 1] = u32::MAX;
-    for dof in [&mut dof1, &mut dof2] {
-        for (n, d) in dof.iter_mut().filter(|d| **d != u32::MAX).enumerate() {
-            *d = n as u32;
-        }
-    }
+    let dof1 = Unknowns::new(nv, [0]);
+    let dof2 = Unknowns::new(2 * nv, [0, 1, 2 * nv - 1]);
     let (mut lap, mut blk) = (Vec::new(), Vec::new());
     for t in &mesh.triangles {
         for i in 0..3 {
             for j in 0..=i {
                 let (a, b) = (t[i] as usize, t[j] as usize);
-                if dof1[a] != u32::MAX && dof1[b] != u32::MAX {
-                    lap.push((dof1[a], dof1[b]));
+                if let (Some(p), Some(q)) = (dof1.get(a), dof1.get(b)) {
+                    lap.push((p, q));
                 }
                 for ca in 0..2 {
                     for cb in 0..2 {
-                        let (p, q) = (dof2[2 * a + ca], dof2[2 * b + cb]);
-                        if p != u32::MAX && q != u32::MAX {
+                        if let (Some(p), Some(q)) = (dof2.get(2 * a + ca), dof2.get(2 * b + cb)) {
                             blk.push((p, q));
                         }
                     }
@@ -101,21 +91,17 @@ fn main() {
     }
     // LSCM: u–u and v–v couplings on every edge, u–v only along the boundary; vertex 0
     // and the last vertex pinned (both coordinates).
-    let topo = surfmap::Topology::new(&mesh);
-    let boundary = &topo.boundary_loops[0].vertices;
-    let mut dof_lscm = vec![0u32; 2 * nv];
-    for d in [0, 1, 2 * nv - 2, 2 * nv - 1] {
-        dof_lscm[d] = u32::MAX;
-    }
-    let mut m = 0;
-    for d in dof_lscm.iter_mut().filter(|d| **d != u32::MAX) {
-        *d = m;
-        m += 1;
-    }
+    let disc = surfmap::Disc::new(&mesh).expect("a disc");
+    let boundary = disc.boundary();
+    let dof_lscm = Unknowns::new(2 * nv, [0, 1, 2 * nv - 2, 2 * nv - 1]);
+    let m = dof_lscm.count();
     let mut lscm = Vec::new();
     let mut push = |a: u32, ca: usize, b: u32, cb: usize| {
-        let (p, q) = (dof_lscm[2 * a as usize + ca], dof_lscm[2 * b as usize + cb]);
-        if p != u32::MAX && q != u32::MAX {
+        let (p, q) = (
+            dof_lscm.get(2 * a as usize + ca),
+            dof_lscm.get(2 * b as usize + cb),
+        );
+        if let (Some(p), Some(q)) = (p, q) {
             lscm.push((p, q));
         }
     };
@@ -137,10 +123,10 @@ fn main() {
     let (t_vertex, vo) = time(|| VertexOrdering::of_triangles(nv, &mesh.triangles).unwrap());
     // The vertex order implied by AMD on the LSCM system: each vertex where its first
     // unknown is eliminated (pinned vertices last).
-    let lscm_amd = VertexOrdering::of_graph(m as usize, &lscm).unwrap();
-    let mut vertex_of = vec![0u32; m as usize];
-    for (d, &u) in dof_lscm.iter().enumerate() {
-        if u != u32::MAX {
+    let lscm_amd = VertexOrdering::of_graph(m, &lscm).unwrap();
+    let mut vertex_of = vec![0u32; m];
+    for d in 0..dof_lscm.len() {
+        if let Some(u) = dof_lscm.get(d) {
             vertex_of[u as usize] = (d / 2) as u32;
         }
     }
@@ -164,7 +150,7 @@ fn main() {
         ("2-dof", 2, &dof2, &blk),
         ("lscm", 2, &dof_lscm, &lscm),
     ] {
-        let dim = dof.iter().filter(|d| **d != u32::MAX).count();
+        let dim = dof.count();
         let (t_amd, own) = time(|| {
             VertexOrdering::of_graph(dim, entries)
                 .unwrap()
@@ -187,7 +173,7 @@ fn main() {
     }
     for _ in 0..3 {
         let t = Instant::now();
-        surfmap::param::lscm::lscm(&mesh.positions, &mesh.triangles, boundary).unwrap();
+        surfmap::param::lscm::lscm(&mesh.positions, &disc).unwrap();
         println!("lscm() {:.4} s", t.elapsed().as_secs_f64());
     }
 }

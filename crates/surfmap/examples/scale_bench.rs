@@ -10,14 +10,7 @@
 use surfmap::mesh::io::read_mesh;
 use surfmap::mesh::subdivide::subdivide_midpoint;
 use surfmap::param::count_flipped;
-use surfmap::param::flatten::{FlattenOptions, MultilevelOptions, flatten};
-
-fn multilevel_on() -> MultilevelOptions {
-    MultilevelOptions {
-        min_faces: 0,
-        ..Default::default()
-    }
-}
+use surfmap::{CoarseLevel, FlattenOptions, Multilevel, Start, flatten};
 
 fn peak_rss_mib() -> f64 {
     std::fs::read_to_string("/proc/self/status")
@@ -51,25 +44,17 @@ fn main() {
         mesh.triangles.len()
     );
     let which = args.get(2).map_or("both", String::as_str);
-    let runs: Vec<(&str, MultilevelOptions)> = match which {
-        "single" => vec![("single-level", MultilevelOptions::off())],
-        "multi" => vec![("multilevel", multilevel_on())],
-        _ => vec![
-            ("multilevel", multilevel_on()),
-            ("single-level", MultilevelOptions::off()),
-        ],
+    let on = Multilevel::Always(CoarseLevel::default());
+    let runs: Vec<(&str, Multilevel)> = match which {
+        "single" => vec![("single-level", Multilevel::Never)],
+        "multi" => vec![("multilevel", on)],
+        _ => vec![("multilevel", on), ("single-level", Multilevel::Never)],
     };
     let mut totals = Vec::new();
     for (name, multilevel) in runs {
         let t = std::time::Instant::now();
-        let r = flatten(
-            &mesh,
-            &FlattenOptions {
-                multilevel,
-                ..Default::default()
-            },
-        )
-        .expect("flattened");
+        let options = FlattenOptions::default().with_start(Start::Auto { multilevel });
+        let r = flatten(&mesh, &options).expect("flattened");
         let total = t.elapsed().as_secs_f64();
         totals.push(total);
         println!(

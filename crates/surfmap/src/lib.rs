@@ -5,31 +5,36 @@
 //! §2.1/§3.1), distortion measures and pictures, and geometry images for matching
 //! (§3.2).
 //!
-//! The modules follow the data flow: [`mesh`] → [`param`] → [`measure`] / [`render`]
-//! → [`raster`]. Nothing downstream is imported upstream.
+//! ## A complete run: read → flatten → measure → write
 //!
 //! ```
-//! use surfmap::measure::{MeasureOptions, distortion_report_per_vertex};
-//! use surfmap::mesh::generate::bumpy_disc;
-//! use surfmap::mesh::io::{read_mesh, write_obj};
-//! use surfmap::param::density::{EnergyKind, Litke};
-//! use surfmap::param::flatten::{FlattenOptions, flatten};
-//! use surfmap::{TriMesh, Uvs};
+//! use surfmap::{Alpha, FlattenOptions, MeasureOptions, TriMesh, Uvs};
 //!
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
-//! // A curved disc (in practice: `read_mesh(path)?.mesh`).
-//! let mesh = bumpy_disc(12, 0.5);
-//! // Flatten with α = (length, area, angle) weights; normalized to sum 1.
-//! let options = FlattenOptions {
-//!     energy: EnergyKind::Litke(Litke::new(1.0, 1.0, 2.0)?),
-//!     ..Default::default()
-//! };
-//! let map = flatten(&mesh, &options)?;
-//! assert!(map.converged);
-//! assert_eq!(map.flipped_triangles, 0); // checked on the output, always 0
+//! let dir = std::env::temp_dir().join(format!("surfmap-doc-{}", std::process::id()));
+//! std::fs::create_dir_all(&dir)?;
+//! // A curved disc written to a file first, so that reading it is real (in practice:
+//! // a scan as OBJ, OFF or PLY).
+//! let input = dir.join("surface.ply");
+//! surfmap::write_mesh(&input, &surfmap::mesh::generate::bumpy_disc(12, 0.5))?;
 //!
-//! // Score it like any other tool's map.
-//! let report = distortion_report_per_vertex(
+//! // Read.
+//! let mesh = surfmap::read_mesh(&input)?.mesh;
+//!
+//! // Flatten with Litke's energy, α = (length, area, angle) weights (normalized to sum 1).
+//! let options = FlattenOptions::new(Alpha::new(1.0, 1.0, 2.0)?);
+//! let map = surfmap::flatten(&mesh, &options)?;
+//! assert!(map.converged);
+//! assert_eq!(map.flipped_triangles, 0); // counted on the output: always 0
+//! println!(
+//!     "start {}, {} Newton iterations, energy {:.5}",
+//!     map.start_description(),
+//!     map.iterations,
+//!     map.energy
+//! );
+//!
+//! // Measure: the thesis's angle, area and length distortion, flips, overlap.
+//! let report = surfmap::distortion_report_per_vertex(
 //!     &mesh.positions,
 //!     &mesh.triangles,
 //!     &map.uvs,
@@ -38,17 +43,46 @@
 //! assert_eq!(report.flipped_triangles, 0);
 //! assert!(report.measures.angle.mean >= 1.0);
 //!
-//! // Write an OBJ with texture coordinates (atomically: temporary file + rename).
-//! let out = TriMesh { uvs: Some(Uvs::PerVertex(map.uvs.clone())), ..mesh.clone() };
-//! let path = std::env::temp_dir().join(format!("surfmap-doc-{}.obj", std::process::id()));
-//! write_obj(&path, &out, None)?;
-//! assert_eq!(read_mesh(&path)?.mesh.vertex_uvs().map(<[_]>::len), Some(mesh.positions.len()));
-//! std::fs::remove_file(&path)?;
+//! // Write an OBJ with texture coordinates in [0, 1]² (atomically: temporary file + rename).
+//! let output = dir.join("flat.obj");
+//! let flat = TriMesh { uvs: Some(Uvs::PerVertex(map.normalized_uvs())), ..mesh };
+//! surfmap::write_mesh(&output, &flat)?;
+//! assert_eq!(surfmap::read_mesh(&output)?.mesh.vertex_uvs().map(<[_]>::len), Some(flat.num_vertices()));
+//! std::fs::remove_dir_all(&dir)?;
 //! # Ok(())
 //! # }
 //! ```
+//!
+//! A mesh that is not a disc gets an error listing every defect with the repair that
+//! fixes it ([`FlattenError::NotADisc`], [`mesh::repair`]); holes (eyes, mouth) can be
+//! filled for the solve with [`FlattenOptions::fill_holes`]. `examples/library.rs`
+//! builds a mesh from arrays, fills its holes and reads the whole report.
+//!
+//! ## Modules
+//!
+//! The modules follow the data flow; each uses only those above it (nothing downstream
+//! is imported upstream):
+//!
+//! | module | what it holds |
+//! |---|---|
+//! | [`mesh`] | [`TriMesh`], [`Topology`], the validated [`Disc`], file io, validation, repairs, decimation, generated test surfaces |
+//! | [`energy`] | the densities `W(a, d)` (Litke's (2.5) with weights [`Alpha`], symmetric Dirichlet, MIPS, ARAP), shared by flattening and matching |
+//! | [`param`] | flattening: initial maps (LSCM, mean-value), per-triangle elements, projected Newton, the multilevel start, [`flatten`] |
+//! | [`measure`] | distortion measures of any map, flips, global overlap |
+//! | [`render`] | PNG pictures: UV layouts, checkerboard renders, plots |
+//! | grid (next) | regular `2^k + 1` grids: sampling, pyramid, Eikonal, harmonic extension |
+//! | [`raster`] | geometry images: a flattened surface rasterized onto a grid (§3.2) |
+//!
+//! Internal building blocks are public for benchmarks and probes but hidden from these
+//! docs and not part of the API: the sparse solver (`linsolve`, the only place `faer`
+//! appears), the Newton solver and its per-triangle elements (`param::newton`,
+//! `param::element`), the ARAP warm start (`param::arap`), file-system helpers
+//! (`fsutil`) and test helpers (`testing`).
 
+pub mod energy;
+#[doc(hidden)]
 pub mod fsutil;
+#[doc(hidden)]
 pub mod linsolve;
 pub mod measure;
 pub mod mesh;
@@ -59,4 +93,15 @@ pub mod render;
 pub mod testing;
 pub(crate) mod vec3;
 
-pub use mesh::{BoundaryLoop, Topology, TriMesh, Uvs};
+pub use energy::{Alpha, Energy};
+pub use measure::{
+    DistortionReport, MeasureError, MeasureOptions, distortion_report, distortion_report_per_vertex,
+};
+pub use mesh::io::{MeshFile, read_mesh, write_mesh, write_obj};
+pub use mesh::{BoundaryLoop, Disc, IndexError, NotADisc, Topology, TriMesh, Uvs};
+pub use param::flatten::{
+    CoarseLevel, FlattenError, FlattenOptions, Flattening, IterationLog, Multilevel,
+    NewtonSettings, Start, StartMap, StopReason, flatten, flatten_with_progress,
+};
+pub use param::normalize_uvs;
+pub use raster::{GeometryImages, GeometryImagesOptions};

@@ -1,5 +1,45 @@
-//! Deterministic pseudo-random inputs for tests and benchmarks (not for anything that
-//! needs statistical quality): xorshift64, so runs repeat exactly.
+//! Helpers for tests, examples and benchmarks (not part of the library's API): the
+//! shared data folder of real meshes, deterministic pseudo-random inputs (xorshift64,
+//! so runs repeat exactly; not for anything that needs statistical quality), and the
+//! list of energies the property tests run over.
+
+use std::path::PathBuf;
+
+/// The environment variable that names the shared data folder (real meshes, several
+/// without a licence, so never copied into the repository).
+pub const DATA_ENV: &str = "SURFMAP_DATA";
+
+/// The shared data folder: `$SURFMAP_DATA`, else `../shared/data` beside the repository
+/// (`CARGO_MANIFEST_DIR/../../../shared/data`), recognized by its `manifest.json`.
+///
+/// When it is missing, tests on real meshes skip with a note (`None`), except under
+/// `CI=true`, where this panics: a CI run must not pass by skipping them.
+pub fn shared_data() -> Option<PathBuf> {
+    let dir = std::env::var_os(DATA_ENV).map_or_else(
+        || PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data")),
+        PathBuf::from,
+    );
+    if dir.join("manifest.json").is_file() {
+        return Some(dir);
+    }
+    let ci = std::env::var("CI").is_ok_and(|v| v == "true");
+    assert!(
+        !ci,
+        "the shared data folder {} (with manifest.json) is missing; CI=true, so tests on real \
+         meshes fail instead of skipping: set {DATA_ENV} to the folder",
+        dir.display()
+    );
+    eprintln!(
+        "note: shared data folder {} not found (set {DATA_ENV}); skipping a test on real meshes",
+        dir.display()
+    );
+    None
+}
+
+/// A file of the shared data folder ([`shared_data`]), or `None` (skip) as there.
+pub fn shared_file(name: &str) -> Option<PathBuf> {
+    Some(shared_data()?.join(name))
+}
 
 /// xorshift64 generator of uniform `f64` in `[0, 1)`. Seed must be non-zero.
 #[derive(Clone, Debug)]
@@ -30,18 +70,33 @@ impl Rng {
     }
 }
 
-/// Every energy density with a name: the four Litke presets, symmetric Dirichlet, MIPS
-/// and ARAP (tests run each property over all of them).
-pub fn all_energies() -> Vec<(&'static str, crate::param::density::EnergyKind)> {
-    use crate::param::density::{EnergyKind, Litke};
+/// The largest coordinate difference `max_i max(|p_i.u − q_i.u|, |p_i.v − q_i.v|)` of two
+/// lists of UVs of the same length.
+pub fn max_uv_difference(p: &[[f64; 2]], q: &[[f64; 2]]) -> f64 {
+    assert_eq!(p.len(), q.len(), "UV lists of different lengths");
+    p.iter()
+        .zip(q)
+        .map(|(p, q)| (p[0] - q[0]).abs().max((p[1] - q[1]).abs()))
+        .fold(0.0, f64::max)
+}
+
+/// Every energy density with a name: the four Litke presets, Litke without the angle
+/// term (matching's regularization (2.8)), symmetric Dirichlet, MIPS and ARAP (tests
+/// run each property over all of them).
+pub fn all_energies() -> Vec<(&'static str, crate::energy::Energy)> {
+    use crate::energy::{Alpha, Energy};
     vec![
-        ("litke conformal", EnergyKind::Litke(Litke::conformal())),
-        ("litke balanced", EnergyKind::Litke(Litke::balanced())),
-        ("litke area", EnergyKind::Litke(Litke::area())),
-        ("litke length", EnergyKind::Litke(Litke::length())),
-        ("sym dirichlet", EnergyKind::SymmetricDirichlet),
-        ("mips", EnergyKind::Mips),
-        ("arap", EnergyKind::Arap),
+        ("litke conformal", Energy::litke(Alpha::conformal())),
+        ("litke balanced", Energy::litke(Alpha::balanced())),
+        ("litke area", Energy::litke(Alpha::area())),
+        ("litke length", Energy::litke(Alpha::length())),
+        (
+            "litke no angle",
+            Energy::litke(Alpha::new(1.0, 1.0, 0.0).expect("valid weights")),
+        ),
+        ("sym dirichlet", Energy::SymmetricDirichlet),
+        ("mips", Energy::Mips),
+        ("arap", Energy::Arap),
     ]
 }
 

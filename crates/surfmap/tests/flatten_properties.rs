@@ -1,5 +1,5 @@
 //! Properties of `surfmap::param::flatten` checked against expectations that do not come
-//! from the solver itself (thesis §2.1, §3.1, §4.1; NOTES.md §1):
+//! from the solver itself (thesis §2.1, §3.1, §4.1):
 //!
 //! 1. developable patches (cylinder, cone) flatten to an isometry under every energy;
 //! 2. a k-fold symmetric hemisphere flattens to a k-fold symmetric map;
@@ -13,25 +13,25 @@
 //! orientation-preserving, so maps can differ only by a rotation and a translation).
 
 use std::f64::consts::{FRAC_PI_2, TAU};
-use std::path::PathBuf;
 
 use surfmap::measure::{corner_uvs_from_vertex_uvs, triangle_singular_values};
 use surfmap::mesh::TriMesh;
 use surfmap::mesh::generate::{bumpy_disc, cylinder_patch, spherical_cap};
 use surfmap::param::count_flipped;
-use surfmap::param::density::{EnergyKind, Litke};
-use surfmap::param::flatten::{FlattenOptions, Flattening, StartChoice, StartMap, flatten};
-use surfmap::param::newton::NewtonSettings;
+use surfmap::{
+    Alpha, Disc, Energy, FlattenOptions, Flattening, Multilevel, NewtonSettings, Start, StartMap,
+    StopReason, flatten,
+};
 
 // ---------------------------------------------------------------------------------------
 // Helpers
 // ---------------------------------------------------------------------------------------
 
-/// Options with a tighter Newton tolerance than the default (1e-10), so the solver error
+/// Options with a tighter Newton tolerance than the default (1e-12), so the solver error
 /// is far below the tolerances asserted here (Newton converges quadratically, so this
 /// costs about one iteration). Not tighter: see
 /// `newton_energy_never_increases_at_a_tolerance_below_rounding` for what happens then.
-fn options(energy: EnergyKind) -> FlattenOptions {
+fn options(energy: Energy) -> FlattenOptions {
     FlattenOptions {
         energy,
         newton: NewtonSettings {
@@ -42,8 +42,8 @@ fn options(energy: EnergyKind) -> FlattenOptions {
     }
 }
 
-fn litke(alpha: Litke) -> FlattenOptions {
-    options(EnergyKind::Litke(alpha))
+fn litke(alpha: Alpha) -> FlattenOptions {
+    options(Energy::litke(alpha))
 }
 
 /// Property 7: the result claims no flips, and every UV triangle has positive signed
@@ -146,17 +146,6 @@ fn rigid_fit(from: &[[f64; 2]], to: &[[f64; 2]]) -> RigidFit {
     }
 }
 
-/// The shared data folder: `../../../shared/data` from this crate, else `SURFMAP_DATA_DIR`.
-fn data_dir() -> Option<PathBuf> {
-    let default = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data"));
-    if default.is_dir() {
-        return Some(default);
-    }
-    std::env::var_os("SURFMAP_DATA_DIR")
-        .map(PathBuf::from)
-        .filter(|d| d.is_dir())
-}
-
 /// Patch of the cone with apex at the origin, axis +z and half-angle `half_angle`:
 /// slant distance `s ∈ [s0, s1]` in `m` steps, azimuth `φ ∈ [0, angle]` in `n` steps;
 /// vertex `(i, j)` (azimuth step `i`, slant step `j`) at `s_j (sin β cos φ_i,
@@ -225,8 +214,8 @@ fn max_angle_defect(mesh: &TriMesh) -> f64 {
 
 /// Mean energy density `Σ area3D·W / Σ area3D` of a map, from the singular values
 /// measured by `surfmap::measure` and densities written out here from their
-/// definitions (thesis (2.5) with `a = σ1² + σ2²`, `d = σ1²σ2²`; NOTES.md §1).
-fn mean_density(mesh: &TriMesh, uvs: &[[f64; 2]], energy: EnergyKind) -> f64 {
+/// definitions (thesis (2.5) with `a = tr C = σ1² + σ2²`, `d = det C = σ1²σ2²`, §2.1.3).
+fn mean_density(mesh: &TriMesh, uvs: &[[f64; 2]], energy: Energy) -> f64 {
     let corners = corner_uvs_from_vertex_uvs(&mesh.triangles, uvs).unwrap();
     let sv = triangle_singular_values(&mesh.positions, &mesh.triangles, &corners, false).unwrap();
     let (mut sum, mut area) = (0.0, 0.0);
@@ -237,13 +226,13 @@ fn mean_density(mesh: &TriMesh, uvs: &[[f64; 2]], energy: EnergyKind) -> f64 {
         }
         let (a, d) = (s1 * s1 + s2 * s2, s1 * s1 * s2 * s2);
         let w = match energy {
-            EnergyKind::Litke(l) => {
-                let [al, aa, ac] = l.alphas();
+            Energy::Litke { alpha, .. } => {
+                let [al, aa, ac] = alpha.alphas();
                 al * a + aa * (d + (al / aa + 1.0) / d) + ac * (a * a / d - 4.0)
             }
-            EnergyKind::SymmetricDirichlet => s1 * s1 + s2 * s2 + 1.0 / (s1 * s1) + 1.0 / (s2 * s2),
-            EnergyKind::Arap => (s1 - 1.0).powi(2) + (s2 - 1.0).powi(2),
-            EnergyKind::Mips => s1 / s2 + s2 / s1,
+            Energy::SymmetricDirichlet => s1 * s1 + s2 * s2 + 1.0 / (s1 * s1) + 1.0 / (s2 * s2),
+            Energy::Arap => (s1 - 1.0).powi(2) + (s2 - 1.0).powi(2),
+            Energy::Mips => s1 / s2 + s2 / s1,
         };
         sum += a3 * w;
         area += a3;
@@ -255,14 +244,14 @@ fn mean_density(mesh: &TriMesh, uvs: &[[f64; 2]], energy: EnergyKind) -> f64 {
 // 1. Developable patches flatten to isometries
 // ---------------------------------------------------------------------------------------
 
-fn all_energies() -> Vec<(&'static str, EnergyKind)> {
+fn all_energies() -> Vec<(&'static str, Energy)> {
     vec![
-        ("conformal", EnergyKind::Litke(Litke::conformal())),
-        ("balanced", EnergyKind::Litke(Litke::balanced())),
-        ("area", EnergyKind::Litke(Litke::area())),
-        ("length", EnergyKind::Litke(Litke::length())),
-        ("symmetric dirichlet", EnergyKind::SymmetricDirichlet),
-        ("arap", EnergyKind::Arap),
+        ("conformal", Energy::litke(Alpha::conformal())),
+        ("balanced", Energy::litke(Alpha::balanced())),
+        ("area", Energy::litke(Alpha::area())),
+        ("length", Energy::litke(Alpha::length())),
+        ("symmetric dirichlet", Energy::SymmetricDirichlet),
+        ("arap", Energy::Arap),
     ]
 }
 
@@ -293,17 +282,13 @@ fn check_isometry(name: &str, mesh: &TriMesh) {
     // LSCM is exact on a developable mesh, so from LSCM the solver has nothing to do;
     // the mean-value start (boundary on a circle) is far from isometric and makes Newton
     // find the isometry itself.
-    for start in [StartChoice::Auto, StartChoice::MeanValue] {
+    let auto = Start::Auto {
+        multilevel: Multilevel::default(),
+    };
+    for start in [auto, Start::MeanValue] {
         for (energy_name, energy) in all_energies() {
             let what = format!("{name}, {energy_name}, start {start:?}");
-            let result = flatten(
-                mesh,
-                &FlattenOptions {
-                    start,
-                    ..options(energy)
-                },
-            )
-            .unwrap();
+            let result = flatten(mesh, &options(energy).with_start(start.clone())).unwrap();
             assert_flip_free(mesh, &result, &what);
             let (sigma_err, edge_err) = isometry_errors(mesh, &result.uvs);
             println!(
@@ -317,13 +302,13 @@ fn check_isometry(name: &str, mesh: &TriMesh) {
             );
             // At an isometry a = 2, d = 1, so the mean density equals W(2, 1).
             let w_iso = match energy {
-                EnergyKind::Litke(l) => {
-                    let [al, aa, _] = l.alphas();
+                Energy::Litke { alpha, .. } => {
+                    let [al, aa, _] = alpha.alphas();
                     2.0 * al + aa * (1.0 + al / aa + 1.0)
                 }
-                EnergyKind::SymmetricDirichlet => 4.0,
-                EnergyKind::Arap => 0.0,
-                EnergyKind::Mips => 2.0,
+                Energy::SymmetricDirichlet => 4.0,
+                Energy::Arap => 0.0,
+                Energy::Mips => 2.0,
             };
             assert!(
                 (result.energy - w_iso).abs() < 1e-9 * w_iso.max(1.0),
@@ -379,8 +364,8 @@ fn symmetric_hemisphere_flattens_to_a_symmetric_map() {
     }
 
     for (name, alpha) in [
-        ("balanced", Litke::balanced()),
-        ("conformal", Litke::conformal()),
+        ("balanced", Alpha::balanced()),
+        ("conformal", Alpha::conformal()),
     ] {
         let result = flatten(&mesh, &litke(alpha)).unwrap();
         assert_flip_free(&mesh, &result, name);
@@ -463,7 +448,7 @@ fn symmetric_hemisphere_flattens_to_a_symmetric_map() {
 fn refinement_differences(
     name: &str,
     meshes: &[TriMesh],
-    energy: Litke,
+    energy: Alpha,
     coarse_in_fine: impl Fn(usize, usize) -> usize,
 ) -> Vec<(f64, f64)> {
     let maps: Vec<Vec<[f64; 2]>> = meshes
@@ -558,7 +543,7 @@ fn refining_a_bumpy_disc_converges() {
     let diffs = refinement_differences(
         "bumpy disc, balanced",
         &meshes,
-        Litke::balanced(),
+        Alpha::balanced(),
         coarse_in_fine,
     );
     report_rates("bumpy disc, balanced", &diffs);
@@ -584,7 +569,7 @@ fn refining_a_spherical_cap_converges() {
     let diffs = refinement_differences(
         "spherical cap, length",
         &meshes,
-        Litke::length(),
+        Alpha::length(),
         coarse_in_fine,
     );
     report_rates("spherical cap, length", &diffs);
@@ -602,13 +587,13 @@ fn refining_a_spherical_cap_converges() {
 #[test]
 fn newton_energy_never_increases_at_a_tolerance_below_rounding() {
     let mesh = spherical_cap(1.0, 1.2, 32, 80);
-    let mut opts = litke(Litke::length());
+    let mut opts = litke(Alpha::length());
     opts.newton.tolerance = 1e-18;
     let result = flatten(&mesh, &opts).unwrap();
     assert_flip_free(&mesh, &result, "tight tolerance");
     assert_ne!(
         result.stop_reason,
-        surfmap::param::newton::StopReason::IterationCap,
+        StopReason::IterationCap,
         "{} iterations",
         result.iterations
     );
@@ -633,14 +618,11 @@ fn newton_energy_never_increases_at_a_tolerance_below_rounding() {
 fn continuation_from_conformal_reaches_the_direct_length_minimum() {
     // A cap of 1 rad opening: curved enough that conformal and length-biased maps differ.
     let mesh = spherical_cap(1.0, 1.0, 10, 24);
-    let (from, target) = (Litke::conformal(), Litke::length());
+    let (from, target) = (Alpha::conformal(), Alpha::length());
     let direct = flatten(&mesh, &litke(target)).unwrap();
     let continued = flatten(
         &mesh,
-        &FlattenOptions {
-            from_alpha: Some(from),
-            ..litke(target)
-        },
+        &options(Energy::litke(target).with_continuation(from).unwrap()),
     )
     .unwrap();
     assert_flip_free(&mesh, &direct, "direct");
@@ -648,7 +630,7 @@ fn continuation_from_conformal_reaches_the_direct_length_minimum() {
     assert!(direct.converged && continued.converged);
     assert!(
         direct.continuation.is_empty(),
-        "no stages without from_alpha"
+        "no stages without a continuation start"
     );
 
     // Stages: α0 first, the target last, in between points of the segment α0 → α1
@@ -725,7 +707,7 @@ fn rotate3(p: [f64; 3], axis: [f64; 3], angle: f64) -> [f64; 3] {
 #[test]
 fn rigid_motion_and_scaling_of_the_surface_scale_the_map() {
     let mesh = bumpy_disc(8, 0.35);
-    let base = flatten(&mesh, &litke(Litke::balanced())).unwrap();
+    let base = flatten(&mesh, &litke(Alpha::balanced())).unwrap();
     assert_flip_free(&mesh, &base, "base");
     let n = 1.0 / 14f64.sqrt();
     let axis = [n, 2.0 * n, 3.0 * n];
@@ -740,7 +722,7 @@ fn rigid_motion_and_scaling_of_the_surface_scale_the_map() {
                 .collect(),
             mesh.triangles.clone(),
         );
-        let result = flatten(&moved, &litke(Litke::balanced())).unwrap();
+        let result = flatten(&moved, &litke(Alpha::balanced())).unwrap();
         assert_flip_free(&moved, &result, &format!("scale {scale}"));
         let scaled: Vec<[f64; 2]> = base
             .uvs
@@ -798,8 +780,8 @@ fn permuting_vertices_and_triangles_gives_the_same_map() {
     triangles.sort();
     let permuted = TriMesh::new(positions, triangles.into_iter().map(|(_, t)| t).collect());
 
-    let base = flatten(&mesh, &litke(Litke::balanced())).unwrap();
-    let result = flatten(&permuted, &litke(Litke::balanced())).unwrap();
+    let base = flatten(&mesh, &litke(Alpha::balanced())).unwrap();
+    let result = flatten(&permuted, &litke(Alpha::balanced())).unwrap();
     assert_flip_free(&mesh, &base, "original order");
     assert_flip_free(&permuted, &result, "permuted");
     let pulled_back: Vec<[f64; 2]> = (0..nv)
@@ -825,15 +807,9 @@ fn permuting_vertices_and_triangles_gives_the_same_map() {
 
 #[test]
 fn lscm_flips_on_three_peaks_fall_back_to_mean_value_and_converge() {
-    let Some(dir) = data_dir() else {
-        println!("note: shared data folder not found (set SURFMAP_DATA_DIR); skipping three_peaks");
+    let Some(path) = surfmap::testing::shared_file("three_peaks.off") else {
         return;
     };
-    let path = dir.join("three_peaks.off");
-    if !path.is_file() {
-        println!("note: {} missing; skipping", path.display());
-        return;
-    }
     let mesh = surfmap::mesh::io::read_mesh(&path).unwrap().mesh;
     let result = flatten(&mesh, &FlattenOptions::default()).unwrap();
     println!(
@@ -844,9 +820,8 @@ fn lscm_flips_on_three_peaks_fall_back_to_mean_value_and_converge() {
     assert!(result.lscm_flipped > 0);
     // LSCM really does flip here: count its non-positive triangles ourselves (either
     // orientation of the whole map is admissible, so count against the majority).
-    let boundary =
-        surfmap::mesh::generate::disc_boundary(&mesh.triangles).expect("one boundary loop");
-    let lscm = surfmap::param::lscm::lscm(&mesh.positions, &mesh.triangles, &boundary).unwrap();
+    let disc = Disc::new(&mesh).expect("a disc");
+    let lscm = surfmap::param::lscm::lscm(&mesh.positions, &disc).unwrap();
     let (mut positive, mut other) = (0usize, 0usize);
     for tri in &mesh.triangles {
         let [a, b, c] = tri.map(|v| lscm.uv[v as usize]);

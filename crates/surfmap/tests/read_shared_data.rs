@@ -2,22 +2,14 @@
 //! written by an independent (Python) script: vertex records V, faces as stored F, the number
 //! of triangles implied by the face-size histogram, and the bounding box of the used vertices.
 //!
-//! The folder is `../../../shared/data` from this crate (override: `SURFMAP_DATA_DIR`); when it
-//! is missing the test prints a note and passes.
+//! The folder is `surfmap::testing::shared_data()` (`../shared/data` beside the repository,
+//! override: `SURFMAP_DATA`); when it is missing the test prints a note and passes, except
+//! under `CI=true`, where it fails.
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use surfmap::mesh::io::{Format, read_mesh};
-
-fn data_dir() -> Option<PathBuf> {
-    let dir = std::env::var_os("SURFMAP_DATA_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data"))
-        });
-    dir.join("manifest.json").is_file().then_some(dir)
-}
 
 fn mesh_files(dir: &Path, root: &Path, out: &mut Vec<String>) {
     let mut entries: Vec<_> = std::fs::read_dir(dir)
@@ -37,10 +29,7 @@ fn mesh_files(dir: &Path, root: &Path, out: &mut Vec<String>) {
 
 #[test]
 fn every_shared_mesh_matches_the_manifest() {
-    let Some(dir) = data_dir() else {
-        println!(
-            "note: shared data folder not found (set SURFMAP_DATA_DIR); skipping the manifest check"
-        );
+    let Some(dir) = surfmap::testing::shared_data() else {
         return;
     };
     let manifest: serde_json::Value =

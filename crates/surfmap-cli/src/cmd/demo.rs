@@ -4,15 +4,14 @@
 
 use anyhow::Context;
 use std::path::PathBuf;
-use surfmap::Topology;
 use surfmap::fsutil::write_atomically;
-use surfmap::measure::{MeasureOptions, distortion_report_per_vertex};
 use surfmap::mesh::generate::bumpy_disc;
-use surfmap::mesh::io::{write_mesh, write_obj};
 use surfmap::mesh::validate::validate;
-use surfmap::param::density::{EnergyKind, Litke};
-use surfmap::param::flatten::FlattenOptions;
 use surfmap::render::{TradeoffPanel, save_png, tradeoff_sheet};
+use surfmap::{
+    Alpha, FlattenOptions, MeasureOptions, Topology, distortion_report_per_vertex, write_mesh,
+    write_obj,
+};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -50,13 +49,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let defects = validate(&mesh, &Topology::new(&mesh));
     let mut maps = Vec::new();
     for (name, alpha) in [
-        ("conformal", Litke::conformal()),
-        ("balanced", Litke::balanced()),
+        ("conformal", Alpha::conformal()),
+        ("balanced", Alpha::balanced()),
     ] {
-        let opts = FlattenOptions {
-            energy: EnergyKind::Litke(alpha),
-            ..Default::default()
-        };
+        let opts = FlattenOptions::new(alpha);
         let r = super::flatten::flatten_mesh(&mesh, &opts, false)?;
         let out = super::flatten::output_mesh(&mesh, &r.uvs, false);
         let obj = dir.join(format!("{name}.obj"));
@@ -77,7 +73,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
         let json = serde_json::to_vec_pretty(&report)?;
         let report_path = dir.join(format!("{name}.json"));
-        write_atomically(&report_path, |w| w.write_all(&json))?;
+        write_atomically(&report_path, |w| w.write_all(&json))
+            .with_context(|| format!("cannot write {}", report_path.display()))?;
         written.push(report_path);
         written.extend(super::flatten::write_pictures(&dir.join(name), &mesh, &r)?);
         outln!(
@@ -107,7 +104,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         })
         .collect();
     let sheet = dir.join("tradeoff.png");
-    save_png(&sheet, &tradeoff_sheet(&panels, (1000, 620)))?;
+    save_png(&sheet, &tradeoff_sheet(&panels, (1000, 620)))
+        .with_context(|| format!("cannot write {}", sheet.display()))?;
     written.push(sheet);
     outln!("wrote:");
     for p in &written {

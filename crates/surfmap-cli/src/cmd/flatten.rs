@@ -1,5 +1,6 @@
 //! `surfmap flatten IN -o OUT.obj`: flip-free flattening of a disc-topology mesh.
 
+use super::advice::{CliDefect, flatten_error, option_message};
 use super::{RepairArgs, load_mesh};
 use anyhow::{Context, bail};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -12,13 +13,13 @@ use surfmap::measure::{
     DistortionReport, Measure, MeasureOptions, corner_uvs_from_vertex_uvs,
     distortion_report_per_vertex, per_triangle_measure,
 };
-use surfmap::mesh::io::write_obj;
-use surfmap::mesh::validate::{Defect, validate};
-use surfmap::param::density::{EnergyKind, Litke};
-use surfmap::param::flatten::{FlattenOptions, Flattening, StartChoice, flatten_with_progress};
-use surfmap::param::newton::IterationLog;
+use surfmap::mesh::validate::validate;
+use surfmap::param::flatten::{MultilevelReport, StartMap};
 use surfmap::render;
-use surfmap::{Topology, TriMesh, Uvs};
+use surfmap::{
+    Alpha, CoarseLevel, Energy, FlattenOptions, Flattening, IterationLog, Multilevel, Start,
+    StopReason, Topology, TriMesh, Uvs, flatten_with_progress, write_obj,
+};
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 pub enum Preset {
@@ -33,7 +34,7 @@ pub enum Preset {
 }
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
-pub enum Energy {
+pub enum EnergyChoice {
     /// Litke's energy (thesis (2.5)) with the chosen α.
     Litke,
     /// Symmetric Dirichlet: σ1² + σ2² + σ1⁻² + σ2⁻² (as libigl SLIM minimizes).
@@ -45,8 +46,9 @@ pub enum Energy {
 }
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
-pub enum Start {
-    /// LSCM, or mean-value coordinates if LSCM flips a triangle.
+pub enum StartChoice {
+    /// LSCM, or mean-value coordinates if LSCM flips a triangle; multilevel for large
+    /// meshes (see --multilevel).
     Auto,
     Lscm,
     MeanValue,
@@ -54,7 +56,7 @@ pub enum Start {
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 pub enum MultilevelChoice {
-    /// For meshes of 15k faces and more, unless --start names a start map.
+    /// For meshes of 15k faces and more.
     Auto,
     On,
     Off,
@@ -75,15 +77,16 @@ pub struct Args {
     pub alpha: Option<[f64; 3]>,
     /// Energy density.
     #[arg(long, value_enum, default_value = "litke")]
-    pub energy: Energy,
+    pub energy: EnergyChoice,
     /// Continuation: minimize first at this α = L,A,C, then move to the target α in steps.
     #[arg(long, value_parser = parse_alpha)]
     pub from_alpha: Option<[f64; 3]>,
-    /// Initial map.
+    /// Initial map (an explicit one is computed on the full mesh: no multilevel start).
     #[arg(long, value_enum, default_value = "auto")]
-    pub start: Start,
-    /// Multilevel start: flatten a decimated copy, re-insert the removed vertices
-    /// flip-free, then run Newton on the full mesh (far fewer full-size iterations).
+    pub start: StartChoice,
+    /// Multilevel start (with --start auto): flatten a decimated copy, re-insert the
+    /// removed vertices flip-free, then run Newton on the full mesh (far fewer
+    /// full-size iterations).
     #[arg(long, value_enum, default_value = "auto")]
     pub multilevel: MultilevelChoice,
     /// Vertices of the decimated copy for --multilevel (default: 1/20 of the mesh,
@@ -142,65 +145,63 @@ pub fn parse_alpha(s: &str) -> Result<[f64; 3], String> {
     Ok(out)
 }
 
-fn litke(alpha: [f64; 3]) -> anyhow::Result<Litke> {
-    Litke::new(alpha[0], alpha[1], alpha[2]).context("invalid α")
+pub fn alpha(a: [f64; 3]) -> anyhow::Result<Alpha> {
+    Alpha::new(a[0], a[1], a[2]).context("invalid α")
 }
 
-/// Builds library options from the command line.
+/// The library options the command line asks for (parsing only: the library checks them).
 pub fn options(args: &Args) -> anyhow::Result<FlattenOptions> {
     let target = match (args.alpha, args.preset) {
-        (Some(a), _) => litke(a)?,
-        (None, Preset::Conformal) => Litke::conformal(),
-        (None, Preset::Balanced) => Litke::balanced(),
-        (None, Preset::Area) => Litke::area(),
-        (None, Preset::Length) => Litke::length(),
+        (Some(a), _) => alpha(a)?,
+        (None, Preset::Conformal) => Alpha::conformal(),
+        (None, Preset::Balanced) => Alpha::balanced(),
+        (None, Preset::Area) => Alpha::area(),
+        (None, Preset::Length) => Alpha::length(),
     };
-    let energy = match args.energy {
-        Energy::Litke => EnergyKind::Litke(target),
-        Energy::Sd => EnergyKind::SymmetricDirichlet,
-        Energy::Mips => EnergyKind::Mips,
-        Energy::Arap => EnergyKind::Arap,
+    let mut energy = match args.energy {
+        EnergyChoice::Litke => Energy::litke(target),
+        EnergyChoice::Sd => Energy::SymmetricDirichlet,
+        EnergyChoice::Mips => Energy::Mips,
+        EnergyChoice::Arap => Energy::Arap,
     };
-    if args.from_alpha.is_some() && !matches!(args.energy, Energy::Litke) {
-        bail!("--from-alpha is a continuation in Litke's α; it needs --energy litke");
+    if let Some(from) = args.from_alpha {
+        energy = energy.with_continuation(alpha(from)?).map_err(|_| {
+            anyhow::anyhow!("--from-alpha is a continuation in Litke's α; it needs --energy litke")
+        })?;
     }
-    let mut opts = FlattenOptions {
-        energy,
-        from_alpha: args.from_alpha.map(litke).transpose()?,
-        start: match args.start {
-            Start::Auto => StartChoice::Auto,
-            Start::Lscm => StartChoice::Lscm,
-            Start::MeanValue => StartChoice::MeanValue,
+    let coarse = CoarseLevel {
+        vertices: args.coarse_vertices,
+        ..CoarseLevel::default()
+    };
+    let start = match (args.start, args.multilevel) {
+        (StartChoice::Auto, choice) => Start::Auto {
+            multilevel: match choice {
+                MultilevelChoice::Auto => Multilevel::Auto(coarse),
+                MultilevelChoice::On => Multilevel::Always(coarse),
+                MultilevelChoice::Off => Multilevel::Never,
+            },
         },
-        ..Default::default()
+        (_, MultilevelChoice::On) => {
+            bail!(
+                "--multilevel on needs --start auto (an explicit start map is computed on the full mesh)"
+            )
+        }
+        (StartChoice::Lscm, _) => Start::Lscm,
+        (StartChoice::MeanValue, _) => Start::MeanValue,
     };
-    if args.tolerance.is_nan() || args.tolerance <= 0.0 {
-        bail!("--tolerance must be positive, got {}", args.tolerance);
-    }
-    if !(args.armijo_c > 0.0 && args.armijo_c < 1.0) {
-        bail!("--armijo-c must be in (0, 1), got {}", args.armijo_c);
-    }
-    if let Some(n) = args.coarse_vertices.filter(|&n| n < 16) {
-        bail!("--coarse-vertices must be at least 16, got {n}");
-    }
-    opts.multilevel = surfmap::param::flatten::MultilevelOptions {
-        min_faces: match args.multilevel {
-            // An explicit --start is a request for that start on the full mesh.
-            MultilevelChoice::Auto if !matches!(args.start, Start::Auto) => usize::MAX,
-            MultilevelChoice::Auto => surfmap::param::flatten::MULTILEVEL_MIN_FACES,
-            MultilevelChoice::On => 0,
-            MultilevelChoice::Off => usize::MAX,
-        },
-        coarse_vertices: args.coarse_vertices,
-        ..opts.multilevel
-    };
+    let mut opts = FlattenOptions::new(energy)
+        .with_start(start)
+        .with_fill_holes(args.fill_holes);
     opts.newton.max_iterations = args.max_iters;
     opts.newton.tolerance = args.tolerance;
     opts.newton.armijo_c = args.armijo_c;
+    opts.validate()
+        .map_err(|e| anyhow::anyhow!(option_message(&e)))?;
     Ok(opts)
 }
 
-/// Runs the flattening with a progress spinner on a terminal.
+/// Runs the flattening with a progress spinner on a terminal; errors name the flags
+/// that fix them.
 pub fn flatten_mesh(
     mesh: &TriMesh,
     opts: &FlattenOptions,
@@ -226,44 +227,14 @@ pub fn flatten_mesh(
     if let Some(b) = bar {
         b.finish_and_clear();
     }
-    Ok(result?)
-}
-
-/// [`flatten_mesh`], optionally with every boundary loop but the longest filled by a
-/// fan for the solve (`repair::fill_holes`); the fill's vertices come after the
-/// original ones and are dropped from the result, so the UVs belong to `mesh` and its
-/// holes stay open in the map.
-pub fn flatten_mesh_filling_holes(
-    mesh: &TriMesh,
-    opts: &FlattenOptions,
-    quiet: bool,
-    fill_holes: bool,
-) -> anyhow::Result<Flattening> {
-    if !fill_holes {
-        return flatten_mesh(mesh, opts, quiet);
+    let result = result.map_err(flatten_error)?;
+    if !quiet && result.holes_filled > 0 {
+        eprintln!(
+            "repair: filled {} holes for the flattening (the output keeps them open)",
+            result.holes_filled
+        );
     }
-    let (filled, holes) = surfmap::mesh::repair::fill_holes(mesh);
-    if !quiet {
-        eprintln!("repair: filled {holes} holes for the flattening (the output keeps them open)");
-    }
-    let mut result = flatten_mesh(&filled, opts, quiet)?;
-    result.uvs.truncate(mesh.positions.len());
     Ok(result)
-}
-
-/// Maps UVs into [0,1]² keeping the aspect ratio.
-pub fn normalize_uvs(uvs: &mut [[f64; 2]]) {
-    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for p in uvs.iter() {
-        for k in 0..2 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
-    let size = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(f64::MIN_POSITIVE);
-    for p in uvs.iter_mut() {
-        *p = [(p[0] - lo[0]) / size, (p[1] - lo[1]) / size];
-    }
 }
 
 /// The mesh to write: the input with per-vertex UVs, or the flat mesh itself.
@@ -283,19 +254,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let file = load_mesh(&args.input)?;
     let opts = options(&args)?;
     let mesh = args.repair.apply(file.mesh, args.quiet)?;
-    let result = flatten_mesh_filling_holes(&mesh, &opts, args.quiet, args.fill_holes)
+    let result = flatten_mesh(&mesh, &opts, args.quiet)
         .with_context(|| format!("cannot flatten {}", args.input.display()))?;
-    let mut uvs = result.uvs.clone();
-    if args.normalize {
-        normalize_uvs(&mut uvs);
-    }
+    let uvs = if args.normalize {
+        result.normalized_uvs()
+    } else {
+        result.uvs.clone()
+    };
     let out = output_mesh(&mesh, &uvs, args.uv_as_positions);
     let material = args
         .texture
         .as_ref()
         .map(|t| surfmap::mesh::io::ObjMaterial { texture: t.clone() });
-    write_obj(&args.output, &out, material.as_ref())
-        .with_context(|| format!("cannot write {}", args.output.display()))?;
+    // The writer's error names the file already.
+    write_obj(&args.output, &out, material.as_ref())?;
     if let Some(path) = &args.report {
         // Measured on the written map (its own scale; the measures normalize area).
         let measures = distortion_report_per_vertex(
@@ -356,25 +328,27 @@ pub struct FlattenReport<'a> {
     pub vertices: usize,
     pub triangles: usize,
     /// Initial map used: `lscm`, `mean_value`, `given` or `multilevel`.
-    pub start: surfmap::param::flatten::StartMap,
+    pub start: StartMap,
     /// The multilevel start's coarse level, re-insertion and timings (when tried).
-    pub multilevel: Option<&'a surfmap::param::flatten::MultilevelReport>,
+    pub multilevel: Option<&'a MultilevelReport>,
     pub lscm_flipped_triangles: usize,
     /// ARAP warm-start steps accepted before Newton.
     pub warm_start_iterations: usize,
     pub iterations: usize,
     pub converged: bool,
-    pub stop_reason: surfmap::param::newton::StopReason,
+    pub stop_reason: StopReason,
     /// Final energy per unit 3D area.
     pub energy: f64,
     pub continuation: &'a [[f64; 3]],
     /// Flipped triangles of the output, counted on the output (always 0).
     pub flipped_triangles: usize,
+    /// Holes filled for the solve (`--fill-holes`).
+    pub holes_filled: usize,
     /// Symmetric Dirichlet energy, area-weighted mean (isometry = 4).
     pub symmetric_dirichlet: f64,
     pub boundary_overlap: serde_json::Value,
     pub measures: DistortionReport,
-    pub input_defects: &'a [Defect],
+    pub input_defects: Vec<CliDefect>,
     pub time_start_s: f64,
     pub time_newton_s: f64,
     pub time_total_s: f64,
@@ -387,7 +361,7 @@ impl<'a> FlattenReport<'a> {
         mesh: &TriMesh,
         r: &'a Flattening,
         measures: DistortionReport,
-        defects: &'a [Defect],
+        defects: &[surfmap::mesh::validate::Defect],
     ) -> Self {
         Self {
             input: input.display().to_string(),
@@ -403,10 +377,11 @@ impl<'a> FlattenReport<'a> {
             energy: r.energy,
             continuation: &r.continuation,
             flipped_triangles: measures.flipped_triangles,
+            holes_filled: r.holes_filled,
             symmetric_dirichlet: measures.symmetric_dirichlet,
             boundary_overlap: serde_json::to_value(&measures.boundary_overlap).unwrap_or_default(),
             measures,
-            input_defects: defects,
+            input_defects: defects.iter().map(CliDefect::from).collect(),
             time_start_s: r.time_start,
             time_newton_s: r.time_newton,
             time_total_s: r.time_total,

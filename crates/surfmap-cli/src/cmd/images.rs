@@ -6,13 +6,13 @@
 use std::path::PathBuf;
 
 use anyhow::{Context, bail};
-use surfmap::param::flatten::FlattenOptions;
+use surfmap::FlattenOptions;
 use surfmap::raster::output::write_image_set;
 use surfmap::raster::{
     FeatureFile, FeatureMask, FeatureSource, GeometryImages, GeometryImagesOptions, TextureImage,
 };
 
-use super::flatten::flatten_mesh_filling_holes;
+use super::flatten::flatten_mesh;
 use super::{RepairArgs, load_mesh};
 
 #[derive(clap::Args)]
@@ -104,13 +104,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         bail!("the mesh has no texture coordinates, so the texture cannot be sampled");
     }
 
-    let flat = flatten_mesh_filling_holes(
-        &mesh,
-        &FlattenOptions::default(),
-        args.quiet,
-        args.fill_holes,
-    )
-    .with_context(|| format!("cannot flatten {}", args.mesh.display()))?;
+    let balanced = FlattenOptions::default().with_fill_holes(args.fill_holes);
+    let flat = flatten_mesh(&mesh, &balanced, args.quiet)
+        .with_context(|| format!("cannot flatten {}", args.mesh.display()))?;
     if !args.quiet {
         outln!(
             "{}: balanced flattening, start {}, {} iterations, {}, energy {:.6}, flipped triangles {}, {:.3} s",

@@ -1,8 +1,9 @@
 //! `surfmap inspect MESH [--json]`: counts, bounding box, area, topology and defects.
 
+use super::advice::CliDefect;
 use super::load_mesh;
 use serde::Serialize;
-use surfmap::mesh::validate::{Defect, validate};
+use surfmap::mesh::validate::validate;
 use surfmap::{Topology, TriMesh};
 
 #[derive(clap::Args)]
@@ -39,7 +40,8 @@ pub struct InspectReport {
     pub bbox_min: Option<[f64; 3]>,
     pub bbox_max: Option<[f64; 3]>,
     pub area: f64,
-    pub defects: Vec<Defect>,
+    /// Every defect, with the flags that repair it.
+    pub defects: Vec<CliDefect>,
 }
 
 pub fn report(
@@ -75,7 +77,7 @@ pub fn report(
         bbox_min: bbox.map(|b| b.0),
         bbox_max: bbox.map(|b| b.1),
         area: mesh.area(),
-        defects: validate(mesh, &topo),
+        defects: validate(mesh, &topo).iter().map(CliDefect::from).collect(),
     }
 }
 

@@ -1,3 +1,4 @@
+pub mod advice;
 pub mod demo;
 pub mod flatten;
 pub mod images;

@@ -5,9 +5,8 @@
 use super::{RepairArgs, load_mesh};
 use anyhow::Context;
 use std::path::PathBuf;
-use surfmap::param::density::{EnergyKind, Litke};
-use surfmap::param::flatten::FlattenOptions;
 use surfmap::render::{TradeoffPanel, save_png, tradeoff_sheet};
+use surfmap::{Alpha, FlattenOptions};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -29,25 +28,22 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<()> {
     let mesh = args.repair.apply(load_mesh(&args.input)?.mesh, false)?;
     let size = args.size;
-    let alphas: Vec<Litke> = if args.alphas.is_empty() {
+    let alphas: Vec<Alpha> = if args.alphas.is_empty() {
         vec![
-            Litke::conformal(),
-            Litke::length(),
-            Litke::balanced(),
-            Litke::area(),
+            Alpha::conformal(),
+            Alpha::length(),
+            Alpha::balanced(),
+            Alpha::area(),
         ]
     } else {
         args.alphas
             .iter()
-            .map(|a| Litke::new(a[0], a[1], a[2]).context("invalid α"))
+            .map(|&a| super::flatten::alpha(a))
             .collect::<anyhow::Result<_>>()?
     };
     let mut maps = Vec::new();
     for alpha in &alphas {
-        let opts = FlattenOptions {
-            energy: EnergyKind::Litke(*alpha),
-            ..Default::default()
-        };
+        let opts = FlattenOptions::new(*alpha);
         let r = super::flatten::flatten_mesh(&mesh, &opts, false)
             .with_context(|| format!("cannot flatten {}", args.input.display()))?;
         let a = alpha.alphas();

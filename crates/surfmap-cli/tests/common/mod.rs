@@ -1,27 +1,16 @@
 //! Shared helpers for the end-to-end tests: the `surfmap` binary and the real meshes
-//! in `../shared/data` (tests skip with a note when that folder is absent).
+//! in the shared data folder (`surfmap::testing::shared_data`: tests skip with a note
+//! when that folder is absent, and fail under `CI=true`).
 #![allow(dead_code)]
 
 use std::path::PathBuf;
 use std::process::Command;
 
-pub fn data_dir() -> Option<PathBuf> {
-    let beside = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data"));
-    let from_env = std::env::var_os("SURFMAP_DATA_DIR").map(PathBuf::from);
-    if let Some(d) = from_env
-        .into_iter()
-        .chain([beside])
-        .find(|d| d.join("manifest.json").exists())
-    {
-        Some(d)
-    } else {
-        eprintln!("note: ../shared/data not found; skipping tests on real meshes");
-        None
-    }
-}
+#[allow(unused_imports)]
+pub use surfmap::testing::{shared_data, shared_file};
 
 pub fn manifest() -> Option<(PathBuf, Vec<serde_json::Value>)> {
-    let d = data_dir()?;
+    let d = shared_data()?;
     let m: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(d.join("manifest.json")).unwrap()).unwrap();
     Some((d, m["files"].as_array().unwrap().clone()))

@@ -25,8 +25,10 @@ use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMatRef, Tripl
 use faer::{Conj, MatMut, Par, Side};
 
 mod ordering;
+mod unknowns;
 use ordering::inverse_permutation;
 pub use ordering::{Ordering, VertexOrdering};
+pub use unknowns::{FIXED, Unknowns};
 
 /// What went wrong in a sparse solve, and what to do about it.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -21,7 +21,7 @@
 //! `v_j` only along the boundary, and there the interleaved order (same fill) breaks
 //! faer's supernodes and factorizes 8× slower (61 ms vs 7.6 ms). LSCM keeps its own AMD.
 
-use super::{LowerPattern, SolveError};
+use super::{FIXED, LowerPattern, SolveError, Unknowns};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::SymbolicSparseColMatRef;
 use faer::sparse::linalg::amd;
@@ -97,28 +97,28 @@ impl VertexOrdering {
     }
 
     /// The ordering of a system with `per_vertex` components per vertex:
-    /// `unknown[per_vertex · v + c]` is the unknown of component `c` of vertex `v`, or
-    /// `u32::MAX` when that component is not an unknown (pinned). Vertices are taken in
-    /// this order, each one's components consecutively, pinned ones skipped.
+    /// `unknowns` numbers the values `per_vertex · v + c` (component `c` of vertex `v`);
+    /// the fixed ones are not unknowns. Vertices are taken in this order, each one's
+    /// components consecutively, fixed ones skipped.
     ///
     /// Whether the result is a permutation of the system's unknowns is checked by
     /// [`super::SpdSystem::with_ordering`].
-    pub fn expand(&self, per_vertex: usize, unknown: &[u32]) -> Result<Ordering, SolveError> {
+    pub fn expand(&self, per_vertex: usize, unknowns: &Unknowns) -> Result<Ordering, SolveError> {
         let expected = per_vertex * self.order.len();
-        if unknown.len() != expected {
+        if unknowns.len() != expected {
             return Err(SolveError::DimensionMismatch {
                 expected,
-                got: unknown.len(),
+                got: unknowns.len(),
             });
         }
         let mut forward = Vec::with_capacity(expected);
         for &v in &self.order {
             let base = per_vertex * v as usize;
             forward.extend(
-                unknown[base..base + per_vertex]
+                unknowns.as_slice()[base..base + per_vertex]
                     .iter()
                     .copied()
-                    .filter(|&u| u != u32::MAX),
+                    .filter(|&u| u != FIXED),
             );
         }
         Ok(Ordering::Custom(forward))
@@ -165,24 +165,19 @@ mod tests {
         triangles: &[[u32; 3]],
         nv: usize,
         rng: &mut Rng,
-    ) -> (Vec<u32>, Vec<(u32, u32, f64)>) {
-        let mut dof = vec![0u32; 2 * nv];
-        for d in [0, 1, 2 * nv - 1] {
-            dof[d] = u32::MAX;
-        }
-        let mut n = 0;
-        for d in dof.iter_mut().filter(|d| **d != u32::MAX) {
-            *d = n;
-            n += 1;
-        }
+    ) -> (Unknowns, Vec<(u32, u32, f64)>) {
+        let dof = Unknowns::new(2 * nv, [0, 1, 2 * nv - 1]);
         let mut t = Vec::new();
-        let mut diag = vec![0.1; n as usize];
+        let mut diag = vec![0.1; dof.count()];
         for tri in triangles {
             for i in 0..3 {
                 for j in 0..i {
                     for (ci, cj) in [(0, 0), (0, 1), (1, 0), (1, 1)] {
-                        let (a, b) = (dof[2 * tri[i] as usize + ci], dof[2 * tri[j] as usize + cj]);
-                        if a != u32::MAX && b != u32::MAX {
+                        let (a, b) = (
+                            dof.get(2 * tri[i] as usize + ci),
+                            dof.get(2 * tri[j] as usize + cj),
+                        );
+                        if let (Some(a), Some(b)) = (a, b) {
                             let w = rng.uniform() - 0.5;
                             t.push((a, b, w));
                             diag[a as usize] += w.abs();
@@ -249,13 +244,7 @@ mod tests {
         }
         assert!(seen.iter().all(|&s| s));
         // unknown of (v, c) = 2v + c shifted past the pinned u of vertex 3.
-        let unknown: Vec<u32> = (0..2 * nv as u32)
-            .map(|d| match d {
-                6 => u32::MAX,
-                d if d > 6 => d - 1,
-                d => d,
-            })
-            .collect();
+        let unknown = Unknowns::new(2 * nv, [6]);
         let Ordering::Custom(forward) = vertices.expand(2, &unknown).unwrap() else {
             panic!("expand gives a custom ordering")
         };
@@ -271,7 +260,7 @@ mod tests {
         }
         inverse_permutation(&forward, 2 * nv - 1).unwrap();
         assert!(matches!(
-            vertices.expand(2, &unknown[1..]),
+            vertices.expand(2, &Unknowns::new(2 * nv - 1, [6])),
             Err(SolveError::DimensionMismatch { .. })
         ));
     }
@@ -290,7 +279,7 @@ mod tests {
         let identity = Ordering::Custom((0..nv as u32).collect());
         let amd = VertexOrdering::of_triangles(nv, &mesh.triangles)
             .unwrap()
-            .expand(1, &(0..nv as u32).collect::<Vec<_>>())
+            .expand(1, &Unknowns::new(nv, []))
             .unwrap();
         let fill = |o: &Ordering| {
             SpdSystem::with_ordering(nv, &pairs, o)

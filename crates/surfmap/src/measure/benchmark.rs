@@ -126,9 +126,9 @@ pub fn benchmark_scores(
     let mut total_uv = 0.0;
     for t in 0..n {
         let p = tri_pos(t);
-        let e1 = super::jacobian::sub3(p[1], p[0]);
-        let e2 = super::jacobian::sub3(p[2], p[0]);
-        total3 += 0.5 * super::jacobian::norm3(super::jacobian::cross3(e1, e2));
+        let e1 = crate::vec3::sub3(p[1], p[0]);
+        let e2 = crate::vec3::sub3(p[2], p[0]);
+        total3 += 0.5 * crate::vec3::norm3(crate::vec3::cross3(e1, e2));
         total_uv += signed_uv_area(corner_uvs[t]).abs();
     }
     // Scale 3D by 1/√total3 and UV by 1/√total_uv: J scales by √(total3/total_uv).

@@ -5,8 +5,8 @@
 //! written in the orthonormal frame `x̂ = e1/|e1|`, `ŷ = n̂ × x̂` of the triangle's
 //! plane (`e1 = p1 − p0`, `n = e1 × e2`): the 3D corners become `q0 = (0, 0)`,
 //! `q1 = (|e1|, 0)`, `q2 = (e2·x̂, |n|/|e1|)`, and `J [q1 q2] = [u1 − u0, u2 − u0]`.
-//! The thesis's inverse metric is `g⁻¹ = J Jᵀ` (NOTES §1), so its eigenvalues are
-//! `Γ = σ1²  ≥  γ = σ2²`.
+//! The thesis's inverse metric is `g⁻¹ = J Jᵀ` (`C = Dφ g⁻¹ Dφᵀ` of §2.1.3 written per
+//! triangle), so its eigenvalues are `Γ = σ1²  ≥  γ = σ2²`.
 
 /// Jacobian `J` (row-major `[[∂u/∂x, ∂u/∂y], [∂v/∂x, ∂v/∂y]]`) and 3D area of one
 /// triangle. Returns `None` when the 3D triangle has zero area (no frame exists).
@@ -47,33 +47,10 @@ pub fn signed_singular_values(j: [[f64; 2]; 2]) -> (f64, f64) {
     (s1, s2)
 }
 
-/// Signed area of a UV triangle (positive when counter-clockwise).
-#[inline]
-pub fn signed_uv_area(uv: [[f64; 2]; 3]) -> f64 {
-    0.5 * ((uv[1][0] - uv[0][0]) * (uv[2][1] - uv[0][1])
-        - (uv[2][0] - uv[0][0]) * (uv[1][1] - uv[0][1]))
-}
-
-#[inline]
-pub(crate) fn sub3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-#[inline]
-pub(crate) fn cross3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-#[inline]
-pub(crate) fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-#[inline]
-pub(crate) fn norm3(a: [f64; 3]) -> f64 {
-    dot3(a, a).sqrt()
-}
+// One copy each: the signed UV area lives with the flip count in `param`, the 3-vector
+// helpers in `crate::vec3`; re-exported here for the measure and render code.
+pub use crate::param::signed_uv_area;
+pub(crate) use crate::vec3::{cross3, dot3, norm3, sub3};
 
 #[cfg(test)]
 mod tests {

@@ -30,12 +30,8 @@ pub enum MeasureError {
         uv_triangles: usize,
         triangles: usize,
     },
-    #[error("triangle {triangle} uses vertex {index}, but there are only {len} vertices")]
-    VertexIndexOutOfRange {
-        triangle: usize,
-        index: u32,
-        len: usize,
-    },
+    #[error(transparent)]
+    Index(#[from] crate::mesh::IndexError),
     #[error("triangle {triangle} uses UV {index}, but there are only {len} UVs")]
     UvIndexOutOfRange {
         triangle: usize,

@@ -3,8 +3,8 @@
 //! Dirichlet, conformal ratio, area distortion, Sander stretch), flips, and global
 //! overlap.
 //!
-//! Conventions (the same as the project's referee `shared/peers/distortion.py`, so the
-//! numbers agree on the same UVs):
+//! Conventions (the same as the referee script BENCHMARKS.md scores every tool's map
+//! with, so the numbers agree on the same UVs):
 //! * **Scale**: UVs are scaled by `k = √(A_3D / Σ|A_UV|)` so both total areas agree
 //!   (thesis §3.1.1, Sander et al. 2001); `uv_scale` reports `k`. Turn off with
 //!   [`MeasureOptions::normalize`].
@@ -245,32 +245,16 @@ fn check_triangles(
             triangles: triangles.len(),
         });
     }
-    for (t, tri) in triangles.iter().enumerate() {
-        for &v in tri {
-            if v as usize >= positions.len() {
-                return Err(MeasureError::VertexIndexOutOfRange {
-                    triangle: t,
-                    index: v,
-                    len: positions.len(),
-                });
-            }
-        }
-    }
+    crate::mesh::check_indices(triangles, positions.len())?;
     Ok(())
 }
 
 /// The first out-of-range vertex index (called once a per-vertex lookup has failed).
 fn vertex_index_error(len: usize, triangles: &[[u32; 3]]) -> MeasureError {
-    for (t, tri) in triangles.iter().enumerate() {
-        if let Some(&v) = tri.iter().find(|&&v| v as usize >= len) {
-            return MeasureError::VertexIndexOutOfRange {
-                triangle: t,
-                index: v,
-                len,
-            };
-        }
+    match crate::mesh::check_indices(triangles, len) {
+        Err(e) => e.into(),
+        Ok(()) => MeasureError::NoTriangles,
     }
-    MeasureError::NoTriangles
 }
 
 /// Signed singular values of every triangle after per-chart orientation and area
@@ -295,9 +279,9 @@ pub fn triangle_singular_values(
             sigma[t] = [s1, s2];
             jac_ok[t] = true;
         } else {
-            let e1 = super::jacobian::sub3(p[1], p[0]);
-            let e2 = super::jacobian::sub3(p[2], p[0]);
-            area3[t] = 0.5 * super::jacobian::norm3(super::jacobian::cross3(e1, e2));
+            let e1 = crate::vec3::sub3(p[1], p[0]);
+            let e2 = crate::vec3::sub3(p[2], p[0]);
+            area3[t] = 0.5 * crate::vec3::norm3(crate::vec3::cross3(e1, e2));
         }
     }
     let mean_area = area3.iter().sum::<f64>() / n as f64;
@@ -754,11 +738,11 @@ mod tests {
         bad[0][1] = 99;
         assert!(matches!(
             distortion_report_per_vertex(&v, &bad, &p, &MeasureOptions::default()),
-            Err(MeasureError::VertexIndexOutOfRange {
+            Err(MeasureError::Index(crate::mesh::IndexError {
                 triangle: 0,
-                index: 99,
+                vertex: 99,
                 ..
-            })
+            }))
         ));
         let mut nan = p.clone();
         nan[4][0] = f64::NAN;

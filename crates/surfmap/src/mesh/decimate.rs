@@ -31,16 +31,16 @@
 //!   drops below the quality floor `4√3·A/Σl² ≥ min_quality` (unless it was already
 //!   below and does not get worse).
 //!
-//! Cost: `O(F log F)` for the topology check ([`Topology::new`], which
-//! [`decimate_with`] takes from the caller), then `O(log F)` per collapse (bounded
+//! Cost: `O(F log F)` for the disc check ([`Disc::new`], which [`decimate_with`] takes
+//! from the caller), then `O(log F)` per collapse (bounded
 //! valence). The vertex–face adjacency is a circular doubly linked list over corners
 //! and the history is packed (fixed-size [`Collapse`] records plus one flat list of
 //! changed faces), so the collapse loop makes no per-collapse allocation (only the
 //! amortized growth of its output vectors and the heap). Lionhead subdivided 3×
 //! (534k vertices) to 20k: about 1.2 s in release on one core, plus 0.4 s for
-//! [`Topology::new`] (`examples/decimate_bench.rs`).
+//! [`Disc::new`] (`examples/decimate_bench.rs`).
 
-use super::{Topology, TriMesh};
+use super::{Disc, NotADisc, PositionError, TriMesh};
 use crate::vec3::{cross3, dot3, sub3};
 
 /// No vertex / no face.
@@ -81,44 +81,12 @@ impl Default for DecimateOptions {
 }
 
 /// Why a mesh cannot be decimated.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[derive(Debug, Clone, thiserror::Error)]
 pub enum DecimateError {
-    #[error("the mesh has no faces: there is nothing to decimate")]
-    NoFaces,
-    #[error("triangle {triangle} uses vertex {vertex}, but the mesh has {vertices} vertices")]
-    IndexOutOfRange {
-        triangle: usize,
-        vertex: u32,
-        vertices: usize,
-    },
-    #[error(
-        "vertex {vertex} has a NaN or infinite coordinate; fix the exporter or drop it (--drop-unreferenced if no face uses it)"
-    )]
-    NonFiniteCoordinates { vertex: u32 },
-    #[error(
-        "triangle {triangle} uses vertex {vertex} twice; remove such faces first (--drop-degenerate)"
-    )]
-    RepeatedIndexFace { triangle: usize, vertex: u32 },
-    #[error(
-        "the mesh has {0} connected components; decimation needs one disc (use --keep-largest)"
-    )]
-    SeveralComponents(usize),
-    #[error(
-        "the mesh is not manifold ({edges} edges with more than two faces, {vertices} vertices with several fans); repair it first"
-    )]
-    NonManifold { edges: usize, vertices: usize },
-    #[error(
-        "the triangles are not consistently oriented ({0} edges are traversed twice in the same direction); use --reorient"
-    )]
-    InconsistentOrientation(usize),
-    #[error("the mesh is closed (no boundary); cut it open into a disc first")]
-    Closed,
-    #[error(
-        "the mesh has {0} boundary loops; decimation needs a disc with exactly one (--fill-holes, or cut)"
-    )]
-    SeveralBoundaryLoops(usize),
-    #[error("the mesh has genus {0}; cut it into a disc first")]
-    PositiveGenus(u32),
+    #[error(transparent)]
+    NotADisc(#[from] NotADisc),
+    #[error(transparent)]
+    Positions(#[from] PositionError),
     #[error("invalid decimation option: {0}")]
     InvalidOption(&'static str),
 }
@@ -251,14 +219,12 @@ impl Decimation {
 }
 
 /// Decimates the disc `mesh` to `target_vertices` vertices with default options (see
-/// [`decimate_with`]).
+/// [`decimate_with`]); an error names every defect when `mesh` is not a disc.
 pub fn decimate(mesh: &TriMesh, target_vertices: usize) -> Result<Decimation, DecimateError> {
-    // Topology::new requires in-range indices.
-    check_indices(mesh)?;
-    let topology = Topology::new(mesh);
+    let disc = Disc::new(mesh)?;
     decimate_with(
-        mesh,
-        &topology,
+        &mesh.positions,
+        &disc,
         &DecimateOptions {
             target_vertices,
             ..Default::default()
@@ -266,20 +232,20 @@ pub fn decimate(mesh: &TriMesh, target_vertices: usize) -> Result<Decimation, De
     )
 }
 
-/// Decimates the disc `mesh` (with its topology `topology`, from [`Topology::new`]) by
-/// half-edge collapses until `options.target_vertices` used vertices are left or no
-/// valid collapse remains (then `reached_target` is false). Deterministic.
+/// Decimates `disc` with vertex positions `positions` by half-edge collapses until
+/// `options.target_vertices` used vertices are left or no valid collapse remains (then
+/// `reached_target` is false). Deterministic.
 ///
-/// Errors: anything but one manifold, consistently oriented disc with finite
-/// coordinates and proper triangles, or out-of-range options.
+/// Errors: positions that do not fit the disc (count, finiteness), or out-of-range
+/// options.
 pub fn decimate_with(
-    mesh: &TriMesh,
-    topology: &Topology,
+    positions: &[[f64; 3]],
+    disc: &Disc,
     options: &DecimateOptions,
 ) -> Result<Decimation, DecimateError> {
     check_options(options)?;
-    check_disc(mesh, topology)?;
-    let mut state = State::new(mesh, topology, options);
+    disc.check_positions(positions)?;
+    let mut state = State::new(positions, disc, options);
     let target = options.target_vertices;
     while state.live > target {
         let Some(entry) = state.heap.pop() else { break };
@@ -333,71 +299,6 @@ fn check_options(o: &DecimateOptions) -> Result<(), DecimateError> {
         ));
     }
     Ok(())
-}
-
-fn check_indices(mesh: &TriMesh) -> Result<(), DecimateError> {
-    match mesh.first_invalid_index() {
-        Some((t, k)) => Err(DecimateError::IndexOutOfRange {
-            triangle: t,
-            vertex: mesh.triangles[t][k],
-            vertices: mesh.positions.len(),
-        }),
-        None => Ok(()),
-    }
-}
-
-/// One manifold, consistently oriented disc with finite coordinates and proper faces.
-fn check_disc(mesh: &TriMesh, topology: &Topology) -> Result<(), DecimateError> {
-    if mesh.triangles.is_empty() {
-        return Err(DecimateError::NoFaces);
-    }
-    check_indices(mesh)?;
-    if topology.face_edges.len() != mesh.triangles.len() {
-        return Err(DecimateError::InvalidOption(
-            "the topology does not belong to this mesh",
-        ));
-    }
-    for (t, &[a, b, c]) in mesh.triangles.iter().enumerate() {
-        if a == b || a == c || b == c {
-            let vertex = if a == b || a == c { a } else { b };
-            return Err(DecimateError::RepeatedIndexFace {
-                triangle: t,
-                vertex,
-            });
-        }
-        for v in [a, b, c] {
-            if mesh.positions[v as usize].iter().any(|x| !x.is_finite()) {
-                return Err(DecimateError::NonFiniteCoordinates { vertex: v });
-            }
-        }
-    }
-    if topology.num_components != 1 {
-        return Err(DecimateError::SeveralComponents(topology.num_components));
-    }
-    if !topology.is_manifold() {
-        return Err(DecimateError::NonManifold {
-            edges: topology.non_manifold_edges.len(),
-            vertices: topology.non_manifold_vertices.len(),
-        });
-    }
-    if !topology.inconsistent_edges.is_empty() || !topology.orientable {
-        return Err(DecimateError::InconsistentOrientation(
-            topology.inconsistent_edges.len(),
-        ));
-    }
-    match topology.boundary_loops.len() {
-        0 => return Err(DecimateError::Closed),
-        1 => {}
-        n => return Err(DecimateError::SeveralBoundaryLoops(n)),
-    }
-    match topology.genus() {
-        Some(0) => Ok(()),
-        Some(g) => Err(DecimateError::PositiveGenus(g)),
-        None => Err(DecimateError::NonManifold {
-            edges: topology.non_manifold_edges.len(),
-            vertices: topology.non_manifold_vertices.len(),
-        }),
-    }
 }
 
 /// Symmetric quadric `Q(x) = xᵀA x + 2 bᵀx + c`, stored as
@@ -607,15 +508,15 @@ struct State {
 }
 
 impl State {
-    fn new(mesh: &TriMesh, topology: &Topology, o: &DecimateOptions) -> Self {
-        let nv = mesh.positions.len();
-        let nf = mesh.triangles.len();
-        let center = match mesh.bounding_box() {
+    fn new(positions: &[[f64; 3]], disc: &Disc, o: &DecimateOptions) -> Self {
+        let triangles = disc.triangles();
+        let nv = positions.len();
+        let nf = triangles.len();
+        let center = match super::bounding_box(positions) {
             Some((lo, hi)) => std::array::from_fn(|k| 0.5 * (lo[k] + hi[k])),
             None => [0.0; 3],
         };
-        let pos: Vec<[f64; 4]> = mesh
-            .positions
+        let pos: Vec<[f64; 4]> = positions
             .iter()
             .map(|&p| {
                 let [x, y, z] = sub3(p, center);
@@ -628,7 +529,7 @@ impl State {
         let mut next = vec![NONE; 3 * nf];
         let mut prev = vec![NONE; 3 * nf];
         let mut num_faces = vec![0u32; nv];
-        for (f, tri) in mesh.triangles.iter().enumerate() {
+        for (f, tri) in triangles.iter().enumerate() {
             for (k, &v) in tri.iter().enumerate() {
                 let c = (3 * f + k) as u32;
                 let v = v as usize;
@@ -652,7 +553,7 @@ impl State {
 
         // Face quadrics, area-weighted; remember unit normals for the boundary planes.
         let mut quadric = vec![Quadric::default(); nv];
-        for tri in &mesh.triangles {
+        for tri in triangles {
             let [a, b, c] = tri.map(|v| xyz(pos[v as usize]));
             let n = cross3(sub3(b, a), sub3(c, a));
             let len = dot3(n, n).sqrt();
@@ -668,7 +569,7 @@ impl State {
         // Boundary loop (oriented with the faces) and boundary planes.
         let mut bnext = vec![NONE; nv];
         let mut bprev = vec![NONE; nv];
-        let boundary = &topology.boundary_loops[0].vertices;
+        let boundary = disc.boundary();
         let m = boundary.len();
         for i in 0..m {
             let (a, b) = (boundary[i], boundary[(i + 1) % m]);
@@ -677,7 +578,7 @@ impl State {
         }
         let mut state = State {
             pos,
-            faces: mesh.triangles.clone(),
+            faces: triangles.to_vec(),
             next,
             prev,
             head,
@@ -1211,11 +1112,22 @@ impl State {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mesh::Topology;
     use crate::mesh::generate::{
-        bumpy_disc, cylinder_patch, disc_boundary, grid_disc, polar_disc, spherical_cap,
-        unit_square,
+        bumpy_disc, cylinder_patch, disc_boundary, grid_disc, octahedron, polar_disc,
+        spherical_cap, unit_square,
     };
-    use crate::mesh::validate::validate;
+    use crate::mesh::validate::{DefectKind, validate};
+
+    /// The defect kinds of a refusal.
+    fn refused(result: Result<Decimation, DecimateError>) -> Vec<DefectKind> {
+        match result {
+            Err(DecimateError::NotADisc(NotADisc::Defects(d))) => {
+                d.iter().map(|d| d.kind).collect()
+            }
+            other => panic!("expected a refusal with defects, got {other:?}"),
+        }
+    }
 
     fn all_some(tris: &[[u32; 3]]) -> Vec<Option<[u32; 3]>> {
         tris.iter().map(|&t| Some(t)).collect()
@@ -1364,7 +1276,8 @@ mod tests {
             min_quality: 0.0,
             ..Default::default()
         };
-        let mut state = State::new(&mesh, &topology, &geometry_off);
+        let disc = Disc::with_topology(&mesh, topology).unwrap();
+        let mut state = State::new(&mesh.positions, &disc, &geometry_off);
         assert!(!state.can_collapse(0, 1), "u → v breaks the link condition");
         assert!(state.can_collapse(3, 0), "a → u is a valid collapse");
     }
@@ -1384,7 +1297,7 @@ mod tests {
             grid_disc(8),
             spherical_cap(1.0, 2.5, 5, 9),
         ] {
-            let dec = decimate_with(&mesh, &Topology::new(&mesh), &options).unwrap();
+            let dec = decimate_with(&mesh.positions, &Disc::new(&mesh).unwrap(), &options).unwrap();
             let mut faces = all_some(&mesh.triangles);
             for (i, c) in dec.collapses.iter().enumerate() {
                 dec.redo(&mut faces, c);
@@ -1420,7 +1333,7 @@ mod tests {
     }
 
     fn check_normal_and_quality_limits(mesh: &TriMesh, options: DecimateOptions) {
-        let dec = decimate_with(mesh, &Topology::new(mesh), &options).unwrap();
+        let dec = decimate_with(&mesh.positions, &Disc::new(mesh).unwrap(), &options).unwrap();
         let cos_limit = options.max_normal_change_deg.to_radians().cos();
         let mut faces = all_some(&mesh.triangles);
         let tri = |t: [u32; 3]| t.map(|v| mesh.positions[v as usize]);
@@ -1546,93 +1459,91 @@ mod tests {
 
     #[test]
     fn non_disc_input_is_refused_with_the_reason() {
-        let octahedron = TriMesh::new(
-            vec![
-                [1., 0., 0.],
-                [-1., 0., 0.],
-                [0., 1., 0.],
-                [0., -1., 0.],
-                [0., 0., 1.],
-                [0., 0., -1.],
-            ],
-            vec![
-                [0, 2, 4],
-                [2, 1, 4],
-                [1, 3, 4],
-                [3, 0, 4],
-                [2, 0, 5],
-                [1, 2, 5],
-                [3, 1, 5],
-                [0, 3, 5],
-            ],
+        let octahedron = octahedron();
+        assert_eq!(
+            refused(decimate(&octahedron, 3)),
+            [DefectKind::ClosedSurface]
         );
-        assert_eq!(decimate(&octahedron, 3), Err(DecimateError::Closed));
 
         // Annulus: a polar disc without its center fan.
         let mut annulus = polar_disc(3, 10);
         annulus.triangles.retain(|t| !t.contains(&0));
         let e = decimate(&annulus, 5).unwrap_err();
-        assert_eq!(e, DecimateError::SeveralBoundaryLoops(2));
-        assert!(e.to_string().contains("2 boundary loops"));
+        assert!(e.to_string().contains("2 boundary loops"), "{e}");
+        assert_eq!(refused(Err(e)), [DefectKind::SeveralBoundaryLoops]);
 
         let mut two = unit_square();
         two.positions
             .extend([[5., 0., 0.], [6., 0., 0.], [5., 1., 0.]]);
         two.triangles.push([4, 5, 6]);
-        assert_eq!(decimate(&two, 3), Err(DecimateError::SeveralComponents(2)));
+        assert!(refused(decimate(&two, 3)).contains(&DefectKind::SeveralComponents));
 
         let mut flipped = grid_disc(3);
         flipped.triangles[4].swap(1, 2);
-        assert!(
-            matches!(decimate(&flipped, 4), Err(DecimateError::InconsistentOrientation(n)) if n > 0)
+        assert_eq!(
+            refused(decimate(&flipped, 4)),
+            [DefectKind::InconsistentOrientation]
         );
 
         let mut fin = unit_square();
         fin.positions.push([0.5, 0.5, 1.0]);
         fin.triangles.push([0, 2, 4]);
-        assert!(matches!(
-            decimate(&fin, 3),
-            Err(DecimateError::NonManifold { edges: 1, .. })
-        ));
+        assert!(refused(decimate(&fin, 3)).contains(&DefectKind::NonManifoldEdges));
 
         let mut repeated = grid_disc(2);
         repeated.triangles[1] = [0, 0, 3];
-        assert!(matches!(
-            decimate(&repeated, 4),
-            Err(DecimateError::RepeatedIndexFace { triangle: 1, .. })
-        ));
+        assert!(refused(decimate(&repeated, 4)).contains(&DefectKind::RepeatedIndexFaces));
 
         let mut nan = grid_disc(2);
         nan.positions[4][2] = f64::NAN;
         assert_eq!(
-            decimate(&nan, 4),
-            Err(DecimateError::NonFiniteCoordinates { vertex: 4 })
+            refused(decimate(&nan, 4)),
+            [DefectKind::NonFiniteCoordinates]
         );
 
         let mut out_of_range = grid_disc(2);
         out_of_range.triangles[0][2] = 99;
         assert!(matches!(
             decimate(&out_of_range, 4),
-            Err(DecimateError::IndexOutOfRange {
-                triangle: 0,
-                vertex: 99,
-                ..
-            })
+            Err(DecimateError::NotADisc(NotADisc::Index(
+                crate::mesh::IndexError {
+                    triangle: 0,
+                    vertex: 99,
+                    ..
+                }
+            )))
         ));
 
         assert_eq!(
-            decimate(&TriMesh::default(), 4),
-            Err(DecimateError::NoFaces)
+            refused(decimate(&TriMesh::default(), 4)),
+            [DefectKind::NoFaces]
         );
 
         let mesh = grid_disc(2);
+        let disc = Disc::new(&mesh).unwrap();
         let bad = DecimateOptions {
             min_quality: 1.5,
             ..Default::default()
         };
         assert!(matches!(
-            decimate_with(&mesh, &Topology::new(&mesh), &bad),
+            decimate_with(&mesh.positions, &disc, &bad),
             Err(DecimateError::InvalidOption(_))
+        ));
+        // Positions that do not fit the disc.
+        assert!(matches!(
+            decimate_with(&mesh.positions[1..], &disc, &DecimateOptions::default()),
+            Err(DecimateError::Positions(PositionError::Count {
+                positions: 8,
+                vertices: 9
+            }))
+        ));
+        let mut moved = mesh.positions.clone();
+        moved[2][0] = f64::INFINITY;
+        assert!(matches!(
+            decimate_with(&moved, &disc, &DecimateOptions::default()),
+            Err(DecimateError::Positions(PositionError::NonFinite {
+                vertex: 2
+            }))
         ));
     }
 
@@ -1681,15 +1592,7 @@ mod tests {
 
     #[test]
     fn real_mesh_decimates_to_a_disc_and_back() {
-        let crate_dir = env!("CARGO_MANIFEST_DIR");
-        let Some(path) = [
-            format!("{crate_dir}/../../../shared/data/camelhead.off"),
-            format!("{crate_dir}/../../../../shared/data/camelhead.off"),
-        ]
-        .into_iter()
-        .map(std::path::PathBuf::from)
-        .find(|p| p.is_file()) else {
-            eprintln!("note: shared/data/camelhead.off not found; skipping real-mesh test");
+        let Some(path) = crate::testing::shared_file("camelhead.off") else {
             return;
         };
         let mesh = crate::mesh::io::read_mesh(&path).unwrap().mesh;

@@ -23,6 +23,31 @@ pub fn unit_square() -> TriMesh {
     )
 }
 
+/// The regular octahedron with vertices `±e_x, ±e_y, ±e_z`, outward-facing: a closed
+/// surface (genus 0, no boundary), for tests of what is not a disc.
+pub fn octahedron() -> TriMesh {
+    TriMesh::new(
+        vec![
+            [1., 0., 0.],
+            [-1., 0., 0.],
+            [0., 1., 0.],
+            [0., -1., 0.],
+            [0., 0., 1.],
+            [0., 0., -1.],
+        ],
+        vec![
+            [0, 2, 4],
+            [2, 1, 4],
+            [1, 3, 4],
+            [3, 0, 4],
+            [2, 0, 5],
+            [1, 2, 5],
+            [3, 1, 5],
+            [0, 3, 5],
+        ],
+    )
+}
+
 /// Planar `n × n` grid of squares on `[0, 1]² × {0}`: `(n + 1)²` vertices, vertex
 /// `(i, j)` (row `j`, column `i`) at `(i/n, j/n, 0)` has index `j·(n + 1) + i`. Each
 /// square is split along the diagonal from `(i, j)` to `(i + 1, j + 1)`. `n ≥ 1`

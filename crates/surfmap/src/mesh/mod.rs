@@ -1,7 +1,9 @@
 //! Triangle meshes: positions and triangles (connectivity kept apart from derived
-//! topology), file input/output, validation and opt-in repairs.
+//! topology), file input/output, validation, the validated [`Disc`], opt-in repairs and
+//! decimation.
 
 pub mod decimate;
+pub mod disc;
 pub mod generate;
 pub mod io;
 pub mod repair;
@@ -9,7 +11,53 @@ pub mod subdivide;
 pub mod topology;
 pub mod validate;
 
+pub use disc::{Disc, NotADisc, PositionError};
 pub use topology::{BoundaryLoop, Topology};
+
+use crate::vec3::{cross3, norm3, sub3};
+
+/// A triangle corner that names a vertex the mesh does not have: the one error every
+/// function taking `(positions, triangles)` returns for it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "triangle {triangle} uses vertex {vertex} (corner {corner}), but the mesh has only {num_vertices} vertices; the triangles do not belong to these positions"
+)]
+pub struct IndexError {
+    pub triangle: usize,
+    /// Which corner of the triangle (0, 1 or 2).
+    pub corner: usize,
+    pub vertex: u32,
+    pub num_vertices: usize,
+}
+
+/// Axis-aligned bounding box `(min, max)` of the finite points; `None` when there are none.
+pub fn bounding_box(points: &[[f64; 3]]) -> Option<([f64; 3], [f64; 3])> {
+    let mut it = points.iter().filter(|p| p.iter().all(|x| x.is_finite()));
+    let first = *it.next()?;
+    let (mut lo, mut hi) = (first, first);
+    for p in it {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    Some((lo, hi))
+}
+
+/// The first triangle corner whose vertex index is not below `num_vertices`, as an error.
+pub fn check_indices(triangles: &[[u32; 3]], num_vertices: usize) -> Result<(), IndexError> {
+    for (triangle, tri) in triangles.iter().enumerate() {
+        if let Some(corner) = tri.iter().position(|&v| v as usize >= num_vertices) {
+            return Err(IndexError {
+                triangle,
+                corner,
+                vertex: tri[corner],
+                num_vertices,
+            });
+        }
+    }
+    Ok(())
+}
 
 /// Texture coordinates attached to a mesh.
 #[derive(Clone, Debug, PartialEq)]
@@ -67,14 +115,7 @@ impl TriMesh {
     /// Area of triangle `t` in 3D: `|(b − a) × (c − a)| / 2`.
     pub fn triangle_area(&self, t: usize) -> f64 {
         let [a, b, c] = self.triangle_positions(t);
-        let e1 = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-        let e2 = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-        let n = [
-            e1[1] * e2[2] - e1[2] * e2[1],
-            e1[2] * e2[0] - e1[0] * e2[2],
-            e1[0] * e2[1] - e1[1] * e2[0],
-        ];
-        0.5 * (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt()
+        0.5 * norm3(cross3(sub3(b, a), sub3(c, a)))
     }
 
     /// Total 3D surface area.
@@ -86,28 +127,12 @@ impl TriMesh {
 
     /// Axis-aligned bounding box `(min, max)` of the finite positions; `None` when there are none.
     pub fn bounding_box(&self) -> Option<([f64; 3], [f64; 3])> {
-        let mut it = self
-            .positions
-            .iter()
-            .filter(|p| p.iter().all(|x| x.is_finite()));
-        let first = *it.next()?;
-        let (mut lo, mut hi) = (first, first);
-        for p in it {
-            for k in 0..3 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
-        Some((lo, hi))
+        bounding_box(&self.positions)
     }
 
-    /// The first triangle `(t, corner)` whose vertex index is out of range, if any.
-    pub fn first_invalid_index(&self) -> Option<(usize, usize)> {
-        let n = self.positions.len();
-        self.triangles
-            .iter()
-            .enumerate()
-            .find_map(|(t, tri)| tri.iter().position(|&v| v as usize >= n).map(|k| (t, k)))
+    /// Every triangle's vertex indices are below the vertex count ([`check_indices`]).
+    pub fn check_indices(&self) -> Result<(), IndexError> {
+        check_indices(&self.triangles, self.positions.len())
     }
 
     /// Per-vertex UVs, when the mesh carries them per vertex (or per corner with

@@ -49,7 +49,7 @@ impl Topology {
     /// Works on any triangle soup: non-manifold edges, inconsistent orientation and
     /// unreferenced vertices are recorded, never rejected. Precondition: every vertex
     /// index is below `positions.len()` (the readers guarantee it; check meshes built
-    /// by hand with [`TriMesh::first_invalid_index`]).
+    /// by hand with [`TriMesh::check_indices`]).
     pub fn new(mesh: &TriMesh) -> Self {
         let nf = mesh.triangles.len();
         let nv = mesh.positions.len();

@@ -2,6 +2,9 @@
 //! disc, and says what it means and which repair option fixes it.
 //!
 //! Defects are reported, never fixed here; see [`super::repair`] for the opt-in fixes.
+//! Each defect says what is wrong ([`Defect::problem`]) and what to do about it in the
+//! library's terms ([`Defect::remedy`]: the `repair` function or option that fixes it);
+//! the command-line tool words the same remedies as its flags.
 
 use super::{Topology, TriMesh};
 use serde::Serialize;
@@ -27,17 +30,32 @@ pub enum DefectKind {
     SeveralBoundaryLoops,
 }
 
-/// One defect: its kind, how many elements it affects, the first few of them, and a
-/// message that says what it means for flattening and what to do.
+/// One defect: its kind, how many elements it affects, the first few of them, what it
+/// means for flattening and what to do.
 #[derive(Clone, Debug, Serialize)]
 pub struct Defect {
     pub kind: DefectKind,
     pub count: usize,
     /// First few offending elements (vertex ids, face ids or vertex pairs, by kind).
     pub examples: Vec<Vec<u64>>,
-    pub message: String,
+    /// What is wrong, where, and what it means for flattening.
+    pub problem: String,
+    /// What to do, in library terms (the `mesh::repair` function or the option that
+    /// fixes it, or the manual fix); empty when there is nothing to say.
+    pub remedy: String,
     /// Whether this defect alone prevents flattening as a disc.
     pub blocks_flattening: bool,
+}
+
+impl Defect {
+    /// Problem and remedy in one sentence.
+    pub fn message(&self) -> String {
+        if self.remedy.is_empty() {
+            self.problem.clone()
+        } else {
+            format!("{} {}", self.problem, self.remedy)
+        }
+    }
 }
 
 const EXAMPLES: usize = 5;
@@ -117,17 +135,19 @@ pub fn unreferenced_vertices(mesh: &TriMesh) -> Vec<u32> {
 /// Finds every defect of `mesh` (with its topology `topo`).
 pub fn validate(mesh: &TriMesh, topo: &Topology) -> Vec<Defect> {
     let mut out = Vec::new();
-    let mut push = |kind, count: usize, examples: Vec<Vec<u64>>, message: String, blocks| {
-        if count > 0 {
-            out.push(Defect {
-                kind,
-                count,
-                examples,
-                message,
-                blocks_flattening: blocks,
-            });
-        }
-    };
+    let mut push =
+        |kind, count: usize, examples: Vec<Vec<u64>>, problem: String, remedy: &str, blocks| {
+            if count > 0 {
+                out.push(Defect {
+                    kind,
+                    count,
+                    examples,
+                    problem,
+                    remedy: remedy.to_owned(),
+                    blocks_flattening: blocks,
+                });
+            }
+        };
     let one = |v: &[u32]| {
         v.iter()
             .take(EXAMPLES)
@@ -144,11 +164,11 @@ pub fn validate(mesh: &TriMesh, topo: &Topology) -> Vec<Defect> {
         non_finite.len(),
         ex.clone(),
         format!(
-            "{} vertices have NaN or infinite coordinates (first: {}); no geometry can be computed from them. \
-             Fix the exporter, or drop them with --drop-unreferenced if no face uses them.",
+            "{} vertices have NaN or infinite coordinates (first: {}); no geometry can be computed from them.",
             non_finite.len(),
             fmt_examples(&ex)
         ),
+        "Fix the exporter, or drop them with `repair::drop_unreferenced` if no face uses them.",
         true,
     );
     if mesh.triangles.is_empty() {
@@ -157,6 +177,7 @@ pub fn validate(mesh: &TriMesh, topo: &Topology) -> Vec<Defect> {
             1,
             vec![],
             "the mesh has no faces: there is nothing to flatten (is it a point cloud?)".into(),
+            "",
             true,
         );
         return out;
@@ -169,11 +190,11 @@ pub fn validate(mesh: &TriMesh, topo: &Topology) -> Vec<Defect> {
         repeated.len(),
         ex.clone(),
         format!(
-            "{} faces use the same vertex twice (first faces: {}); they have no area and no Jacobian. \
-             Use --drop-degenerate to remove them.",
+            "{} faces use the same vertex twice (first faces: {}); they have no area and no Jacobian.",
             repeated.len(),
             fmt_examples(&ex)
         ),
+        "Remove them with `repair::drop_degenerate`.",
         true,
     );
     let zero = zero_area_faces(mesh);
@@ -183,11 +204,11 @@ pub fn validate(mesh: &TriMesh, topo: &Topology) -> Vec<Defect> {
         zero.len(),
         ex.clone(),
         format!(
-            "{} faces have zero area (collinear corners; first faces: {}); the elastic energy is undefined on them. \
-             Use --drop-degenerate to remove them (this may open holes), or fix them in a mesh editor.",
+            "{} faces have zero area (collinear corners; first faces: {}); the elastic energy is undefined on them.",
             zero.len(),
             fmt_examples(&ex)
         ),
+        "Remove them with `repair::drop_degenerate` (this may open holes), or fix them in a mesh editor.",
         true,
     );
 
@@ -198,11 +219,11 @@ pub fn validate(mesh: &TriMesh, topo: &Topology) -> Vec<Defect> {
         unref.len(),
         ex.clone(),
         format!(
-            "{} vertices are used by no face (first: {}); they are harmless but get no UV. \
-             Use --drop-unreferenced to remove them.",
+            "{} vertices are used by no face (first: {}); they are harmless but get no UV.",
             unref.len(),
             fmt_examples(&ex)
         ),
+        "Remove them with `repair::drop_unreferenced`.",
         false,
     );
     let dups = duplicate_vertices(mesh);
@@ -217,10 +238,11 @@ pub fn validate(mesh: &TriMesh, topo: &Topology) -> Vec<Defect> {
         ex.clone(),
         format!(
             "{} vertices sit exactly on another vertex (pairs: {}); the surface is probably cut there \
-             (seams or cracks), which adds boundary loops or components. Use --weld to merge coincident vertices.",
+             (seams or cracks), which adds boundary loops or components.",
             dups.len(),
             fmt_examples(&ex)
         ),
+        "Merge coincident vertices with `repair::weld`.",
         false,
     );
 
@@ -245,8 +267,7 @@ pub fn validate(mesh: &TriMesh, topo: &Topology) -> Vec<Defect> {
                 .map(|&c| vec![c as u64, sizes[c] as u64])
                 .collect(),
             format!(
-                "the mesh has {} connected components ({}{}); a flattening maps one piece. \
-                 Use --keep-largest, or --component N to choose one.",
+                "the mesh has {} connected components ({}{}); a flattening maps one piece.",
                 topo.num_components,
                 listed.join(", "),
                 if topo.num_components > EXAMPLES {
@@ -255,6 +276,7 @@ pub fn validate(mesh: &TriMesh, topo: &Topology) -> Vec<Defect> {
                     ""
                 }
             ),
+            "Keep one with `repair::keep_component` (the largest, or one by number).",
             true,
         );
     }
@@ -270,11 +292,12 @@ pub fn validate(mesh: &TriMesh, topo: &Topology) -> Vec<Defect> {
         ex.clone(),
         format!(
             "{} edges are shared by more than two faces (vertex pairs: {}); such a surface cannot be flattened \
-             without cutting. No automatic fix: remove the extra faces (fins, internal walls) in a mesh editor, \
-             or try --keep-largest if they belong to a stray piece.",
+             without cutting.",
             topo.non_manifold_edges.len(),
             fmt_examples(&ex)
         ),
+        "No automatic fix: remove the extra faces (fins, internal walls) in a mesh editor, \
+         or try `repair::keep_component` if they belong to a stray piece.",
         true,
     );
     let ex = one(&topo.non_manifold_vertices);
@@ -284,10 +307,11 @@ pub fn validate(mesh: &TriMesh, topo: &Topology) -> Vec<Defect> {
         ex.clone(),
         format!(
             "{} vertices join two or more otherwise separate fans of faces (first: {}); the surface pinches \
-             there, so it is not a disc. No automatic fix: split those vertices in a mesh editor.",
+             there, so it is not a disc.",
             topo.non_manifold_vertices.len(),
             fmt_examples(&ex)
         ),
+        "No automatic fix: split those vertices in a mesh editor.",
         true,
     );
     if !topo.orientable {
@@ -296,8 +320,9 @@ pub fn validate(mesh: &TriMesh, topo: &Topology) -> Vec<Defect> {
             1,
             vec![],
             "the surface is not orientable (like a Möbius strip): no consistent front side exists, so it cannot \
-             be flattened without flipping triangles. Cut it into orientable pieces first."
+             be flattened without flipping triangles."
                 .into(),
+            "Cut it into orientable pieces first.",
             true,
         );
     } else if !topo.inconsistent_edges.is_empty() {
@@ -313,11 +338,12 @@ pub fn validate(mesh: &TriMesh, topo: &Topology) -> Vec<Defect> {
             ex.clone(),
             format!(
                 "{} edges are traversed in the same direction by both of their faces (vertex pairs: {}); \
-                 {} faces must be flipped for a consistent orientation. Use --reorient.",
+                 {} faces must be flipped for a consistent orientation.",
                 topo.inconsistent_edges.len(),
                 fmt_examples(&ex),
                 topo.faces_to_flip.unwrap_or(0)
             ),
+            "Flip them with `repair::reorient`.",
             true,
         );
     }
@@ -330,10 +356,10 @@ pub fn validate(mesh: &TriMesh, topo: &Topology) -> Vec<Defect> {
                 1,
                 vec![],
                 format!(
-                    "the surface is closed (no boundary, genus {}); a disc map needs exactly one boundary loop. \
-                     Cut it open first (e.g. remove a cap or cut along a seam).",
+                    "the surface is closed (no boundary, genus {}); a disc map needs exactly one boundary loop.",
                     topo.genus().map_or("?".into(), |g| g.to_string())
                 ),
+                "Cut it open first (e.g. remove a cap or cut along a seam).",
                 true,
             );
         }
@@ -342,10 +368,8 @@ pub fn validate(mesh: &TriMesh, topo: &Topology) -> Vec<Defect> {
                 DefectKind::PositiveGenus,
                 g as usize,
                 vec![],
-                format!(
-                    "the surface has genus {g} (handles); a disc has genus 0. Cut each handle open \
-                     (2·genus cuts) before flattening."
-                ),
+                format!("the surface has genus {g} (handles); a disc has genus 0."),
+                "Cut each handle open (2·genus cuts) before flattening.",
                 true,
             );
         }
@@ -367,8 +391,7 @@ pub fn validate(mesh: &TriMesh, topo: &Topology) -> Vec<Defect> {
                 .collect(),
             format!(
                 "found {loops} boundary loops (edge counts: {}{}); a disc has exactly one. The others are holes \
-                 (eyes, mouth, scan gaps): use --fill-holes to fill all but the longest for the flattening (they stay \
-                 open in the output), or cut from each hole to the outer boundary.",
+                 (eyes, mouth, scan gaps):",
                 lens.iter()
                     .take(EXAMPLES)
                     .map(|(n, _)| n.to_string())
@@ -376,6 +399,8 @@ pub fn validate(mesh: &TriMesh, topo: &Topology) -> Vec<Defect> {
                     .join(", "),
                 if loops > EXAMPLES { ", …" } else { "" }
             ),
+            "set `FlattenOptions::fill_holes` (or call `repair::fill_holes`) to fill all but the longest \
+             for the flattening (they stay open in the map), or cut from each hole to the outer boundary.",
             true,
         );
     }
@@ -446,11 +471,20 @@ mod tests {
             .iter()
             .find(|d| d.kind == DefectKind::SeveralComponents)
             .unwrap();
-        assert!(comp.message.contains("--keep-largest"), "{}", comp.message);
+        assert!(comp.remedy.contains("keep_component"), "{}", comp.remedy);
         assert!(
-            comp.message.contains("2 connected components"),
+            comp.message().contains("2 connected components"),
             "{}",
-            comp.message
+            comp.message()
         );
+        // Every remedy names the repair in library terms, never a command-line flag.
+        let mut m = square();
+        m.positions.push([1.0, 0.0, 0.0]);
+        m.positions.push([0.5, 0.5, f64::NAN]);
+        m.triangles.push([0, 0, 1]);
+        m.triangles[1] = [0, 3, 2];
+        for d in validate(&m, &Topology::new(&m)) {
+            assert!(!d.message().contains("--"), "{}", d.message());
+        }
     }
 }

@@ -13,14 +13,15 @@
 //! can never flip a triangle or raise the energy.
 
 use super::element::RestTriangle;
-use crate::linsolve::{Ordering, SolveError, SpdSystem, VertexOrdering};
+use crate::linsolve::{Ordering, SolveError, SpdSystem, Unknowns, VertexOrdering};
 
 /// The factorized ARAP global step of one mesh.
 pub struct ArapStep<'m> {
     triangles: &'m [[u32; 3]],
     rest: &'m [RestTriangle],
-    /// Unknown of each vertex, `u32::MAX` for the pinned one (fixes translation).
-    unknown: Vec<u32>,
+    /// Unknown of each vertex; the pinned one (fixes translation) is fixed.
+    unknown: Unknowns,
+    pinned: u32,
     system: SpdSystem,
 }
 
@@ -47,23 +48,16 @@ impl<'m> ArapStep<'m> {
         pinned: u32,
         ordering: Option<&VertexOrdering>,
     ) -> Result<Self, SolveError> {
-        let mut unknown = vec![0u32; num_vertices];
-        unknown[pinned as usize] = u32::MAX;
-        let mut n = 0u32;
-        for u in unknown.iter_mut() {
-            if *u != u32::MAX {
-                *u = n;
-                n += 1;
-            }
-        }
+        let unknown = Unknowns::new(num_vertices, [pinned as usize]);
         let mut entries = Vec::with_capacity(6 * triangles.len());
         let mut values = Vec::with_capacity(6 * triangles.len());
         for (tri, r) in triangles.iter().zip(rest) {
             let c = gradient_coefficients(r);
             for i in 0..3 {
                 for j in 0..=i {
-                    let (a, b) = (unknown[tri[i] as usize], unknown[tri[j] as usize]);
-                    if a != u32::MAX && b != u32::MAX {
+                    if let (Some(a), Some(b)) =
+                        (unknown.get(tri[i] as usize), unknown.get(tri[j] as usize))
+                    {
                         entries.push((a, b));
                         values.push(r.area * (c[i][0] * c[j][0] + c[i][1] * c[j][1]));
                     }
@@ -74,7 +68,7 @@ impl<'m> ArapStep<'m> {
             Some(vertices) => vertices.expand(1, &unknown)?,
             None => Ordering::Amd,
         };
-        let (mut system, slots) = SpdSystem::with_ordering(n as usize, &entries, &ordering)?;
+        let (mut system, slots) = SpdSystem::with_ordering(unknown.count(), &entries, &ordering)?;
         let v = system.values_mut();
         for (&s, &x) in slots.iter().zip(&values) {
             v[s as usize] += x;
@@ -84,6 +78,7 @@ impl<'m> ArapStep<'m> {
             triangles,
             rest,
             unknown,
+            pinned,
             system,
         })
     }
@@ -93,11 +88,7 @@ impl<'m> ArapStep<'m> {
     pub fn target(&self, uv: &[[f64; 2]], target: &mut Vec<[f64; 2]>) -> Result<(), SolveError> {
         let n = self.system.dim();
         let mut rhs = [vec![0.0; n], vec![0.0; n]];
-        let pinned_uv = self
-            .unknown
-            .iter()
-            .position(|&u| u == u32::MAX)
-            .map(|v| uv[v]);
+        let pinned_uv = uv[self.pinned as usize];
         for (tri, r) in self.triangles.iter().zip(self.rest) {
             let corners = [
                 uv[tri[0] as usize],
@@ -117,21 +108,22 @@ impl<'m> ArapStep<'m> {
             for k in 0..3 {
                 let v = tri[k] as usize;
                 // ∂/∂u_k of area·‖U C − R‖² gives area·(U C Cᵀ − R Cᵀ) for corner k.
-                for row in 0..2 {
-                    let rc = rot[row][0] * c[k][0] + rot[row][1] * c[k][1];
-                    let u = self.unknown[v];
-                    if u != u32::MAX {
-                        rhs[row][u as usize] += r.area * rc;
+                match self.unknown.get(v) {
+                    Some(u) => {
+                        for row in 0..2 {
+                            let rc = rot[row][0] * c[k][0] + rot[row][1] * c[k][1];
+                            rhs[row][u as usize] += r.area * rc;
+                        }
                     }
-                }
-                // The pinned vertex's known value moves to the right-hand side.
-                if let Some(p) = pinned_uv.filter(|_| self.unknown[v] == u32::MAX) {
-                    for l in 0..3 {
-                        let w = self.unknown[tri[l] as usize];
-                        if w != u32::MAX {
-                            let kl = r.area * (c[k][0] * c[l][0] + c[k][1] * c[l][1]);
-                            rhs[0][w as usize] -= kl * p[0];
-                            rhs[1][w as usize] -= kl * p[1];
+                    // The pinned vertex's known value moves to the right-hand side.
+                    None => {
+                        let p = pinned_uv;
+                        for l in 0..3 {
+                            if let Some(w) = self.unknown.get(tri[l] as usize) {
+                                let kl = r.area * (c[k][0] * c[l][0] + c[k][1] * c[l][1]);
+                                rhs[0][w as usize] -= kl * p[0];
+                                rhs[1][w as usize] -= kl * p[1];
+                            }
                         }
                     }
                 }
@@ -141,12 +133,9 @@ impl<'m> ArapStep<'m> {
             self.system.solve_in_place(r)?;
         }
         target.clear();
-        target.extend(self.unknown.iter().enumerate().map(|(v, &u)| {
-            if u == u32::MAX {
-                uv[v]
-            } else {
-                [rhs[0][u as usize], rhs[1][u as usize]]
-            }
+        target.extend((0..self.unknown.len()).map(|v| match self.unknown.get(v) {
+            Some(u) => [rhs[0][u as usize], rhs[1][u as usize]],
+            None => uv[v],
         }));
         Ok(())
     }
@@ -239,11 +228,7 @@ mod tests {
             .unwrap()
             .target(&uv, &mut b)
             .unwrap();
-        let diff = a
-            .iter()
-            .zip(&b)
-            .map(|(p, q)| (p[0] - q[0]).abs().max((p[1] - q[1]).abs()))
-            .fold(0.0, f64::max);
+        let diff = crate::testing::max_uv_difference(&a, &b);
         assert!(diff < 1e-9, "{diff}");
         assert!(a.iter().zip(&uv).any(|(p, q)| (p[0] - q[0]).abs() > 1e-3));
         let other = VertexOrdering::of_triangles(n + 1, &mesh.triangles).unwrap();

@@ -1,5 +1,6 @@
 //! Per-triangle energy, gradient and positive semi-definite Hessian (thesis §3.1.2,
-//! App. A; NOTES §1).
+//! App. A): the density `W(a, d)` of [`crate::energy`] pulled back to a triangle's UV
+//! coordinates.
 //!
 //! A triangle's map is linear. With the rest triangle in an orthonormal frame of its
 //! own plane (2D corners `x1, x2, x3`, `Dm = [x2 − x1, x3 − x1]`) and its UV triangle
@@ -19,7 +20,8 @@
 //! De Goes, Kim 2019, *Analytic eigensystems for isotropic distortion energies*), which
 //! [`gradient_and_projected_hessian`] uses to clamp negative eigenvalues to zero.
 
-use super::density::Density;
+use crate::energy::Density;
+use crate::mesh::{IndexError, check_indices};
 use crate::vec3::{cross3, dot3, sub3};
 use rayon::prelude::*;
 use thiserror::Error;
@@ -73,14 +75,8 @@ impl RestTriangle {
 /// Why the rest triangles of a mesh could not be built.
 #[derive(Clone, Debug, Error, PartialEq)]
 pub enum RestTriangleError {
-    #[error(
-        "triangle {triangle} refers to vertex {vertex}, but the mesh has only {num_vertices} vertices; the mesh file is inconsistent"
-    )]
-    VertexOutOfRange {
-        triangle: usize,
-        vertex: u32,
-        num_vertices: usize,
-    },
+    #[error(transparent)]
+    Index(#[from] IndexError),
     #[error(
         "{count} triangle(s) have (nearly) zero area or non-finite corners, the first is triangle {first}; their distortion is undefined — remove or repair them (collapse zero-area triangles) before flattening"
     )]
@@ -95,15 +91,7 @@ pub fn rest_triangles(
     positions: &[[f64; 3]],
     triangles: &[[u32; 3]],
 ) -> Result<Vec<RestTriangle>, RestTriangleError> {
-    for (t, tri) in triangles.iter().enumerate() {
-        if let Some(&v) = tri.iter().find(|&&v| v as usize >= positions.len()) {
-            return Err(RestTriangleError::VertexOutOfRange {
-                triangle: t,
-                vertex: v,
-                num_vertices: positions.len(),
-            });
-        }
-    }
+    check_indices(triangles, positions.len())?;
     let rest: Vec<Option<RestTriangle>> = triangles
         .par_iter()
         .with_min_len(4096)
@@ -231,9 +219,10 @@ pub fn gradient_and_projected_hessian<D: Density + ?Sized>(
 ///         + 2W_a·I + W_d·(2 cof J cof Jᵀ + 2 det J·∂²det J)
 /// ```
 ///
-/// with `∇a = 2 vec J`, `∇d = 2 det J·vec cof J`. For tests and diagnostics; the Newton
-/// solver wants [`gradient_and_projected_hessian`]. On `det J ≤ 0` returns
-/// `f64::INFINITY` and zeros.
+/// with `∇a = 2 vec J`, `∇d = 2 det J·vec cof J`. The Newton solver uses it close to a
+/// minimum, where it is positive definite and converges quadratically (falling back to
+/// [`gradient_and_projected_hessian`] where its Cholesky fails); the tests check the
+/// projection against it. On `det J ≤ 0` returns `f64::INFINITY` and zeros.
 pub fn exact_hessian<D: Density + ?Sized>(
     rest: &RestTriangle,
     uv: &[[f64; 2]; 3],
@@ -256,7 +245,7 @@ pub fn exact_hessian<D: Density + ?Sized>(
 struct Local {
     f: [f64; 4],
     det: f64,
-    w: super::density::DensityDerivs,
+    w: crate::energy::DensityDerivs,
 }
 
 impl Local {
@@ -475,7 +464,7 @@ fn pull_back_hessian(rest: &RestTriangle, hj: &[[f64; 4]; 4], out: &mut [[f64; 6
 #[allow(clippy::needless_range_loop)] // matrix indices read best as indices
 mod tests {
     use super::*;
-    use crate::param::density::{Arap, Litke, Mips, SymmetricDirichlet};
+    use crate::energy::{Alpha, Arap, Mips, SymmetricDirichlet};
 
     use crate::testing::Rng;
 
@@ -653,11 +642,12 @@ mod tests {
         );
         assert!(matches!(
             rest_triangles(&pos, &[[0, 1, 4]]),
-            Err(RestTriangleError::VertexOutOfRange {
+            Err(RestTriangleError::Index(IndexError {
                 triangle: 0,
+                corner: 2,
                 vertex: 4,
-                ..
-            })
+                num_vertices: 4
+            }))
         ));
     }
 
@@ -886,10 +876,10 @@ mod tests {
 
         // Litke at the isometry: the exact Hessian is PSD, projection is the identity.
         for w in [
-            Litke::conformal(),
-            Litke::balanced(),
-            Litke::area(),
-            Litke::length(),
+            Alpha::conformal(),
+            Alpha::balanced(),
+            Alpha::area(),
+            Alpha::length(),
         ] {
             let (_, rest) = random_rest(&mut rng);
             let uv = uv_for(&rest, 1.0, 1.0, 0.4, -1.2);

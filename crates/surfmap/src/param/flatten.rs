@@ -1,98 +1,151 @@
-//! The one-call flattening: checks the input is a disc, computes the initial map
-//! (free-boundary conformal, with an injective fallback), normalizes scale, runs
-//! projected Newton (with optional α-continuation), verifies the result has no
-//! flipped triangle, and returns UVs in the mesh's own units.
+//! The one-call flattening (thesis §3.1): checks that the input is a disc, computes the
+//! initial map (free-boundary conformal, with an injective fallback, or the multilevel
+//! start for large meshes), normalizes scale, runs projected Newton (with optional
+//! α-continuation), verifies the result has no flipped triangle, and returns UVs in the
+//! mesh's own units.
+//!
+//! [`FlattenOptions`] says what to minimize ([`Energy`]), where to start ([`Start`],
+//! [`Multilevel`]) and whether holes are filled for the solve; the defaults (balanced
+//! α, automatic start, ARAP warm start) suit most meshes.
 
 use super::arap::ArapStep;
-use super::density::{EnergyKind, Litke};
 use super::element::{RestTriangleError, rest_triangles};
 use super::flip_free::max_flip_free_step;
-use super::newton::{IterationLog, NewtonSettings, NewtonSolver, NewtonTimings, StopReason};
+use super::newton::NewtonSolver;
+pub use super::newton::{IterationLog, NewtonSettings, NewtonTimings, StopReason};
 use super::{InitialMapError, count_flipped, lscm, signed_uv_area, tutte};
+use crate::energy::Energy;
 use crate::linsolve::{SolveError, VertexOrdering};
-use crate::mesh::validate::{Defect, validate};
-use crate::mesh::{Topology, TriMesh};
+use crate::mesh::disc::list_defects;
+use crate::mesh::validate::Defect;
+use crate::mesh::{Disc, IndexError, NotADisc, TriMesh};
 use serde::Serialize;
 use std::time::Instant;
 
-/// Which initial map to use (thesis §3.1.1).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum StartChoice {
-    /// LSCM, falling back to mean-value coordinates when LSCM flips a triangle.
-    #[default]
-    Auto,
+/// Where the flattening starts (thesis §3.1.1): the initial map, which must be
+/// admissible (no flipped triangle).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Start {
+    /// LSCM, falling back to mean-value coordinates when LSCM flips a triangle; for
+    /// large meshes (see [`Multilevel`]) the flattening of a decimated copy instead.
+    Auto { multilevel: Multilevel },
+    /// LSCM on the full mesh; an error if it flips a triangle.
     Lscm,
+    /// Mean-value coordinates onto a circle on the full mesh (injective by
+    /// construction).
     MeanValue,
+    /// This map: one UV per vertex in the mesh's length units (as [`Flattening::uvs`]),
+    /// no flipped triangle.
+    Given(Vec<[f64; 2]>),
 }
 
-/// The initial map that was actually used.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum StartMap {
-    /// Free-boundary least-squares conformal map.
-    Lscm,
-    /// Mean-value coordinates onto a circle (injective by construction), used because
-    /// LSCM flipped or degenerated `lscm_flipped` triangles.
-    MeanValue,
-    /// The caller's map ([`FlattenOptions::initial_uv`]).
-    Given,
-    /// The flattening of a decimated copy, refined vertex by vertex
-    /// ([`super::multilevel`]; details in [`Flattening::multilevel`]).
-    Multilevel,
+impl Default for Start {
+    /// `Auto` with the automatic multilevel choice.
+    fn default() -> Self {
+        Start::Auto {
+            multilevel: Multilevel::default(),
+        }
+    }
 }
 
-/// When to use the multilevel start ([`super::multilevel`]): flatten a decimated copy
-/// (about `coarse_vertices` vertices), re-insert the removed vertices, then run Newton
-/// on the full mesh from there.
+/// When [`Start::Auto`] uses the multilevel start ([`super::multilevel`]): flatten a
+/// decimated copy, re-insert the removed vertices flip-free, then run Newton on the full
+/// mesh from there. If any stage fails, the single-level start is used (and the report
+/// says why).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct MultilevelOptions {
-    /// Meshes with at least this many faces use it (`usize::MAX`: never, `0`: always).
-    pub min_faces: usize,
-    /// Vertices of the coarse copy; `None`: [`MultilevelOptions::coarse_size`].
-    pub coarse_vertices: Option<usize>,
+pub enum Multilevel {
+    /// For meshes of at least [`MULTILEVEL_MIN_FACES`] faces.
+    Auto(CoarseLevel),
+    /// For every mesh.
+    Always(CoarseLevel),
+    /// Never.
+    Never,
+}
+
+impl Default for Multilevel {
+    fn default() -> Self {
+        Multilevel::Auto(CoarseLevel::default())
+    }
+}
+
+impl Multilevel {
+    /// The coarse level to use for a mesh of `faces` faces, or `None` for the
+    /// single-level start.
+    pub fn coarse_level(&self, faces: usize) -> Option<&CoarseLevel> {
+        match self {
+            Multilevel::Auto(c) if faces >= MULTILEVEL_MIN_FACES => Some(c),
+            Multilevel::Always(c) => Some(c),
+            _ => None,
+        }
+    }
+}
+
+/// The coarse level of the multilevel start.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CoarseLevel {
+    /// Vertices of the decimated copy (at least [`MIN_COARSE_VERTICES`]); `None`: 1/20
+    /// of the mesh, between [`MULTILEVEL_MIN_COARSE_VERTICES`] and
+    /// [`MULTILEVEL_MAX_COARSE_VERTICES`] ([`CoarseLevel::size_for`]).
+    pub vertices: Option<usize>,
     /// Local Newton steps per re-inserted vertex.
     pub polish_steps: usize,
     /// Relaxation sweeps over the full mesh after the re-insertion.
     pub sweeps: usize,
 }
 
-impl Default for MultilevelOptions {
+impl Default for CoarseLevel {
     fn default() -> Self {
         Self {
-            min_faces: MULTILEVEL_MIN_FACES,
-            coarse_vertices: None,
+            vertices: None,
             polish_steps: super::multilevel::DEFAULT_POLISH_STEPS,
             sweeps: super::multilevel::DEFAULT_SWEEPS,
         }
     }
 }
 
-impl MultilevelOptions {
+impl CoarseLevel {
+    /// The default level with `vertices` coarse vertices.
+    pub fn with_vertices(vertices: usize) -> Self {
+        Self {
+            vertices: Some(vertices),
+            ..Self::default()
+        }
+    }
+
     /// The coarse size for a mesh of `vertices` vertices: the given one, or by default
     /// 1/20 of the mesh, between 500 and 20 000 vertices.
-    pub fn coarse_size(&self, vertices: usize) -> usize {
-        self.coarse_vertices.unwrap_or((vertices / 20).clamp(
+    pub fn size_for(&self, vertices: usize) -> usize {
+        self.vertices.unwrap_or((vertices / 20).clamp(
             MULTILEVEL_MIN_COARSE_VERTICES,
             MULTILEVEL_MAX_COARSE_VERTICES,
         ))
     }
-
-    /// Never use the multilevel start.
-    pub fn off() -> Self {
-        Self {
-            min_faces: usize::MAX,
-            ..Self::default()
-        }
-    }
 }
 
-/// Default size from which the multilevel start is used (measured in BENCHMARKS.md:
-/// from ~15k faces it needs fewer full-size Newton iterations than the start map), and
-/// the bounds of the default coarse size.
+/// Size from which [`Multilevel::Auto`] uses the multilevel start (measured in
+/// BENCHMARKS.md: from ~15k faces it needs fewer full-size Newton iterations than the
+/// start map), and the bounds of the default coarse size.
 pub const MULTILEVEL_MIN_FACES: usize = 15_000;
 pub const MULTILEVEL_MIN_COARSE_VERTICES: usize = 500;
 pub const MULTILEVEL_MAX_COARSE_VERTICES: usize = 20_000;
+/// The smallest coarse level one may ask for ([`CoarseLevel::vertices`]).
+pub const MIN_COARSE_VERTICES: usize = 16;
+
+/// Which initial map was actually used.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StartMap {
+    /// Free-boundary least-squares conformal map.
+    Lscm,
+    /// Mean-value coordinates onto a circle (injective by construction), used because
+    /// LSCM flipped or degenerated `lscm_flipped` triangles, or by request.
+    MeanValue,
+    /// The caller's map ([`Start::Given`]).
+    Given,
+    /// The flattening of a decimated copy, refined vertex by vertex
+    /// ([`super::multilevel`]; details in [`Flattening::multilevel`]).
+    Multilevel,
+}
 
 /// What the multilevel start did (or why it was abandoned).
 #[derive(Clone, Debug, Default, Serialize)]
@@ -101,8 +154,8 @@ pub struct MultilevelReport {
     pub coarse_faces: usize,
     /// Newton iterations on the coarse mesh.
     pub coarse_iterations: usize,
-    /// α values of the continuation stages solved on the coarse mesh (with
-    /// `from_alpha`; the full mesh then goes straight to the target α).
+    /// α values of the continuation stages solved on the coarse mesh (with a
+    /// continuation start; the full mesh then goes straight to the target α).
     pub coarse_continuation: Vec<[f64; 3]>,
     /// Vertices re-inserted, of them placed at their star's kernel centroid, and local
     /// Newton steps taken.
@@ -116,44 +169,97 @@ pub struct MultilevelReport {
 }
 
 /// Options of [`flatten`].
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct FlattenOptions {
-    /// The energy density to minimize (default: Litke's, balanced α).
-    pub energy: EnergyKind,
-    /// Continuation (§3.1.3): first minimize Litke's energy at this α, then move to
-    /// `energy`'s α in steps (Litke energy only).
-    pub from_alpha: Option<Litke>,
-    pub start: StartChoice,
-    pub newton: NewtonSettings,
-    /// Move the start map toward an isometry with a few ARAP local/global steps before
-    /// Newton (each one only accepted if flip-free and energy-decreasing).
+    /// The energy to minimize, with an optional continuation (default: Litke's density
+    /// with balanced α, [`Energy::default`]).
+    pub energy: Energy,
+    /// The initial map (default: automatic, multilevel from 15k faces).
+    pub start: Start,
+    /// Move the single-level start map (LSCM, mean-value or given) toward an isometry
+    /// with a few ARAP steps before Newton (each one accepted only if flip-free and
+    /// energy-decreasing). Under the multilevel start they run on the coarse level.
     pub warm_start: bool,
-    /// Start from this map (one UV per vertex in the mesh's length units, as
-    /// [`Flattening::uvs`], no flipped triangle)
-    /// instead of computing one; `start` is then ignored.
-    pub initial_uv: Option<Vec<[f64; 2]>>,
-    /// Multilevel start for large meshes (used when no `initial_uv` is given).
-    pub multilevel: MultilevelOptions,
+    /// Newton's line search and stopping rule.
+    pub newton: NewtonSettings,
+    /// Fill every boundary loop but the longest (eyes, mouth, scan holes) with a fan
+    /// for the solve ([`crate::mesh::repair::fill_holes`]); the result has UVs for the
+    /// original vertices only, so the holes stay open in the map.
+    pub fill_holes: bool,
 }
 
 impl Default for FlattenOptions {
     fn default() -> Self {
         Self {
-            energy: EnergyKind::Litke(Litke::balanced()),
-            from_alpha: None,
-            start: StartChoice::Auto,
-            newton: NewtonSettings::default(),
+            energy: Energy::default(),
+            start: Start::default(),
             warm_start: true,
-            initial_uv: None,
-            multilevel: MultilevelOptions::default(),
+            newton: NewtonSettings::default(),
+            fill_holes: false,
         }
     }
+}
+
+impl FlattenOptions {
+    /// The default options with this energy (e.g. `FlattenOptions::new(Alpha::conformal())`).
+    pub fn new(energy: impl Into<Energy>) -> Self {
+        Self {
+            energy: energy.into(),
+            ..Self::default()
+        }
+    }
+
+    /// These options with the start `start`.
+    pub fn with_start(self, start: Start) -> Self {
+        Self { start, ..self }
+    }
+
+    /// These options with holes filled for the solve (or not).
+    pub fn with_fill_holes(self, fill_holes: bool) -> Self {
+        Self { fill_holes, ..self }
+    }
+
+    /// Checks the numeric settings (called by [`flatten`]).
+    pub fn validate(&self) -> Result<(), OptionError> {
+        let n = &self.newton;
+        if n.tolerance.is_nan() || n.tolerance <= 0.0 {
+            return Err(OptionError::Tolerance(n.tolerance));
+        }
+        if !(n.armijo_c > 0.0 && n.armijo_c < 1.0) {
+            return Err(OptionError::ArmijoC(n.armijo_c));
+        }
+        if !(n.armijo_rho > 0.0 && n.armijo_rho < 1.0) {
+            return Err(OptionError::ArmijoRho(n.armijo_rho));
+        }
+        if let Start::Auto {
+            multilevel: Multilevel::Auto(c) | Multilevel::Always(c),
+        } = &self.start
+            && let Some(v) = c.vertices.filter(|&v| v < MIN_COARSE_VERTICES)
+        {
+            return Err(OptionError::CoarseVertices(v));
+        }
+        Ok(())
+    }
+}
+
+/// A numeric option out of its range (see [`FlattenOptions::validate`]).
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+pub enum OptionError {
+    #[error("NewtonSettings::tolerance must be positive, got {0}")]
+    Tolerance(f64),
+    #[error("NewtonSettings::armijo_c must be in (0, 1), got {0}")]
+    ArmijoC(f64),
+    #[error("NewtonSettings::armijo_rho must be in (0, 1), got {0}")]
+    ArmijoRho(f64),
+    #[error("CoarseLevel::vertices must be at least {MIN_COARSE_VERTICES}, got {0}")]
+    CoarseVertices(usize),
 }
 
 /// Result of a flattening.
 #[derive(Clone, Debug, Serialize)]
 pub struct Flattening {
     /// One UV per vertex, in the mesh's length units (an isometry keeps lengths).
+    /// Vertices used by no triangle are at the origin.
     pub uvs: Vec<[f64; 2]>,
     pub start: StartMap,
     /// Triangles LSCM flipped or degenerated (0 when LSCM was used).
@@ -169,6 +275,8 @@ pub struct Flattening {
     /// Flipped or degenerate triangles in the output, counted on the output: always 0
     /// for a returned flattening (a non-zero count is an error instead).
     pub flipped_triangles: usize,
+    /// Holes filled for the solve ([`FlattenOptions::fill_holes`]).
+    pub holes_filled: usize,
     /// α values of the continuation stages actually solved (empty without continuation).
     pub continuation: Vec<[f64; 3]>,
     pub log: Vec<IterationLog>,
@@ -188,7 +296,10 @@ impl Flattening {
     pub fn start_description(&self) -> String {
         match self.start {
             StartMap::Lscm => "lscm".to_string(),
-            StartMap::MeanValue => format!("mean-value (LSCM flipped {})", self.lscm_flipped),
+            StartMap::MeanValue if self.lscm_flipped > 0 => {
+                format!("mean-value (LSCM flipped {})", self.lscm_flipped)
+            }
+            StartMap::MeanValue => "mean-value".to_string(),
             StartMap::Given => "given".to_string(),
             StartMap::Multilevel => match &self.multilevel {
                 Some(m) => format!("multilevel ({} coarse vertices)", m.coarse_vertices),
@@ -196,27 +307,30 @@ impl Flattening {
             },
         }
     }
+
+    /// The UVs mapped into `[0, 1]²` with the aspect ratio kept
+    /// ([`super::normalize_uvs`]), e.g. for texture coordinates.
+    pub fn normalized_uvs(&self) -> Vec<[f64; 2]> {
+        let mut uvs = self.uvs.clone();
+        super::normalize_uvs(&mut uvs);
+        uvs
+    }
 }
 
-/// Why a flattening failed.
+/// Why a flattening failed. The messages name the problem and the remedy in the
+/// library's terms (options, `mesh::repair` functions).
 #[derive(Debug, thiserror::Error)]
 pub enum FlattenError {
-    #[error("the mesh cannot be flattened as a disc:\n{}", .0.iter().map(|d| format!("  - {}", d.message)).collect::<Vec<_>>().join("\n"))]
+    #[error(transparent)]
+    Index(#[from] IndexError),
+    #[error("the mesh cannot be flattened as a disc:\n{}", list_defects(.0))]
     NotADisc(Vec<Defect>),
-    #[error("{0}; run with --drop-degenerate or fix the mesh")]
+    #[error("{0}; `repair::drop_degenerate` removes them")]
     Degenerate(#[from] RestTriangleError),
+    #[error("invalid option: {0}")]
+    Option(#[from] OptionError),
     #[error("linear solve failed: {0}")]
     Solve(#[from] SolveError),
-    #[error("triangle {triangle} uses vertex {vertex}, but the mesh has {vertices} vertices")]
-    InvalidIndex {
-        triangle: usize,
-        vertex: u32,
-        vertices: usize,
-    },
-    #[error(
-        "continuation (--from-alpha) blends Litke α values; it needs the Litke energy as the target"
-    )]
-    ContinuationNeedsLitke,
     #[error("initial map: {0}")]
     InitialMap(#[from] InitialMapError),
     #[error(
@@ -224,7 +338,7 @@ pub enum FlattenError {
     )]
     NoAdmissibleStart { lscm: usize, mean_value: usize },
     #[error(
-        "the LSCM start flips or degenerates {0} triangles; use --start auto (falls back to mean-value coordinates, injective by construction)"
+        "the LSCM start flips or degenerates {0} triangles; use `Start::Auto` (falls back to mean-value coordinates, injective by construction)"
     )]
     LscmFlipped(usize),
     #[error("the given initial map has {uvs} UVs, but the mesh has {vertices} vertices")]
@@ -233,67 +347,90 @@ pub enum FlattenError {
         "the given initial map flips or degenerates {0} triangles; a start map must be injective"
     )]
     GivenStartFlipped(usize),
+    #[error(
+        "a given start map has no UVs for the {0} filled holes; fill them yourself (`repair::fill_holes`) and give UVs for the filled mesh, or use `Start::Auto`"
+    )]
+    GivenStartWithFilledHoles(usize),
     #[error("internal error: the result has {0} flipped triangles; please report this mesh")]
     FlippedResult(usize),
 }
 
-/// Flattens a disc-topology mesh. See the module docs.
+impl From<NotADisc> for FlattenError {
+    fn from(e: NotADisc) -> Self {
+        match e {
+            NotADisc::Index(e) => FlattenError::Index(e),
+            NotADisc::Defects(d) => FlattenError::NotADisc(d),
+        }
+    }
+}
+
+/// Flattens a disc-topology mesh (module docs) with `options`.
+///
+/// Errors name the problem and the remedy: a mesh that is not a disc gets every defect
+/// with the repair that fixes it ([`FlattenError::NotADisc`]).
 pub fn flatten(mesh: &TriMesh, options: &FlattenOptions) -> Result<Flattening, FlattenError> {
     flatten_with_progress(mesh, options, &mut |_| {})
 }
 
-/// [`flatten`] with a callback receiving every iteration's log entry as it happens
-/// (for progress bars).
+/// [`flatten`] with a callback receiving every Newton iteration's log entry as it
+/// happens (for progress bars; the same entries end up in [`Flattening::log`]).
 pub fn flatten_with_progress(
     mesh: &TriMesh,
     options: &FlattenOptions,
     progress: &mut dyn FnMut(&IterationLog),
 ) -> Result<Flattening, FlattenError> {
-    let clock = Instant::now();
-    if let Some((t, k)) = mesh.first_invalid_index() {
-        return Err(FlattenError::InvalidIndex {
-            triangle: t,
-            vertex: mesh.triangles[t][k],
-            vertices: mesh.positions.len(),
-        });
+    options.validate()?;
+    mesh.check_indices()?;
+    if options.fill_holes {
+        let (filled, holes) = crate::mesh::repair::fill_holes(mesh);
+        if holes > 0 {
+            if matches!(options.start, Start::Given(_)) {
+                return Err(FlattenError::GivenStartWithFilledHoles(holes));
+            }
+            // The fill's vertices come after the original ones: dropping them leaves
+            // the UVs of `mesh`, with its holes open in the map.
+            let mut result = flatten_used(&filled, options, progress)?;
+            result.uvs.truncate(mesh.positions.len());
+            result.holes_filled = holes;
+            return Ok(result);
+        }
     }
-    if options.from_alpha.is_some() && !matches!(options.energy, EnergyKind::Litke(_)) {
-        return Err(FlattenError::ContinuationNeedsLitke);
-    }
-    // Vertices used by no face get no UV from the solve: flatten the used part and
-    // put them at the origin afterwards.
+    flatten_used(mesh, options, progress)
+}
+
+/// The flattening of the vertices used by a triangle; the others are put at the origin.
+fn flatten_used(
+    mesh: &TriMesh,
+    options: &FlattenOptions,
+    progress: &mut dyn FnMut(&IterationLog),
+) -> Result<Flattening, FlattenError> {
     let (compact, old_of_new) = without_unreferenced(mesh);
-    if let Some(compact) = compact {
-        let mut compact_options = options.clone();
-        if let Some(given) = &options.initial_uv {
-            check_given_length(given, mesh)?;
-            compact_options.initial_uv =
-                Some(old_of_new.iter().map(|&v| given[v as usize]).collect());
-        }
-        let mut result = flatten_with_progress(&compact, &compact_options, progress)?;
-        let mut uvs = vec![[0.0, 0.0]; mesh.positions.len()];
-        for (new, &old) in old_of_new.iter().enumerate() {
-            uvs[old as usize] = result.uvs[new];
-        }
-        result.uvs = uvs;
-        return Ok(result);
+    let Some(compact) = compact else {
+        return flatten_disc(mesh, options, progress);
+    };
+    let mut compact_options = options.clone();
+    if let Start::Given(given) = &options.start {
+        check_given_length(given, mesh)?;
+        compact_options.start =
+            Start::Given(old_of_new.iter().map(|&v| given[v as usize]).collect());
     }
-    let topo = Topology::new(mesh);
-    if !topo.is_disc()
-        || !topo.inconsistent_edges.is_empty()
-        || mesh
-            .positions
-            .iter()
-            .any(|p| p.iter().any(|x| !x.is_finite()))
-    {
-        let defects: Vec<Defect> = validate(mesh, &topo)
-            .into_iter()
-            .filter(|d| d.blocks_flattening)
-            .collect();
-        if !defects.is_empty() || !topo.is_disc() {
-            return Err(FlattenError::NotADisc(defects));
-        }
+    let mut result = flatten_disc(&compact, &compact_options, progress)?;
+    let mut uvs = vec![[0.0, 0.0]; mesh.positions.len()];
+    for (new, &old) in old_of_new.iter().enumerate() {
+        uvs[old as usize] = result.uvs[new];
     }
+    result.uvs = uvs;
+    Ok(result)
+}
+
+/// The flattening of a mesh whose vertices are all used.
+fn flatten_disc(
+    mesh: &TriMesh,
+    options: &FlattenOptions,
+    progress: &mut dyn FnMut(&IterationLog),
+) -> Result<Flattening, FlattenError> {
+    let clock = Instant::now();
+    let disc = Disc::new(mesh)?;
     // Scale normalization: work on the surface scaled to unit area, so energies and
     // tolerances are scale-free; the UVs are scaled back at the end.
     let area = mesh.area();
@@ -304,7 +441,7 @@ pub fn flatten_with_progress(
         .map(|p| p.map(|x| x / scale))
         .collect();
     let rest = rest_triangles(&positions, &mesh.triangles)?;
-    let boundary = &topo.boundary_loops[0].vertices;
+    let boundary = disc.boundary();
 
     // Initial map (§3.1.1), checked: any flipped or degenerate triangle → fallback.
     let admissible = |uv: &mut Vec<[f64; 2]>| -> usize {
@@ -323,31 +460,36 @@ pub fn flatten_with_progress(
     };
     let mut lscm_flipped = 0;
     let mut multilevel = None;
-    let mut given = options.initial_uv.clone().map(|uv| (uv, StartMap::Given));
-    if given.is_none() && mesh.triangles.len() >= options.multilevel.min_faces {
-        let (uv, report) = multilevel_start(mesh, &topo, options);
-        given = uv.map(|uv| (uv, StartMap::Multilevel));
-        multilevel = Some(report);
-    }
-    let (mut uv, start) = match (given, options.start) {
-        (Some((given, kind)), _) => {
-            check_given_length(&given, mesh)?;
-            (given, kind)
+    // LSCM, with the mean-value fallback when `fallback` (else LSCM as it is).
+    let mut lscm_start = |fallback: bool| -> Result<(Vec<[f64; 2]>, StartMap), FlattenError> {
+        let mut uv = lscm::lscm(&positions, &disc)?.uv;
+        lscm_flipped = admissible(&mut uv);
+        if lscm_flipped == 0 || !fallback {
+            Ok((uv, StartMap::Lscm))
+        } else {
+            Ok((tutte::mean_value(&positions, &disc)?, StartMap::MeanValue))
         }
-        (None, StartChoice::MeanValue) => (
-            tutte::mean_value(&positions, &mesh.triangles, boundary)?,
-            StartMap::MeanValue,
-        ),
-        (None, StartChoice::Auto | StartChoice::Lscm) => {
-            let mut uv = lscm::lscm(&positions, &mesh.triangles, boundary)?.uv;
-            lscm_flipped = admissible(&mut uv);
-            if lscm_flipped == 0 || options.start == StartChoice::Lscm {
-                (uv, StartMap::Lscm)
-            } else {
-                (
-                    tutte::mean_value(&positions, &mesh.triangles, boundary)?,
-                    StartMap::MeanValue,
-                )
+    };
+    let (mut uv, start) = match &options.start {
+        Start::Given(given) => {
+            check_given_length(given, mesh)?;
+            (given.clone(), StartMap::Given)
+        }
+        Start::MeanValue => (tutte::mean_value(&positions, &disc)?, StartMap::MeanValue),
+        Start::Lscm => lscm_start(false)?,
+        Start::Auto { multilevel: choice } => {
+            let coarse = choice.coarse_level(mesh.triangles.len());
+            let (uv, report) = match coarse {
+                Some(coarse) => {
+                    let (uv, report) = multilevel_start(mesh, &disc, options, coarse);
+                    (uv, Some(report))
+                }
+                None => (None, None),
+            };
+            multilevel = report;
+            match uv {
+                Some(uv) => (uv, StartMap::Multilevel),
+                None => lscm_start(true)?,
             }
         }
     };
@@ -355,7 +497,7 @@ pub fn flatten_with_progress(
     if start_flipped > 0 && matches!(start, StartMap::Given | StartMap::Multilevel) {
         return Err(FlattenError::GivenStartFlipped(start_flipped));
     }
-    if start_flipped > 0 && options.start == StartChoice::Lscm {
+    if start_flipped > 0 && matches!(options.start, Start::Lscm) {
         return Err(FlattenError::LscmFlipped(start_flipped));
     }
     if start_flipped > 0 {
@@ -365,7 +507,8 @@ pub fn flatten_with_progress(
         });
     }
     // Scale the start so its area matches the (unit) surface area: lengths scale by
-    // √(area3D / areaUV) (NOTES.md §1).
+    // √(area3D / areaUV) (the thesis's "ratio of the surface area versus the area of the
+    // domain", §3.1.1, taken for lengths).
     let uv_area: f64 = mesh
         .triangles
         .iter()
@@ -389,12 +532,16 @@ pub fn flatten_with_progress(
     // they lower the energy being minimized first (see `arap`).
     let mut warm_start_iterations = 0;
     // A multilevel start is already close to the minimum: no warm start, and no
-    // continuation (the coarse level did it).
-    let from_alpha = options.from_alpha.filter(|_| start != StartMap::Multilevel);
+    // continuation (the coarse level did both).
+    let objective = if start == StartMap::Multilevel {
+        options.energy.without_continuation()
+    } else {
+        options.energy
+    };
     if options.warm_start && start != StartMap::Multilevel {
-        let first_energy = match (&options.energy, &from_alpha) {
-            (_, Some(from)) => EnergyKind::Litke(*from),
-            (e, None) => *e,
+        let first_energy = match objective.continuation_start() {
+            Some(from) => Energy::litke(from),
+            None => objective,
         };
         let arap = ArapStep::new(
             mesh.positions.len(),
@@ -452,8 +599,11 @@ pub fn flatten_with_progress(
     };
     let mut iterations = 0;
     let mut continuation = Vec::new();
-    let (stop, energy) = match (&options.energy, &from_alpha) {
-        (EnergyKind::Litke(target), Some(from)) => {
+    let (stop, energy) = match &objective {
+        Energy::Litke {
+            alpha: target,
+            from: Some(from),
+        } => {
             // Continuation (§3.1.3): θ from 0 to 1, halving the step when a stage locks.
             // Stage 0 only prepares a start: a locked or capped stage 0 is still a
             // valid (flip-free) start for the next stage.
@@ -490,7 +640,7 @@ pub fn flatten_with_progress(
             }
             last
         }
-        (energy, _) => {
+        energy => {
             let (stop, it, e) =
                 solver.minimize(&mut uv, energy, &options.newton, 0, clock, &mut record)?;
             iterations += it;
@@ -513,6 +663,7 @@ pub fn flatten_with_progress(
         stop_reason: stop,
         energy,
         flipped_triangles: flipped,
+        holes_filled: 0,
         continuation,
         log,
         time_start,
@@ -527,14 +678,15 @@ pub fn flatten_with_progress(
 /// (with the reason in the report) when any stage failed.
 fn multilevel_start(
     mesh: &TriMesh,
-    topo: &Topology,
+    disc: &Disc,
     options: &FlattenOptions,
+    coarse_level: &CoarseLevel,
 ) -> (Option<Vec<[f64; 2]>>, MultilevelReport) {
     use crate::mesh::decimate::{DecimateOptions, decimate_with};
     let mut report = MultilevelReport::default();
     let clock = Instant::now();
     let run = |report: &mut MultilevelReport| -> Result<Vec<[f64; 2]>, String> {
-        let coarse_size = options.multilevel.coarse_size(mesh.positions.len());
+        let coarse_size = coarse_level.size_for(mesh.positions.len());
         if mesh.positions.len() < 2 * coarse_size {
             return Err(format!(
                 "the mesh has {} vertices, not even twice the {coarse_size} of the coarse level",
@@ -542,8 +694,8 @@ fn multilevel_start(
             ));
         }
         let decimation = decimate_with(
-            mesh,
-            topo,
+            &mesh.positions,
+            disc,
             &DecimateOptions {
                 target_vertices: coarse_size,
                 ..Default::default()
@@ -555,8 +707,10 @@ fn multilevel_start(
         report.coarse_faces = coarse.triangles.len();
         report.time_decimate = clock.elapsed().as_secs_f64();
         let coarse_options = FlattenOptions {
-            multilevel: MultilevelOptions::off(),
-            initial_uv: None,
+            start: Start::Auto {
+                multilevel: Multilevel::Never,
+            },
+            fill_holes: false,
             ..options.clone()
         };
         let flat = flatten(&coarse, &coarse_options).map_err(|e| format!("coarse mesh: {e}"))?;
@@ -572,8 +726,8 @@ fn multilevel_start(
             &decimation,
             &mut uv,
             &options.energy,
-            options.multilevel.polish_steps,
-            options.multilevel.sweeps,
+            coarse_level.polish_steps,
+            coarse_level.sweeps,
         )
         .map_err(|e| format!("re-insertion: {e}"))?;
         let flipped = count_flipped(&uv, &mesh.triangles);
@@ -667,8 +821,9 @@ fn without_unreferenced(mesh: &TriMesh) -> (Option<TriMesh>, Vec<u32>) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::generate::bumpy_disc;
-    use crate::mesh::repair::reorient;
+    use crate::energy::Alpha;
+    use crate::mesh::generate::{bumpy_disc, grid_disc};
+    use crate::mesh::repair::{fill_holes, reorient};
 
     #[test]
     fn inconsistent_orientation_is_refused_with_advice_and_reorient_fixes_it() {
@@ -676,7 +831,7 @@ mod tests {
         mesh.triangles[40].swap(1, 2);
         let err = flatten(&mesh, &FlattenOptions::default()).unwrap_err();
         assert!(matches!(err, FlattenError::NotADisc(_)), "{err}");
-        assert!(err.to_string().contains("--reorient"), "{err}");
+        assert!(err.to_string().contains("repair::reorient"), "{err}");
         let (fixed, flipped) = reorient(&mesh).unwrap();
         assert_eq!(flipped, 1);
         let map = flatten(&fixed, &FlattenOptions::default()).unwrap();
@@ -689,6 +844,7 @@ mod tests {
         mesh.positions.push([9.0, 9.0, 9.0]);
         let map = flatten(&mesh, &FlattenOptions::default()).unwrap();
         assert_eq!(map.uvs.len(), mesh.positions.len());
+        assert_eq!(map.uvs[mesh.positions.len() - 1], [0.0, 0.0]);
         assert_eq!(count_flipped(&map.uvs, &mesh.triangles), 0);
     }
 
@@ -729,10 +885,7 @@ mod tests {
         // Restarting from a converged map (in the mesh's units) needs no iteration.
         let again = flatten(
             &mesh,
-            &FlattenOptions {
-                initial_uv: Some(first.uvs.clone()),
-                ..Default::default()
-            },
+            &FlattenOptions::default().with_start(Start::Given(first.uvs.clone())),
         )
         .unwrap();
         assert_eq!(again.start, StartMap::Given);
@@ -748,10 +901,7 @@ mod tests {
         ];
         let err = flatten(
             &mesh,
-            &FlattenOptions {
-                initial_uv: Some(folded),
-                ..Default::default()
-            },
+            &FlattenOptions::default().with_start(Start::Given(folded)),
         )
         .unwrap_err();
         assert!(
@@ -760,10 +910,7 @@ mod tests {
         );
         let err = flatten(
             &mesh,
-            &FlattenOptions {
-                initial_uv: Some(vec![[0.0; 2]; 3]),
-                ..Default::default()
-            },
+            &FlattenOptions::default().with_start(Start::Given(vec![[0.0; 2]; 3])),
         )
         .unwrap_err();
         assert!(err.to_string().contains("3 UVs"), "{err}");
@@ -777,27 +924,137 @@ mod tests {
         assert!(
             matches!(
                 err,
-                FlattenError::InvalidIndex {
+                FlattenError::Index(IndexError {
                     triangle: 2,
+                    corner: 1,
                     vertex: 10_000,
                     ..
-                }
+                })
             ),
+            "{err}"
+        );
+        // Also with holes to fill (the fill needs the topology, hence valid indices).
+        let err = flatten(&mesh, &FlattenOptions::default().with_fill_holes(true)).unwrap_err();
+        assert!(matches!(err, FlattenError::Index(_)), "{err}");
+    }
+
+    /// A grid disc with two interior faces' stars removed: three boundary loops.
+    fn disc_with_two_holes() -> TriMesh {
+        let mut mesh = grid_disc(8);
+        // Vertices (2, 2) and (5, 4) of the 9×9 grid, index j·9 + i.
+        let holes = [2 * 9 + 2, 4 * 9 + 5];
+        mesh.triangles
+            .retain(|t| !holes.iter().any(|h| t.contains(h)));
+        mesh
+    }
+
+    #[test]
+    fn holes_are_filled_for_the_solve_and_stay_open_in_the_map() {
+        let mesh = disc_with_two_holes();
+        let err = flatten(&mesh, &FlattenOptions::default()).unwrap_err();
+        assert!(err.to_string().contains("fill_holes"), "{err}");
+        let map = flatten(&mesh, &FlattenOptions::default().with_fill_holes(true)).unwrap();
+        assert_eq!(map.holes_filled, 2);
+        assert_eq!(map.uvs.len(), mesh.positions.len());
+        assert_eq!(count_flipped(&map.uvs, &mesh.triangles), 0);
+        // The same as filling by hand and dropping the fill's vertices.
+        let (filled, holes) = fill_holes(&mesh);
+        assert_eq!(holes, 2);
+        let by_hand = flatten(&filled, &FlattenOptions::default()).unwrap();
+        assert_eq!(&by_hand.uvs[..mesh.positions.len()], &map.uvs[..]);
+        // A planar grid flattens to an isometry: hole or not, every edge keeps its length.
+        for t in &mesh.triangles {
+            for k in 0..3 {
+                let (a, b) = (t[k] as usize, t[(k + 1) % 3] as usize);
+                let l3 =
+                    crate::vec3::norm3(crate::vec3::sub3(mesh.positions[a], mesh.positions[b]));
+                let l2 = (map.uvs[a][0] - map.uvs[b][0]).hypot(map.uvs[a][1] - map.uvs[b][1]);
+                assert!((l2 - l3).abs() < 1e-6 * l3, "{l2} vs {l3}");
+            }
+        }
+        // Without holes the option changes nothing.
+        let plain = grid_disc(4);
+        let a = flatten(&plain, &FlattenOptions::default()).unwrap();
+        let b = flatten(&plain, &FlattenOptions::default().with_fill_holes(true)).unwrap();
+        assert_eq!((a.uvs, b.holes_filled), (b.uvs, 0));
+        // A given start has no UVs for the fill.
+        let err = flatten(
+            &mesh,
+            &FlattenOptions::default()
+                .with_fill_holes(true)
+                .with_start(Start::Given(map.uvs.clone())),
+        )
+        .unwrap_err();
+        assert!(
+            matches!(err, FlattenError::GivenStartWithFilledHoles(2)),
             "{err}"
         );
     }
 
     #[test]
-    fn continuation_needs_the_litke_energy() {
+    fn normalized_uvs_fit_the_unit_square() {
+        let mesh = bumpy_disc(6, 0.3);
+        let map = flatten(&mesh, &FlattenOptions::default()).unwrap();
+        let n = map.normalized_uvs();
+        let (lo, hi) = n
+            .iter()
+            .fold(([f64::MAX; 2], [f64::MIN; 2]), |(lo, hi), p| {
+                (
+                    [lo[0].min(p[0]), lo[1].min(p[1])],
+                    [hi[0].max(p[0]), hi[1].max(p[1])],
+                )
+            });
+        assert_eq!(lo, [0.0, 0.0]);
+        assert!((hi[0].max(hi[1]) - 1.0).abs() < 1e-15, "{hi:?}");
+        // One translation and one scale: UV edges keep their directions and ratios.
+        let s = (n[1][0] - n[0][0]) / (map.uvs[1][0] - map.uvs[0][0]);
+        for (p, q) in n.iter().zip(&map.uvs) {
+            let d = [p[0] - n[0][0], p[1] - n[0][1]];
+            let e = [q[0] - map.uvs[0][0], q[1] - map.uvs[0][1]];
+            assert!((d[0] - s * e[0]).abs() < 1e-12 && (d[1] - s * e[1]).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn an_explicit_start_is_single_level_and_options_are_checked() {
         let mesh = bumpy_disc(4, 0.3);
-        let options = FlattenOptions {
-            energy: EnergyKind::SymmetricDirichlet,
-            from_alpha: Some(Litke::conformal()),
-            ..Default::default()
+        for (start, used) in [
+            (Start::Lscm, StartMap::Lscm),
+            (Start::MeanValue, StartMap::MeanValue),
+        ] {
+            let map = flatten(&mesh, &FlattenOptions::default().with_start(start)).unwrap();
+            assert_eq!((map.start, map.multilevel.is_none()), (used, true));
+        }
+        let always = Start::Auto {
+            multilevel: Multilevel::Always(CoarseLevel::with_vertices(30)),
         };
-        assert!(matches!(
-            flatten(&mesh, &options),
-            Err(FlattenError::ContinuationNeedsLitke)
-        ));
+        let map = flatten(&mesh, &FlattenOptions::default().with_start(always)).unwrap();
+        assert_eq!(map.start, StartMap::Multilevel);
+        assert_eq!(map.multilevel.as_ref().unwrap().coarse_vertices, 30);
+        let bad = |o: FlattenOptions| flatten(&mesh, &o).unwrap_err().to_string();
+        let mut o = FlattenOptions::default();
+        o.newton.tolerance = 0.0;
+        assert!(bad(o).contains("tolerance"));
+        let mut o = FlattenOptions::default();
+        o.newton.armijo_c = 1.0;
+        assert!(bad(o).contains("armijo_c"));
+        let o = FlattenOptions::default().with_start(Start::Auto {
+            multilevel: Multilevel::Auto(CoarseLevel::with_vertices(3)),
+        });
+        assert!(bad(o).contains("CoarseLevel::vertices must be at least 16, got 3"));
+    }
+
+    #[test]
+    fn continuation_reaches_the_target_alpha() {
+        let mesh = bumpy_disc(5, 0.3);
+        let energy = Energy::litke(Alpha::length())
+            .with_continuation(Alpha::conformal())
+            .unwrap();
+        let map = flatten(&mesh, &FlattenOptions::new(energy)).unwrap();
+        assert_eq!(map.continuation.first(), Some(&Alpha::conformal().alphas()));
+        assert_eq!(map.continuation.last(), Some(&Alpha::length().alphas()));
+        let direct = flatten(&mesh, &FlattenOptions::new(Alpha::length())).unwrap();
+        assert!(direct.continuation.is_empty());
+        assert!((map.energy - direct.energy).abs() <= 1e-9 * direct.energy);
     }
 }

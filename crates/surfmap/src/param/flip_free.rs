@@ -1,5 +1,5 @@
-//! The largest flip-free step along a search direction (thesis §3.1.3, NOTES §1
-//! "Flip safety").
+//! The largest flip-free step along a search direction (thesis §3.1.3: the line search
+//! must stay in the admissible set `det J > 0`).
 //!
 //! A step that makes any triangle's `det J ≤ 0` must be rejected: the energy can
 //! *decrease* through a flip, because the barrier `1/d` only blows up at `d = 0`. With
@@ -29,7 +29,7 @@ use rayon::prelude::*;
 /// case `s = −c/b` (a root only when `b < 0`); a negative discriminant means no real
 /// root. A double root (the triangle touches `det = 0` and recovers) whose
 /// discriminant rounds below zero is reported as no root; the energy at such a point
-/// is still `+∞` in [`super::element::energy`].
+/// is still `+∞` in `element::energy`.
 #[inline]
 pub fn flip_free_step(uv: [[f64; 2]; 3], dir: [[f64; 2]; 3]) -> f64 {
     let a00 = uv[1][0] - uv[0][0];

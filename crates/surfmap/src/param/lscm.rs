@@ -14,13 +14,16 @@
 //! conformal (similarity-per-triangle) map. `E_C(x) = xᵀ Q x` is a positive semi-definite
 //! quadratic form whose null space on a disc is the 4-dimensional group of similarities;
 //! pinning two vertices removes it and the reduced system `Q_ff x_f = −Q_fp x_p` is
-//! symmetric positive definite (solved with [`crate::linsolve::solve_spd`]).
+//! symmetric positive definite (solved with `linsolve::solve_spd`).
 //!
-//! LSCM has no guarantee against flipped triangles (NOTES.md §1): check the result
+//! LSCM has no guarantee against flipped triangles (the thesis assumes an admissible
+//! start, §3.1.1; CGAL's documentation says LSCM can fold): check the result
 //! with [`super::count_flipped`] and fall back to [`super::tutte::mean_value`].
 
-use super::{InitialMapError, check_disc_input};
-use crate::linsolve::solve_spd;
+use super::{InitialMapError, check_positions};
+use crate::linsolve::{Unknowns, solve_spd};
+use crate::mesh::Disc;
+use crate::vec3::{cross3, dot3, norm3, sub3};
 use std::cmp::Ordering;
 
 /// A free-boundary conformal map and the two boundary vertices that were pinned.
@@ -35,32 +38,21 @@ pub struct LscmMap {
 /// UV positions of the two pinned vertices.
 pub const PIN_UV: [[f64; 2]; 2] = [[0.0, 0.0], [1.0, 0.0]];
 
-/// Least-squares conformal map of a disc mesh (thesis §3.1.1): minimizes `E_D − A`
-/// (module docs) with the two boundary vertices farthest apart in 3D
-/// ([`farthest_boundary_pair`]) pinned at `(0, 0)` and `(1, 0)`.
+/// Least-squares conformal map of a disc (thesis §3.1.1) with vertex positions
+/// `positions` (the disc's own, or a rescaled copy): minimizes `E_D − A` (module docs)
+/// with the two boundary vertices farthest apart in 3D pinned at `(0, 0)` and `(1, 0)`.
 ///
-/// `boundary` is the ordered boundary loop (either direction); the map preserves the
-/// orientation of the triangles. The result does not depend on the vertex numbering
-/// (up to rounding), since the pins are chosen by position.
-pub fn lscm(
-    positions: &[[f64; 3]],
-    triangles: &[[u32; 3]],
-    boundary: &[u32],
-) -> Result<LscmMap, InitialMapError> {
-    let surface_on_left = check_disc_input(positions, triangles, boundary)?;
+/// The map preserves the orientation of the triangles. The result does not depend on
+/// the vertex numbering (up to rounding), since the pins are chosen by position.
+/// Every vertex must be used by a triangle.
+pub fn lscm(positions: &[[f64; 3]], disc: &Disc) -> Result<LscmMap, InitialMapError> {
+    check_positions(positions, disc)?;
+    let (triangles, boundary) = (disc.triangles(), disc.boundary());
     let pinned = farthest_boundary_pair(positions, boundary)?;
     let n = positions.len();
 
     // Unknowns: (u, v) of every non-pinned vertex, interleaved: dofs 2f, 2f + 1.
-    const PINNED: u32 = u32::MAX;
-    let mut free_index = vec![0u32; n];
-    free_index[pinned[0] as usize] = PINNED;
-    free_index[pinned[1] as usize] = PINNED;
-    let mut free = 0u32;
-    for slot in free_index.iter_mut().filter(|s| **s != PINNED) {
-        *slot = free;
-        free += 1;
-    }
+    let free_index = Unknowns::new(n, pinned.map(|v| v as usize));
     let pin_value = |v: u32, c: usize| {
         if v == pinned[0] {
             PIN_UV[0][c]
@@ -68,7 +60,7 @@ pub fn lscm(
             PIN_UV[1][c]
         }
     };
-    let m = 2 * free as usize;
+    let m = 2 * free_index.count();
     // Off-diagonal entries as triplets (one per triangle edge and component, plus the
     // boundary's u–v couplings), diagonal entries summed in place: the triangles would
     // otherwise list each diagonal entry about 12 times, for the pattern assembly to sort.
@@ -79,9 +71,8 @@ pub fn lscm(
     // Adds the symmetric entry `Q[(a, ca), (b, cb)] = Q[(b, cb), (a, ca)] += q` (once if the
     // two dofs coincide), moving pinned columns to the right-hand side.
     let mut add = |a: u32, ca: usize, b: u32, cb: usize, q: f64| {
-        let (fa, fb) = (free_index[a as usize], free_index[b as usize]);
-        let da = (fa != PINNED).then(|| 2 * fa + ca as u32);
-        let db = (fb != PINNED).then(|| 2 * fb + cb as u32);
+        let da = free_index.get(a as usize).map(|f| 2 * f + ca as u32);
+        let db = free_index.get(b as usize).map(|f| 2 * f + cb as u32);
         match (da, db) {
             (Some(i), Some(j)) if i == j => diagonal[i as usize] += q,
             (Some(i), Some(j)) => triplets.push((i, j, q)),
@@ -109,13 +100,11 @@ pub fn lscm(
             }
         }
     }
-    // Minus the signed area: −½ (u_i v_j − u_j v_i) per boundary edge i → j.
+    // Minus the signed area: −½ (u_i v_j − u_j v_i) per boundary edge i → j (the
+    // disc's loop has the surface on its left).
     let b = boundary.len();
     for k in 0..b {
-        let (mut i, mut j) = (boundary[k], boundary[(k + 1) % b]);
-        if !surface_on_left {
-            std::mem::swap(&mut i, &mut j);
-        }
+        let (i, j) = (boundary[k], boundary[(k + 1) % b]);
         add(i, 0, j, 1, -0.25);
         add(j, 0, i, 1, 0.25);
     }
@@ -128,11 +117,10 @@ pub fn lscm(
 
     solve_spd(m, &triplets, &mut [&mut rhs])?;
     let mut uv = vec![[0.0; 2]; n];
-    for (v, &f) in free_index.iter().enumerate() {
-        uv[v] = if f == PINNED {
-            [pin_value(v as u32, 0), pin_value(v as u32, 1)]
-        } else {
-            [rhs[2 * f as usize], rhs[2 * f as usize + 1]]
+    for (v, p) in uv.iter_mut().enumerate() {
+        *p = match free_index.get(v) {
+            Some(f) => [rhs[2 * f as usize], rhs[2 * f as usize + 1]],
+            None => [pin_value(v as u32, 0), pin_value(v as u32, 1)],
         };
     }
     Ok(LscmMap { uv, pinned })
@@ -141,15 +129,9 @@ pub fn lscm(
 /// `cot θ` for the angle `θ` at `o` between `i − o` and `j − o`: `(e1·e2) / ‖e1 × e2‖`;
 /// `None` for a degenerate triangle.
 fn cotangent(o: [f64; 3], i: [f64; 3], j: [f64; 3]) -> Option<f64> {
-    let e1 = [i[0] - o[0], i[1] - o[1], i[2] - o[2]];
-    let e2 = [j[0] - o[0], j[1] - o[1], j[2] - o[2]];
-    let cross = [
-        e1[1] * e2[2] - e1[2] * e2[1],
-        e1[2] * e2[0] - e1[0] * e2[2],
-        e1[0] * e2[1] - e1[1] * e2[0],
-    ];
-    let sin_part = (cross[0].powi(2) + cross[1].powi(2) + cross[2].powi(2)).sqrt();
-    let cot = (e1[0] * e2[0] + e1[1] * e2[1] + e1[2] * e2[2]) / sin_part;
+    let (e1, e2) = (sub3(i, o), sub3(j, o));
+    let sin_part = norm3(cross3(e1, e2));
+    let cot = dot3(e1, e2) / sin_part;
     (sin_part > 0.0 && cot.is_finite()).then_some(cot)
 }
 
@@ -165,18 +147,11 @@ fn position_order(a: &[f64; 3], b: &[f64; 3]) -> Ordering {
 /// positions are lexicographically smallest, so the choice depends on positions only,
 /// not on vertex numbering or where the loop starts (vertices at identical positions
 /// excepted). Exact, `O(B²)` in the boundary length `B` (which is `O(√V)` for a
-/// reasonable disc mesh).
-pub fn farthest_boundary_pair(
+/// reasonable disc mesh). Precondition: every boundary vertex indexes `positions`.
+fn farthest_boundary_pair(
     positions: &[[f64; 3]],
     boundary: &[u32],
 ) -> Result<[u32; 2], InitialMapError> {
-    if let Some((index, &vertex)) = boundary
-        .iter()
-        .enumerate()
-        .find(|(_, v)| **v as usize >= positions.len())
-    {
-        return Err(InitialMapError::BadBoundaryVertex { index, vertex });
-    }
     let mut best: Option<(f64, u32, u32)> = None;
     for (k, &a) in boundary.iter().enumerate() {
         for &b in &boundary[k + 1..] {
@@ -217,11 +192,10 @@ mod tests {
     use crate::param::count_flipped;
 
     fn run(mesh: &TriMesh) -> LscmMap {
-        let b = disc_boundary(&mesh.triangles).unwrap();
-        lscm(&mesh.positions, &mesh.triangles, &b).unwrap()
+        lscm(&mesh.positions, &Disc::new(mesh).unwrap()).unwrap()
     }
 
-    use crate::vec3::{norm3 as len3, sub3};
+    use crate::vec3::norm3 as len3;
     fn lift(p: [f64; 2]) -> [f64; 3] {
         [p[0], p[1], 0.0]
     }
@@ -312,25 +286,25 @@ mod tests {
                 ]
             })
             .collect();
-        let mut b: Vec<u32> = disc_boundary(&mesh.triangles)
-            .unwrap()
-            .iter()
-            .map(|&v| perm[v as usize])
-            .collect();
-        b.rotate_left(7);
-        let permuted = lscm(&positions, &triangles, &b).unwrap();
+        let permuted = TriMesh::new(positions, triangles);
+        let permuted = run(&permuted);
         assert_eq!(permuted.pinned, map.pinned.map(|v| perm[v as usize]));
         for (p, &pv) in map.uv.iter().zip(&perm) {
             let q = permuted.uv[pv as usize];
             assert!((p[0] - q[0]).abs() < 1e-9 && (p[1] - q[1]).abs() < 1e-9);
         }
-        // The boundary loop given in the other direction gives the same map.
-        b.reverse();
-        let reversed = lscm(&positions, &triangles, &b).unwrap();
-        for v in 0..n {
-            let (p, q) = (permuted.uv[v], reversed.uv[v]);
-            assert!((p[0] - q[0]).abs() < 1e-9 && (p[1] - q[1]).abs() < 1e-9);
-        }
+    }
+
+    #[test]
+    fn positions_must_fit_the_disc() {
+        // The checks themselves are tested with `check_positions`; here only that LSCM
+        // runs them.
+        let mesh = grid_disc(2);
+        let disc = Disc::new(&mesh).unwrap();
+        assert!(matches!(
+            lscm(&mesh.positions[1..], &disc),
+            Err(InitialMapError::Positions(_))
+        ));
     }
 
     fn gcd(a: usize, b: usize) -> usize {

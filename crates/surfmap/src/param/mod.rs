@@ -2,17 +2,20 @@
 //! projected Newton minimization of `E = Σ_T area3D(T) · W(a, d)` with flip-free
 //! line search and α-continuation.
 
+#[doc(hidden)]
 pub mod arap;
-pub mod density;
+#[doc(hidden)]
 pub mod element;
 pub mod flatten;
 pub mod flip_free;
 pub mod lscm;
 pub mod multilevel;
+#[doc(hidden)]
 pub mod newton;
 pub mod tutte;
 
 use crate::linsolve::SolveError;
+use crate::mesh::{Disc, PositionError};
 
 /// Signed area of a UV triangle, `½ ((b − a) × (c − a))`: positive when `a, b, c` turn
 /// counter-clockwise.
@@ -37,26 +40,12 @@ pub fn count_flipped(uvs: &[[f64; 2]], triangles: &[[u32; 3]]) -> usize {
 /// Why an initial map ([`lscm`], [`tutte`]) could not be computed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum InitialMapError {
-    #[error("the mesh has no triangles")]
-    NoTriangles,
-    #[error("triangle {triangle} uses vertex {vertex}, but there are only {num_vertices} vertices")]
-    VertexOutOfRange {
-        triangle: usize,
-        vertex: u32,
-        num_vertices: usize,
-    },
-    #[error("position of vertex {vertex} is not finite; fix or remove it")]
-    NonFinitePosition { vertex: u32 },
-    #[error("vertex {vertex} is used by no triangle; remove unreferenced vertices first")]
-    UnreferencedVertex { vertex: u32 },
-    #[error("the boundary loop has {len} vertices; a disc boundary needs at least 3")]
-    BoundaryTooShort { len: usize },
-    #[error("boundary entry {index} is vertex {vertex}, which is out of range or repeated")]
-    BadBoundaryVertex { index: usize, vertex: u32 },
+    #[error(transparent)]
+    Positions(#[from] PositionError),
     #[error(
-        "boundary vertices {from} → {to} are not joined by a triangle edge; pass the ordered boundary loop of a disc"
+        "vertex {vertex} is used by no triangle; remove unreferenced vertices first (`repair::drop_unreferenced`)"
     )]
-    BoundaryNotAnEdge { from: u32, to: u32 },
+    UnreferencedVertex { vertex: u32 },
     #[error("the boundary loop has zero length (all boundary vertices coincide)")]
     DegenerateBoundary,
     #[error(
@@ -69,73 +58,36 @@ pub enum InitialMapError {
     Solve(#[from] SolveError),
 }
 
-/// Checks the common preconditions of the initial maps: indices in range, finite
-/// positions, every vertex used, a boundary loop of distinct vertices whose
-/// consecutive pairs are triangle edges. Returns whether the loop runs with the
-/// triangles' orientation (surface on the left, `true`) or against it.
-pub(crate) fn check_disc_input(
-    positions: &[[f64; 3]],
-    triangles: &[[u32; 3]],
-    boundary: &[u32],
-) -> Result<bool, InitialMapError> {
-    let n = positions.len();
-    if triangles.is_empty() {
-        return Err(InitialMapError::NoTriangles);
+/// Checks what the initial maps need beyond a [`Disc`]: one finite position per vertex
+/// ([`Disc::check_positions`]), and every vertex used by a triangle (an unused one would
+/// make the systems singular).
+pub(crate) fn check_positions(positions: &[[f64; 3]], disc: &Disc) -> Result<(), InitialMapError> {
+    disc.check_positions(positions)?;
+    match disc.first_unreferenced_vertex() {
+        Some(vertex) => Err(InitialMapError::UnreferencedVertex { vertex }),
+        None => Ok(()),
     }
-    let mut used = vec![false; n];
-    for (t, tri) in triangles.iter().enumerate() {
-        for &v in tri {
-            if v as usize >= n {
-                return Err(InitialMapError::VertexOutOfRange {
-                    triangle: t,
-                    vertex: v,
-                    num_vertices: n,
-                });
-            }
-            used[v as usize] = true;
+}
+
+/// Maps UVs into `[0, 1]²` by one translation and one uniform scale (the aspect ratio
+/// is kept): the longer side of the bounding box becomes 1, its lower-left corner the
+/// origin. Non-finite UVs are left out of the box (and stay non-finite). See also
+/// [`flatten::Flattening::normalized_uvs`].
+pub fn normalize_uvs(uvs: &mut [[f64; 2]]) {
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in uvs.iter().filter(|p| p[0].is_finite() && p[1].is_finite()) {
+        for k in 0..2 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
         }
     }
-    if let Some(v) = positions
-        .iter()
-        .position(|p| p.iter().any(|x| !x.is_finite()))
-    {
-        return Err(InitialMapError::NonFinitePosition { vertex: v as u32 });
+    if lo[0] > hi[0] {
+        return; // nothing finite
     }
-    if let Some(v) = used.iter().position(|&u| !u) {
-        return Err(InitialMapError::UnreferencedVertex { vertex: v as u32 });
+    let size = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(f64::MIN_POSITIVE);
+    for p in uvs.iter_mut() {
+        *p = [(p[0] - lo[0]) / size, (p[1] - lo[1]) / size];
     }
-    if boundary.len() < 3 {
-        return Err(InitialMapError::BoundaryTooShort {
-            len: boundary.len(),
-        });
-    }
-    let mut on_boundary = vec![false; n];
-    for (index, &v) in boundary.iter().enumerate() {
-        if v as usize >= n || on_boundary[v as usize] {
-            return Err(InitialMapError::BadBoundaryVertex { index, vertex: v });
-        }
-        on_boundary[v as usize] = true;
-    }
-    // Directed triangle edges between boundary vertices, to check the loop and its direction.
-    let mut forward = 0usize;
-    let mut edges: Vec<(u32, u32)> = triangles
-        .iter()
-        .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
-        .filter(|&(a, b)| on_boundary[a as usize] && on_boundary[b as usize])
-        .collect();
-    edges.sort_unstable();
-    for k in 0..boundary.len() {
-        let (a, b) = (boundary[k], boundary[(k + 1) % boundary.len()]);
-        let has_forward = edges.binary_search(&(a, b)).is_ok();
-        let has_backward = edges.binary_search(&(b, a)).is_ok();
-        if !has_forward && !has_backward {
-            return Err(InitialMapError::BoundaryNotAnEdge { from: a, to: b });
-        }
-        if has_forward {
-            forward += 1;
-        }
-    }
-    Ok(2 * forward >= boundary.len())
 }
 
 /// Real meshes from `shared/data` for tests, read by a minimal OFF/OBJ reader (positions
@@ -143,25 +95,6 @@ pub(crate) fn check_disc_input(
 #[cfg(test)]
 pub(crate) mod test_meshes {
     use crate::mesh::TriMesh;
-    use std::path::PathBuf;
-
-    /// `shared/data` (`$SURFMAP_DATA`, or `../../../shared/data` from the crate, or one
-    /// level further up for a worktree under `wt/`), or `None` (with a note) when missing.
-    pub fn data_dir() -> Option<PathBuf> {
-        let crate_dir = env!("CARGO_MANIFEST_DIR");
-        let candidates = [
-            std::env::var_os("SURFMAP_DATA").map(PathBuf::from),
-            Some(PathBuf::from(format!("{crate_dir}/../../../shared/data"))),
-            Some(PathBuf::from(format!(
-                "{crate_dir}/../../../../shared/data"
-            ))),
-        ];
-        let found = candidates.into_iter().flatten().find(|d| d.is_dir());
-        if found.is_none() {
-            eprintln!("note: shared/data not found; skipping real-mesh test");
-        }
-        found
-    }
 
     fn fan(face: &[u32], triangles: &mut Vec<[u32; 3]>) {
         for k in 1..face.len().saturating_sub(1) {
@@ -169,9 +102,10 @@ pub(crate) mod test_meshes {
         }
     }
 
-    /// Reads `name` (OFF or OBJ) from the data folder.
+    /// Reads `name` (OFF or OBJ) from the data folder ([`crate::testing::shared_data`]);
+    /// `None` (the test returns) only when the folder is missing outside CI.
     pub fn read(name: &str) -> Option<TriMesh> {
-        let text = std::fs::read_to_string(data_dir()?.join(name)).ok()?;
+        let text = std::fs::read_to_string(crate::testing::shared_data()?.join(name)).ok()?;
         let (mut positions, mut triangles) = (Vec::new(), Vec::new());
         let num = |t: &str| t.parse::<f64>().ok();
         if name.ends_with(".obj") {
@@ -249,46 +183,42 @@ mod tests {
     }
 
     #[test]
-    fn disc_input_checks() {
+    fn positions_are_checked_against_the_disc() {
         let mesh = crate::mesh::generate::grid_disc(2);
-        let boundary = crate::mesh::generate::disc_boundary(&mesh.triangles).unwrap();
+        let disc = Disc::new(&mesh).unwrap();
+        assert_eq!(check_positions(&mesh.positions, &disc), Ok(()));
         assert_eq!(
-            check_disc_input(&mesh.positions, &mesh.triangles, &boundary),
-            Ok(true)
-        );
-        let reversed: Vec<u32> = boundary.iter().rev().copied().collect();
-        assert_eq!(
-            check_disc_input(&mesh.positions, &mesh.triangles, &reversed),
-            Ok(false)
-        );
-        let mut skipping = boundary.clone();
-        skipping.remove(1);
-        assert!(matches!(
-            check_disc_input(&mesh.positions, &mesh.triangles, &skipping),
-            Err(InitialMapError::BoundaryNotAnEdge { .. })
-        ));
-        let mut extra = mesh.positions.clone();
-        extra.push([0.0; 3]);
-        assert_eq!(
-            check_disc_input(&extra, &mesh.triangles, &boundary),
-            Err(InitialMapError::UnreferencedVertex { vertex: 9 })
+            check_positions(&mesh.positions[..8], &disc),
+            Err(InitialMapError::Positions(PositionError::Count {
+                positions: 8,
+                vertices: 9
+            }))
         );
         let mut nan = mesh.positions.clone();
         nan[4][1] = f64::NAN;
         assert_eq!(
-            check_disc_input(&nan, &mesh.triangles, &boundary),
-            Err(InitialMapError::NonFinitePosition { vertex: 4 })
+            check_positions(&nan, &disc),
+            Err(InitialMapError::Positions(PositionError::NonFinite {
+                vertex: 4
+            }))
         );
-        assert!(matches!(
-            check_disc_input(&mesh.positions, &mesh.triangles, &[0, 1]),
-            Err(InitialMapError::BoundaryTooShort { len: 2 })
-        ));
-        assert!(matches!(
-            check_disc_input(&mesh.positions, &mesh.triangles, &[0, 1, 1]),
-            Err(InitialMapError::BadBoundaryVertex {
-                index: 2,
-                vertex: 1
-            })
-        ));
+        let mut extra = mesh.clone();
+        extra.positions.push([0.0; 3]);
+        assert_eq!(
+            check_positions(&extra.positions, &Disc::new(&extra).unwrap()),
+            Err(InitialMapError::UnreferencedVertex { vertex: 9 })
+        );
+    }
+
+    #[test]
+    fn normalized_uvs_fill_the_unit_square_keeping_the_aspect() {
+        let mut uv = vec![[-1.0, 2.0], [3.0, 2.0], [1.0, 4.0], [f64::NAN, 0.0]];
+        normalize_uvs(&mut uv);
+        assert_eq!(&uv[..3], &[[0.0, 0.0], [1.0, 0.0], [0.5, 0.5]]);
+        assert!(uv[3][0].is_nan());
+        // A single point stays finite.
+        let mut one = vec![[5.0, 5.0]];
+        normalize_uvs(&mut one);
+        assert_eq!(one, vec![[0.0, 0.0]]);
     }
 }

@@ -31,9 +31,9 @@
 //! single-level start. The prolongation needs no linear solve: cost
 //! O(faces · (polish steps + sweeps)).
 
-use super::density::Density;
 use super::element::{self, RestTriangle};
 use super::signed_uv_area;
+use crate::energy::Density;
 use crate::mesh::decimate::Decimation;
 use crate::vec3::{cross3, dot3, sub3};
 
@@ -440,10 +440,16 @@ fn polish<D: Density + ?Sized>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::energy::{Alpha, Energy};
     use crate::mesh::generate::{bumpy_disc, spherical_cap};
     use crate::param::count_flipped;
-    use crate::param::density::{EnergyKind, Litke};
-    use crate::param::flatten::{FlattenOptions, MultilevelOptions, StartMap, flatten};
+    use crate::param::flatten::{
+        CoarseLevel, FlattenOptions, Multilevel, Start, StartMap, flatten,
+    };
+
+    fn multilevel(choice: Multilevel) -> Start {
+        Start::Auto { multilevel: choice }
+    }
 
     /// A ring of `k` vertices around vertex 0 (counter-clockwise faces `(0, i, i+1)`).
     fn fan(ring: &[[f64; 2]]) -> (Vec<[f64; 2]>, Vec<[u32; 3]>) {
@@ -522,7 +528,7 @@ mod tests {
         // Start far off-centre (still admissible): the optimum for this symmetric
         // planar star is the centre (the identity map).
         uv[0] = [0.6, 0.1];
-        let density = Litke::balanced();
+        let density = Alpha::balanced();
         let before: f64 = star_energy(&positions, &uv, &star, &density);
         let mut rest = Vec::new();
         rest_of(&positions, &star, &mut rest).unwrap();
@@ -542,7 +548,7 @@ mod tests {
         positions: &[[f64; 3]],
         uv: &[[f64; 2]],
         star: &[[u32; 3]],
-        density: &Litke,
+        density: &Alpha,
     ) -> f64 {
         star.iter()
             .map(|f| {
@@ -566,14 +572,9 @@ mod tests {
         let mesh = bumpy_disc(6, 0.3);
         let r = flatten(
             &mesh,
-            &FlattenOptions {
-                multilevel: MultilevelOptions {
-                    min_faces: 0,
-                    coarse_vertices: Some(mesh.positions.len()),
-                    ..Default::default()
-                },
-                ..Default::default()
-            },
+            &FlattenOptions::default().with_start(multilevel(Multilevel::Always(
+                CoarseLevel::with_vertices(mesh.positions.len()),
+            ))),
         )
         .unwrap();
         assert_ne!(r.start, StartMap::Multilevel);
@@ -585,20 +586,12 @@ mod tests {
     #[test]
     fn continuation_runs_on_the_coarse_level_and_reaches_the_same_minimum() {
         let mesh = bumpy_disc(20, 0.4);
-        let options = |multilevel| FlattenOptions {
-            from_alpha: Some(Litke::conformal()),
-            multilevel,
-            ..Default::default()
+        let options = |choice| {
+            FlattenOptions::new(Energy::litke_from(Alpha::conformal(), Alpha::balanced()))
+                .with_start(multilevel(choice))
         };
-        let single = flatten(&mesh, &options(MultilevelOptions::off())).unwrap();
-        let multi = flatten(
-            &mesh,
-            &options(MultilevelOptions {
-                min_faces: 0,
-                ..Default::default()
-            }),
-        )
-        .unwrap();
+        let single = flatten(&mesh, &options(Multilevel::Never)).unwrap();
+        let multi = flatten(&mesh, &options(Multilevel::Always(CoarseLevel::default()))).unwrap();
         assert_eq!(multi.start, StartMap::Multilevel);
         let report = multi.multilevel.unwrap();
         assert_eq!(
@@ -615,30 +608,20 @@ mod tests {
     fn multilevel_flattening_reaches_the_single_level_minimum() {
         for mesh in [bumpy_disc(24, 0.4), spherical_cap(1.0, 1.6, 20, 60)] {
             for energy in [
-                EnergyKind::Litke(Litke::balanced()),
-                EnergyKind::Litke(Litke::conformal()),
-                EnergyKind::SymmetricDirichlet,
+                Energy::litke(Alpha::balanced()),
+                Energy::litke(Alpha::conformal()),
+                Energy::SymmetricDirichlet,
             ] {
                 let single = flatten(
                     &mesh,
-                    &FlattenOptions {
-                        energy,
-                        multilevel: MultilevelOptions::off(),
-                        ..Default::default()
-                    },
+                    &FlattenOptions::new(energy).with_start(multilevel(Multilevel::Never)),
                 )
                 .unwrap();
                 let multi = flatten(
                     &mesh,
-                    &FlattenOptions {
-                        energy,
-                        multilevel: MultilevelOptions {
-                            min_faces: 0,
-                            coarse_vertices: Some(mesh.positions.len() / 8),
-                            ..Default::default()
-                        },
-                        ..Default::default()
-                    },
+                    &FlattenOptions::new(energy).with_start(multilevel(Multilevel::Always(
+                        CoarseLevel::with_vertices(mesh.positions.len() / 8),
+                    ))),
                 )
                 .unwrap();
                 let report = multi.multilevel.as_ref().unwrap();

@@ -4,7 +4,7 @@
 //! Each iteration:
 //! 1. assembles the gradient and the per-triangle Hessians, each projected to positive
 //!    semi-definite in closed form ([`element::gradient_and_projected_hessian`]);
-//! 2. solves `H p = −∇E` (the sign NOTES.md §1 corrects in thesis (3.1)) with a sparse
+//! 2. solves `H p = −∇E` (thesis (3.1) prints `+∇E`; the descent direction needs `−∇E`) with a sparse
 //!    Cholesky whose symbolic factorization is computed once, in [`NewtonSolver::new`];
 //! 3. steps along `p` with Armijo backtracking (thesis fig. 3.3) started at or below
 //!    the largest flip-free step, so no accepted iterate has `det J ≤ 0` anywhere; an
@@ -23,10 +23,10 @@
 //! the energy is invariant under rigid motions, so this changes nothing but the
 //! output's placement, and keeps the Cholesky factorization well-posed.
 
-use super::density::Density;
 use super::element::{self, RestTriangle};
 use super::flip_free::max_flip_free_step;
-use crate::linsolve::{Ordering, SolveError, SpdSystem, VertexOrdering};
+use crate::energy::Density;
+use crate::linsolve::{FIXED, Ordering, SolveError, SpdSystem, Unknowns, VertexOrdering};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::time::Instant;
@@ -65,7 +65,7 @@ pub enum StopReason {
 }
 
 /// Line-search and stopping parameters.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NewtonSettings {
     /// Armijo sufficient-decrease constant `c` (thesis: 0.5).
     pub armijo_c: f64,
@@ -93,8 +93,8 @@ impl Default for NewtonSettings {
 pub struct NewtonSolver<'m> {
     triangles: &'m [[u32; 3]],
     rest: Vec<RestTriangle>,
-    /// Reduced unknown of coordinate `2·v + c`, or `u32::MAX` when pinned.
-    dof: Vec<u32>,
+    /// The unknowns: coordinate `c` of vertex `v` is value `2·v + c`; the pins are fixed.
+    dof: Unknowns,
     system: SpdSystem,
     /// For each triangle, the value slot of its 21 lower-triangle local pairs
     /// (`u32::MAX` where a pinned coordinate is involved).
@@ -177,25 +177,16 @@ impl<'m> NewtonSolver<'m> {
         ordering: Option<&VertexOrdering>,
     ) -> Result<Self, SolveError> {
         let nv = num_vertices;
-        let mut dof = vec![0u32; 2 * nv];
-        for &(v, c) in pins {
-            dof[2 * v as usize + c] = u32::MAX;
-        }
-        let mut n = 0u32;
-        for d in dof.iter_mut() {
-            if *d != u32::MAX {
-                *d = n;
-                n += 1;
-            }
-        }
+        let dof = Unknowns::new(2 * nv, pins.iter().map(|&(v, c)| 2 * v as usize + c));
+        let n = dof.count();
         let local_dofs = |t: &[u32; 3]| -> [u32; 6] {
-            std::array::from_fn(|i| dof[2 * t[i / 2] as usize + i % 2])
+            std::array::from_fn(|i| dof.as_slice()[2 * t[i / 2] as usize + i % 2])
         };
         let mut entries = Vec::with_capacity(triangles.len() * 21);
         for t in triangles {
             let ld = local_dofs(t);
             for &(i, j) in &LOWER_PAIRS {
-                if ld[i] != u32::MAX && ld[j] != u32::MAX {
+                if ld[i] != FIXED && ld[j] != FIXED {
                     entries.push((ld[i], ld[j]));
                 }
             }
@@ -205,7 +196,7 @@ impl<'m> NewtonSolver<'m> {
             Some(vertices) => vertices.expand(2, &dof)?,
             None => Ordering::Amd,
         };
-        let (system, entry_slots) = SpdSystem::with_ordering(n as usize, &entries, &ordering)?;
+        let (system, entry_slots) = SpdSystem::with_ordering(n, &entries, &ordering)?;
         let symbolic_time = t_symbolic.elapsed().as_secs_f64();
         drop(entries);
         let mut slots = vec![[u32::MAX; 21]; triangles.len()];
@@ -213,7 +204,7 @@ impl<'m> NewtonSolver<'m> {
         for (t, tri) in triangles.iter().enumerate() {
             let ld = local_dofs(tri);
             for (p, &(i, j)) in LOWER_PAIRS.iter().enumerate() {
-                if ld[i] != u32::MAX && ld[j] != u32::MAX {
+                if ld[i] != FIXED && ld[j] != FIXED {
                     slots[t][p] = entry_slots[k];
                     k += 1;
                 }
@@ -229,7 +220,7 @@ impl<'m> NewtonSolver<'m> {
             elem_grad: vec![[0.0; 6]; nf],
             elem_hess: vec![[0.0; 21]; nf],
             elem_energy: vec![0.0; nf],
-            gradient: vec![0.0; n as usize],
+            gradient: vec![0.0; n],
             direction: vec![[0.0; 2]; nv],
             trial: vec![[0.0; 2]; nv],
             best: vec![[0.0; 2]; nv],
@@ -392,8 +383,7 @@ impl<'m> NewtonSolver<'m> {
             }
             for (v, d) in self.direction.iter_mut().enumerate() {
                 for (c, dc) in d.iter_mut().enumerate() {
-                    let k = self.dof[2 * v + c];
-                    *dc = if k == u32::MAX { 0.0 } else { p[k as usize] };
+                    *dc = self.dof.get(2 * v + c).map_or(0.0, |k| p[k as usize]);
                 }
             }
             let t_search = Instant::now();
@@ -537,8 +527,7 @@ impl<'m> NewtonSolver<'m> {
             }
             let g = &self.elem_grad[t];
             for i in 0..6 {
-                let k = self.dof[2 * tri[i / 2] as usize + i % 2];
-                if k != u32::MAX {
+                if let Some(k) = self.dof.get(2 * tri[i / 2] as usize + i % 2) {
                     self.gradient[k as usize] += g[i];
                 }
             }
@@ -549,9 +538,9 @@ impl<'m> NewtonSolver<'m> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::Topology;
+    use crate::energy::Alpha;
+    use crate::mesh::Disc;
     use crate::mesh::generate::bumpy_disc;
-    use crate::param::density::Litke;
     use crate::param::element::rest_triangles;
     use crate::param::tutte::mean_value;
 
@@ -566,9 +555,9 @@ mod tests {
             .iter()
             .map(|p| p.map(|x| x / scale))
             .collect();
-        let topo = Topology::new(&mesh);
-        let boundary = &topo.boundary_loops[0].vertices;
-        let mut uv = mean_value(&positions, &mesh.triangles, boundary).unwrap();
+        let disc = Disc::new(&mesh).unwrap();
+        let boundary = disc.boundary();
+        let mut uv = mean_value(&positions, &disc).unwrap();
         let rest = rest_triangles(&positions, &mesh.triangles).unwrap();
         let (p0, p1) = (boundary[0], boundary[boundary.len() / 2]);
         let mut solver = NewtonSolver::new(
@@ -579,7 +568,7 @@ mod tests {
             None,
         )
         .unwrap();
-        let density = Litke::balanced();
+        let density = Alpha::balanced();
         let settings = NewtonSettings::default();
         let (stop, iterations, _) = solver
             .minimize(&mut uv, &density, &settings, 0, Instant::now(), &mut |_| {})
@@ -632,7 +621,7 @@ mod tests {
             let (_, iterations, energy) = solver
                 .minimize(
                     &mut uv,
-                    &Litke::balanced(),
+                    &Alpha::balanced(),
                     &settings,
                     0,
                     Instant::now(),
@@ -645,11 +634,7 @@ mod tests {
         let (b, it_b, e_b) = run(Some(&ordering));
         assert_eq!(it_a, it_b);
         assert!(it_a > 0 && (e_a - e_b).abs() <= 1e-12 * e_a.abs());
-        let diff = a
-            .iter()
-            .zip(&b)
-            .map(|(p, q)| (p[0] - q[0]).abs().max((p[1] - q[1]).abs()))
-            .fold(0.0, f64::max);
+        let diff = crate::testing::max_uv_difference(&a, &b);
         assert!(diff < 1e-9, "{diff}");
     }
 }

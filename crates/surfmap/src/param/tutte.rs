@@ -7,31 +7,30 @@
 //! triangles) for any disc mesh when the boundary polygon is convex and (strictly)
 //! every interior vertex has positive weights — which both weightings guarantee.
 //! These are the fallback when the free-boundary conformal map of thesis §3.1.1
-//! ([`super::lscm`]) is not admissible (NOTES.md §1).
+//! ([`super::lscm`]) is not admissible (flips a triangle).
 
-use super::{InitialMapError, check_disc_input};
-use crate::linsolve::{solve_general, solve_spd};
-use crate::vec3::{norm3 as norm, sub3 as sub};
+use super::{InitialMapError, check_positions};
+use crate::linsolve::{Unknowns, solve_general, solve_spd};
+use crate::mesh::Disc;
+use crate::vec3::{cross3, norm3 as norm, sub3 as sub};
 use std::f64::consts::TAU;
 
-/// Boundary fixed on the unit circle by arc length: boundary vertex `k` goes to angle
-/// `2π s_k / L`, where `s_k` is the 3D length of the loop from `boundary[0]` to
-/// `boundary[k]` and `L` the total length. The circle is run counter-clockwise when the
-/// loop has the surface on its left (the orientation of the triangles), clockwise
-/// otherwise, so the resulting map preserves orientation either way.
+/// The disc's boundary fixed on the unit circle by arc length: boundary vertex `k`
+/// ([`Disc::boundary`]) goes to angle `2π s_k / L`, where `s_k` is the 3D length of the
+/// loop from its first vertex to its `k`-th and `L` the total length. The loop has the
+/// surface on its left, so the circle is run counter-clockwise and a map onto it
+/// preserves orientation.
 pub fn boundary_on_circle(
     positions: &[[f64; 3]],
-    triangles: &[[u32; 3]],
-    boundary: &[u32],
+    disc: &Disc,
 ) -> Result<Vec<[f64; 2]>, InitialMapError> {
-    let counter_clockwise = check_disc_input(positions, triangles, boundary)?;
-    circle_by_arc_length(positions, boundary, counter_clockwise)
+    check_positions(positions, disc)?;
+    circle_by_arc_length(positions, disc.boundary())
 }
 
 fn circle_by_arc_length(
     positions: &[[f64; 3]],
     boundary: &[u32],
-    counter_clockwise: bool,
 ) -> Result<Vec<[f64; 2]>, InitialMapError> {
     let b = boundary.len();
     let mut arc = Vec::with_capacity(b + 1);
@@ -48,11 +47,10 @@ fn circle_by_arc_length(
     if total <= 0.0 || !total.is_finite() {
         return Err(InitialMapError::DegenerateBoundary);
     }
-    let sign = if counter_clockwise { 1.0 } else { -1.0 };
     Ok(arc[..b]
         .iter()
         .map(|s| {
-            let angle = sign * TAU * s / total;
+            let angle = TAU * s / total;
             [angle.cos(), angle.sin()]
         })
         .collect())
@@ -60,16 +58,12 @@ fn circle_by_arc_length(
 
 /// Mean-value map with the boundary on the unit circle by arc length
 /// ([`boundary_on_circle`]); see [`mean_value_with_boundary`].
-pub fn mean_value(
-    positions: &[[f64; 3]],
-    triangles: &[[u32; 3]],
-    boundary: &[u32],
-) -> Result<Vec<[f64; 2]>, InitialMapError> {
-    onto_circle(positions, triangles, boundary, Weights::MeanValue)
+pub fn mean_value(positions: &[[f64; 3]], disc: &Disc) -> Result<Vec<[f64; 2]>, InitialMapError> {
+    onto_circle(positions, disc, Weights::MeanValue)
 }
 
 /// Mean-value coordinates (Floater 2003, eq. 5.1) with the boundary loop fixed at
-/// `boundary_uv[k]` for `boundary[k]`:
+/// `boundary_uv[k]` for `disc.boundary()[k]`:
 ///
 /// `w_ij = (tan(δ_ij / 2) + tan(γ_ij / 2)) / ‖x_j − x_i‖`, where `δ_ij, γ_ij` are the 3D
 /// angles at `x_i` of the two triangles sharing the edge `ij`, and every interior vertex
@@ -81,18 +75,11 @@ pub fn mean_value(
 /// reproduced exactly. Injective when `boundary_uv` is a convex polygon.
 pub fn mean_value_with_boundary(
     positions: &[[f64; 3]],
-    triangles: &[[u32; 3]],
-    boundary: &[u32],
+    disc: &Disc,
     boundary_uv: &[[f64; 2]],
 ) -> Result<Vec<[f64; 2]>, InitialMapError> {
-    check_disc_input(positions, triangles, boundary)?;
-    solve_fixed_boundary(
-        positions,
-        triangles,
-        boundary,
-        boundary_uv,
-        Weights::MeanValue,
-    )
+    check_positions(positions, disc)?;
+    solve_fixed_boundary(positions, disc, boundary_uv, Weights::MeanValue)
 }
 
 /// Uniform Tutte embedding (Tutte 1963): `w_ij = 1` for every edge, boundary on the unit
@@ -100,22 +87,20 @@ pub fn mean_value_with_boundary(
 /// vertices: symmetric positive definite, solved by sparse Cholesky ([`solve_spd`]).
 pub fn tutte_uniform(
     positions: &[[f64; 3]],
-    triangles: &[[u32; 3]],
-    boundary: &[u32],
+    disc: &Disc,
 ) -> Result<Vec<[f64; 2]>, InitialMapError> {
-    onto_circle(positions, triangles, boundary, Weights::Uniform)
+    onto_circle(positions, disc, Weights::Uniform)
 }
 
 /// The fixed-boundary map with the boundary on the unit circle by arc length.
 fn onto_circle(
     positions: &[[f64; 3]],
-    triangles: &[[u32; 3]],
-    boundary: &[u32],
+    disc: &Disc,
     weights: Weights,
 ) -> Result<Vec<[f64; 2]>, InitialMapError> {
-    let counter_clockwise = check_disc_input(positions, triangles, boundary)?;
-    let boundary_uv = circle_by_arc_length(positions, boundary, counter_clockwise)?;
-    solve_fixed_boundary(positions, triangles, boundary, &boundary_uv, weights)
+    check_positions(positions, disc)?;
+    let boundary_uv = circle_by_arc_length(positions, disc.boundary())?;
+    solve_fixed_boundary(positions, disc, &boundary_uv, weights)
 }
 
 #[derive(Clone, Copy, PartialEq)]
@@ -127,28 +112,24 @@ enum Weights {
 /// `tan(α/2)` for the angle `α` between `e1` and `e2`, or `None` if it is undefined
 /// (zero-length edge or `α = π`).
 fn tan_half_angle(e1: [f64; 3], e2: [f64; 3]) -> Option<f64> {
-    let cross = [
-        e1[1] * e2[2] - e1[2] * e2[1],
-        e1[2] * e2[0] - e1[0] * e2[2],
-        e1[0] * e2[1] - e1[1] * e2[0],
-    ];
-    let sin_part = (cross[0].powi(2) + cross[1].powi(2) + cross[2].powi(2)).sqrt();
-    let l1 = (e1[0].powi(2) + e1[1].powi(2) + e1[2].powi(2)).sqrt();
-    let l2 = (e2[0].powi(2) + e2[1].powi(2) + e2[2].powi(2)).sqrt();
+    let sin_part = norm(cross3(e1, e2));
+    let (l1, l2) = (norm(e1), norm(e2));
+    // Summed left to right (as `l1·l2 + e1·e2` term by term) on purpose: the start
+    // map's bits, and so the flattening's iteration counts, depend on it.
     let denom = l1 * l2 + e1[0] * e2[0] + e1[1] * e2[1] + e1[2] * e2[2];
     let t = sin_part / denom;
     (l1 > 0.0 && l2 > 0.0 && denom > 0.0 && t.is_finite()).then_some(t)
 }
 
 /// Assembles and solves `Σ_j w_ij (u_i − u_j) = 0` for the interior vertices with the
-/// boundary fixed; inputs already checked.
+/// boundary fixed; positions already checked.
 fn solve_fixed_boundary(
     positions: &[[f64; 3]],
-    triangles: &[[u32; 3]],
-    boundary: &[u32],
+    disc: &Disc,
     boundary_uv: &[[f64; 2]],
     weights: Weights,
 ) -> Result<Vec<[f64; 2]>, InitialMapError> {
+    let (triangles, boundary) = (disc.triangles(), disc.boundary());
     if boundary_uv.len() != boundary.len() {
         return Err(InitialMapError::BoundaryUvCount {
             expected: boundary.len(),
@@ -157,18 +138,11 @@ fn solve_fixed_boundary(
     }
     let n = positions.len();
     let mut uv = vec![[0.0; 2]; n];
-    const FIXED: u32 = u32::MAX;
-    let mut index = vec![0u32; n];
     for (&v, &p) in boundary.iter().zip(boundary_uv) {
-        index[v as usize] = FIXED;
         uv[v as usize] = p;
     }
-    let mut free = 0u32;
-    for slot in index.iter_mut().filter(|s| **s != FIXED) {
-        *slot = free;
-        free += 1;
-    }
-    let m = free as usize;
+    let index = Unknowns::new(n, boundary.iter().map(|&v| v as usize));
+    let m = index.count();
     if m == 0 {
         return Ok(uv);
     }
@@ -182,26 +156,24 @@ fn solve_fixed_boundary(
                     // Each edge (i, j) is seen from both of its triangles (it touches an
                     // interior vertex, so it is an interior edge): ½ per triangle sums to 1.
                     let w = 0.5;
-                    let (fi, fj) = (index[i as usize], index[j as usize]);
-                    for (f, other) in [(fi, j), (fj, i)] {
-                        if f != FIXED {
+                    let (fi, fj) = (index.get(i as usize), index.get(j as usize));
+                    for (f, fo, other) in [(fi, fj, j), (fj, fi, i)] {
+                        if let Some(f) = f {
                             triplets.push((f, f, w));
-                            let fo = index[other as usize];
-                            if fo == FIXED {
+                            if fo.is_none() {
                                 rhs_u[f as usize] += w * uv[other as usize][0];
                                 rhs_v[f as usize] += w * uv[other as usize][1];
                             }
                         }
                     }
-                    if fi != FIXED && fj != FIXED {
+                    if let (Some(fi), Some(fj)) = (fi, fj) {
                         triplets.push((fi, fj, -w));
                     }
                 }
                 Weights::MeanValue => {
-                    let fi = index[i as usize];
-                    if fi == FIXED {
+                    let Some(fi) = index.get(i as usize) else {
                         continue;
-                    }
+                    };
                     let x = positions[i as usize];
                     let ej = sub(positions[j as usize], x);
                     let el = sub(positions[l as usize], x);
@@ -210,12 +182,12 @@ fn solve_fixed_boundary(
                     for (other, e) in [(j, ej), (l, el)] {
                         let w = tan_half / norm(e);
                         triplets.push((fi, fi, w));
-                        let fo = index[other as usize];
-                        if fo == FIXED {
-                            rhs_u[fi as usize] += w * uv[other as usize][0];
-                            rhs_v[fi as usize] += w * uv[other as usize][1];
-                        } else {
-                            triplets.push((fi, fo, -w));
+                        match index.get(other as usize) {
+                            None => {
+                                rhs_u[fi as usize] += w * uv[other as usize][0];
+                                rhs_v[fi as usize] += w * uv[other as usize][1];
+                            }
+                            Some(fo) => triplets.push((fi, fo, -w)),
                         }
                     }
                 }
@@ -226,9 +198,9 @@ fn solve_fixed_boundary(
         Weights::Uniform => solve_spd(m, &triplets, &mut [&mut rhs_u, &mut rhs_v])?,
         Weights::MeanValue => solve_general(m, &triplets, &mut [&mut rhs_u, &mut rhs_v])?,
     }
-    for (v, &f) in index.iter().enumerate() {
-        if f != FIXED {
-            uv[v] = [rhs_u[f as usize], rhs_v[f as usize]];
+    for (v, p) in uv.iter_mut().enumerate() {
+        if let Some(f) = index.get(v) {
+            *p = [rhs_u[f as usize], rhs_v[f as usize]];
         }
     }
     Ok(uv)
@@ -238,11 +210,11 @@ fn solve_fixed_boundary(
 mod tests {
     use super::*;
     use crate::mesh::TriMesh;
-    use crate::mesh::generate::{bumpy_disc, disc_boundary, grid_disc, polar_disc, spherical_cap};
+    use crate::mesh::generate::{bumpy_disc, grid_disc, polar_disc, spherical_cap};
     use crate::param::count_flipped;
 
-    fn boundary(mesh: &TriMesh) -> Vec<u32> {
-        disc_boundary(&mesh.triangles).unwrap()
+    fn disc(mesh: &TriMesh) -> Disc<'_> {
+        Disc::new(mesh).unwrap()
     }
 
     /// Checks injectivity (all UV triangles positive) and the boundary on the unit circle.
@@ -278,28 +250,37 @@ mod tests {
             spherical_cap(3.0, std::f64::consts::FRAC_PI_2, 6, 7),
         ];
         for mesh in &meshes {
-            let b = boundary(mesh);
-            let mv = mean_value(&mesh.positions, &mesh.triangles, &b).unwrap();
-            check_embedding(mesh, &mv, &b);
-            let un = tutte_uniform(&mesh.positions, &mesh.triangles, &b).unwrap();
-            check_embedding(mesh, &un, &b);
+            let d = disc(mesh);
+            let mv = mean_value(&mesh.positions, &d).unwrap();
+            check_embedding(mesh, &mv, d.boundary());
+            let un = tutte_uniform(&mesh.positions, &d).unwrap();
+            check_embedding(mesh, &un, d.boundary());
         }
     }
 
     #[test]
-    fn reversed_boundary_loop_still_gives_positive_triangles() {
-        let mesh = bumpy_disc(4, 0.3);
-        let b: Vec<u32> = boundary(&mesh).into_iter().rev().collect();
-        let uv = mean_value(&mesh.positions, &mesh.triangles, &b).unwrap();
-        check_embedding(&mesh, &uv, &b);
+    fn mirrored_triangles_still_give_positive_triangles() {
+        // Every triangle turned around: the boundary loop runs the other way round the
+        // surface, and the map still preserves (the new) orientation.
+        let mut mesh = bumpy_disc(4, 0.3);
+        mesh.triangles.iter_mut().for_each(|t| t.swap(1, 2));
+        let d = disc(&mesh);
+        let b = d.boundary();
+        let directed: std::collections::HashSet<(u32, u32)> = mesh
+            .triangles
+            .iter()
+            .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+            .collect();
+        assert!((0..b.len()).all(|k| directed.contains(&(b[k], b[(k + 1) % b.len()]))));
+        let uv = mean_value(&mesh.positions, &d).unwrap();
+        check_embedding(&mesh, &uv, d.boundary());
     }
 
     #[test]
     fn boundary_placement_follows_arc_length() {
         // Unit square boundary of a 2×2 grid: 8 edges of length ½, so angles step by π/4.
         let mesh = grid_disc(2);
-        let b = boundary(&mesh);
-        let circle = boundary_on_circle(&mesh.positions, &mesh.triangles, &b).unwrap();
+        let circle = boundary_on_circle(&mesh.positions, &disc(&mesh)).unwrap();
         for (k, p) in circle.iter().enumerate() {
             let angle = TAU * k as f64 / 8.0;
             assert!((p[0] - angle.cos()).abs() < 1e-14 && (p[1] - angle.sin()).abs() < 1e-14);
@@ -326,9 +307,9 @@ mod tests {
             .iter()
             .map(|p| [p[0] + 2.0, c * p[1], s * p[1] - 1.0])
             .collect();
-        let b = boundary(&mesh);
-        let b_uv: Vec<[f64; 2]> = b.iter().map(|&v| planar[v as usize]).collect();
-        let uv = mean_value_with_boundary(&lifted, &mesh.triangles, &b, &b_uv).unwrap();
+        let d = disc(&mesh);
+        let b_uv: Vec<[f64; 2]> = d.boundary().iter().map(|&v| planar[v as usize]).collect();
+        let uv = mean_value_with_boundary(&lifted, &d, &b_uv).unwrap();
         for (p, q) in uv.iter().zip(&planar) {
             assert!(
                 (p[0] - q[0]).abs() < 1e-12 && (p[1] - q[1]).abs() < 1e-12,
@@ -342,14 +323,14 @@ mod tests {
         // One interior vertex (center of polar_disc(1, 5)): it must land at the mean of the
         // five boundary positions, which are equally spaced, i.e. at the origin.
         let mesh = polar_disc(1, 5);
-        let b = boundary(&mesh);
-        let uv = tutte_uniform(&mesh.positions, &mesh.triangles, &b).unwrap();
+        let uv = tutte_uniform(&mesh.positions, &disc(&mesh)).unwrap();
         assert!(uv[0][0].abs() < 1e-14 && uv[0][1].abs() < 1e-14);
         // Uniform weights on a 2-ring polar disc: each interior vertex is the average of its
         // neighbours (checked directly on the result).
         let mesh = polar_disc(3, 9);
-        let b = boundary(&mesh);
-        let uv = tutte_uniform(&mesh.positions, &mesh.triangles, &b).unwrap();
+        let d = disc(&mesh);
+        let b = d.boundary();
+        let uv = tutte_uniform(&mesh.positions, &d).unwrap();
         let mut nbrs = vec![std::collections::BTreeSet::new(); mesh.num_vertices()];
         for t in &mesh.triangles {
             for k in 0..3 {
@@ -371,17 +352,16 @@ mod tests {
 
     #[test]
     fn degenerate_input_is_an_error() {
-        let mut mesh = polar_disc(2, 6);
-        mesh.positions[1] = mesh.positions[0]; // zero-length edge at the center
-        let b = boundary(&mesh);
+        let mesh = polar_disc(2, 6);
+        let mut collapsed = mesh.positions.clone();
+        collapsed[1] = collapsed[0]; // zero-length edge at the center
         assert!(matches!(
-            mean_value(&mesh.positions, &mesh.triangles, &b),
+            mean_value(&collapsed, &disc(&mesh)),
             Err(InitialMapError::DegenerateTriangle { .. })
         ));
-        let mesh = polar_disc(2, 6);
         let b_uv = vec![[0.0, 0.0]; 3];
         assert!(matches!(
-            mean_value_with_boundary(&mesh.positions, &mesh.triangles, &boundary(&mesh), &b_uv),
+            mean_value_with_boundary(&mesh.positions, &disc(&mesh), &b_uv),
             Err(InitialMapError::BoundaryUvCount {
                 expected: 6,
                 got: 3
@@ -393,7 +373,6 @@ mod tests {
 #[cfg(test)]
 mod real_mesh_tests {
     use super::*;
-    use crate::mesh::generate::disc_boundary;
     use crate::param::{count_flipped, lscm::lscm, test_meshes};
 
     /// Floater's theorem on real scans: mean-value and uniform maps onto a circle are
@@ -404,12 +383,12 @@ mod real_mesh_tests {
             let Some(mesh) = test_meshes::read(name) else {
                 return;
             };
-            let b = disc_boundary(&mesh.triangles).expect("a disc");
-            let mv = mean_value(&mesh.positions, &mesh.triangles, &b).unwrap();
+            let disc = Disc::new(&mesh).expect("a disc");
+            let mv = mean_value(&mesh.positions, &disc).unwrap();
             assert_eq!(count_flipped(&mv, &mesh.triangles), 0, "{name}: mean value");
-            let un = tutte_uniform(&mesh.positions, &mesh.triangles, &b).unwrap();
+            let un = tutte_uniform(&mesh.positions, &disc).unwrap();
             assert_eq!(count_flipped(&un, &mesh.triangles), 0, "{name}: uniform");
-            let conformal = lscm(&mesh.positions, &mesh.triangles, &b).unwrap();
+            let conformal = lscm(&mesh.positions, &disc).unwrap();
             let flips = count_flipped(&conformal.uv, &mesh.triangles);
             eprintln!("{name}: LSCM flipped triangles: {flips}");
             if name == "hemisphere.obj" {

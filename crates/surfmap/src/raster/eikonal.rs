@@ -167,8 +167,9 @@ pub fn solve_eikonal(
 const SEED_RADIUS: i64 = 6;
 
 /// Seeds `value` near a polyline (domain coordinates; one point is a point feature):
-/// every updatable node within two nodes of the curve gets its distance to the curve in
-/// its own metric, `min_t ‖ξ − a − t(b − a)‖_{g(ξ)}`.
+/// every updatable node within `SEED_RADIUS` = 6 nodes of the curve (a box around each
+/// sample point) gets its distance to the curve in its own metric,
+/// `min_t ‖ξ − a − t(b − a)‖_{g(ξ)}`.
 pub fn seed_polyline(
     size: usize,
     metric: &[[f64; 3]],

@@ -3,7 +3,8 @@
 //! Units. Positions keep the mesh's units, so every node maps back to the surface. All
 //! other quantities use the length unit `ℓ` ([`GeometryImages::length_unit`]): with
 //! [`SurfaceScale::UnitArea`] (the default) `ℓ = √(surface area)`, so two surfaces of
-//! different size are compared at the same scale (NOTES §2); with
+//! different size are compared at the same scale (mean curvature has units 1/length, so
+//! the weights of the matching energy (2.9) only balance at a common scale); with
 //! [`SurfaceScale::Original`], `ℓ` = 1 mesh unit. Mean curvature `h` is in `1/ℓ`, the
 //! metric `g` in `ℓ²` per domain unit², feature distances in `ℓ`; the boundary distance
 //! is in domain units of ω (it feeds `χ^ε` of (2.14), defined on ω).

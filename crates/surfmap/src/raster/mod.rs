@@ -1,4 +1,4 @@
-//! Geometry images (thesis §3.2): a flattened surface placed in ω = [0,1]² and sampled on
+//! Geometry images (thesis §3.2): a flattened surface placed in ω = [0, 1]² and sampled on
 //! a regular `N × N` grid (`N = 2^k + 1`): inside mask, triangle id and barycentric
 //! coordinates, 3D position, metric `g`, mean curvature `h`, texture colour, signed
 //! distance to the domain boundary, feature distance maps in the metric `g`, harmonic
@@ -44,12 +44,8 @@ pub enum RasterError {
     DegenerateDomain,
     #[error("{count} UVs given for a mesh with {num_vertices} vertices")]
     UvCount { count: usize, num_vertices: usize },
-    #[error("triangle {triangle} uses vertex {vertex}, but the mesh has {num_vertices} vertices")]
-    BadVertexIndex {
-        triangle: usize,
-        vertex: usize,
-        num_vertices: usize,
-    },
+    #[error(transparent)]
+    Index(#[from] crate::mesh::IndexError),
     #[error(
         "triangle {triangle} is flipped or degenerate in the flattening (signed area {signed_area:e}); geometry images need a flip-free flattening"
     )]

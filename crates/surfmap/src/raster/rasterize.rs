@@ -29,22 +29,14 @@ const BAND_ROWS: usize = 8;
 
 impl Rasterization {
     /// Rasterizes triangles given by their domain coordinates `xi` (one per vertex, in
-    /// ω = [0,1]²). Degenerate or flipped domain triangles are an error: the input must be
+    /// ω = [0, 1]²). Degenerate or flipped domain triangles are an error: the input must be
     /// a flip-free flattening.
     pub fn new(xi: &[[f64; 2]], triangles: &[[u32; 3]], size: usize) -> Result<Self, RasterError> {
         super::domain::grid_level(size)?;
         let n = size;
         let nodes_per_unit = (n - 1) as f64;
+        crate::mesh::check_indices(triangles, xi.len())?;
         for (t, tri) in triangles.iter().enumerate() {
-            for &v in tri {
-                if v as usize >= xi.len() {
-                    return Err(RasterError::BadVertexIndex {
-                        triangle: t,
-                        vertex: v as usize,
-                        num_vertices: xi.len(),
-                    });
-                }
-            }
             let [a, b, c] = tri.map(|v| xi[v as usize]);
             let area2 = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
             if area2.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
@@ -265,7 +257,10 @@ mod tests {
         ));
         assert!(matches!(
             Rasterization::new(&xi, &[[0, 1, 9]], 17),
-            Err(RasterError::BadVertexIndex { vertex: 9, .. })
+            Err(RasterError::Index(crate::mesh::IndexError {
+                vertex: 9,
+                ..
+            }))
         ));
         assert!(Rasterization::new(&xi, &[[0, 1, 2]], 16).is_err());
     }

@@ -11,7 +11,7 @@
 //! `faces/flame/flame_scan.obj` as 47591 instead of 47653 vertices); `ply-rs-bw` is fast enough
 //! (igea.ply in 20–40 ms) but reports binary errors by element index, not byte offset.
 //!
-//! Writers go through [`crate::fsutil::write_atomically`]; text formats print every `f64` with
+//! Writers go through `fsutil::write_atomically`; text formats print every `f64` with
 //! `{}` (the shortest string that parses back to the same bits), PLY writes doubles.
 
 mod obj;
@@ -365,16 +365,7 @@ fn check_writable(path: &Path, mesh: &TriMesh) -> Result<(), WriteError> {
     if nv > u32::MAX as usize {
         return Err(invalid(format!("{nv} vertices cannot be indexed by u32")));
     }
-    if let Some((t, tri)) = mesh
-        .triangles
-        .iter()
-        .enumerate()
-        .find(|(_, tri)| tri.iter().any(|&i| i as usize >= nv))
-    {
-        return Err(invalid(format!(
-            "triangle {t} {tri:?} uses a vertex beyond the {nv} vertices"
-        )));
-    }
+    mesh.check_indices().map_err(|e| invalid(e.to_string()))?;
     match &mesh.uvs {
         None => {}
         Some(Uvs::PerVertex(uv)) if uv.len() != nv => {
@@ -788,30 +779,30 @@ mod tests {
         }
     }
 
-    /// Small real files of each format from the shared data folder, when it is there.
-    fn real_seeds() -> Vec<(Format, Vec<u8>)> {
-        let dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/data"));
-        let dir = std::env::var_os("SURFMAP_DATA_DIR").map_or(dir.to_path_buf(), PathBuf::from);
-        [
+    /// Small real files of each format from the shared data folder, when it is there
+    /// (`None`: skip; under `CI=true` a missing folder fails instead).
+    fn real_seeds() -> Option<Vec<(Format, Vec<u8>)>> {
+        let dir = crate::testing::shared_data()?;
+        let seeds = [
             "nefertiti_small.off",
             "faces/mp_canonical.obj",
             "faces/flame/flame_template.ply",
         ]
         .into_iter()
-        .filter_map(|name| {
+        .map(|name| {
             let path = dir.join(name);
-            Some((Format::from_path(&path)?, std::fs::read(&path).ok()?))
+            let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            (Format::from_path(&path).expect("a mesh extension"), bytes)
         })
-        .collect()
+        .collect();
+        Some(seeds)
     }
 
     #[test]
     fn mutated_real_files_never_panic() {
-        let seeds = real_seeds();
-        if seeds.is_empty() {
-            println!("note: shared data folder not found; skipping mutations of real files");
+        let Some(seeds) = real_seeds() else {
             return;
-        }
+        };
         let config = ProptestConfig {
             cases: (fuzz_cases() / 16).max(8),
             failure_persistence: None,

@@ -1,0 +1,143 @@
+//! The library's errors and remedies worded for the command line. The library names its
+//! own options and `mesh::repair` functions ("set `FlattenOptions::fill_holes`"); here
+//! each becomes the flag that does the same ("use --fill-holes").
+
+use serde::Serialize;
+use surfmap::FlattenError;
+use surfmap::mesh::validate::{Defect, DefectKind};
+use surfmap::param::flatten::OptionError;
+
+/// The remedy of a defect kind as the flags that apply it, where a flag does.
+fn flag_remedy(kind: DefectKind) -> Option<&'static str> {
+    Some(match kind {
+        DefectKind::NonFiniteCoordinates => {
+            "Fix the exporter, or drop them with --drop-unreferenced if no face uses them."
+        }
+        DefectKind::RepeatedIndexFaces => "Use --drop-degenerate to remove them.",
+        DefectKind::ZeroAreaFaces => {
+            "Use --drop-degenerate to remove them (this may open holes), or fix them in a mesh editor."
+        }
+        DefectKind::UnreferencedVertices => "Use --drop-unreferenced to remove them.",
+        DefectKind::DuplicateVertices => "Use --weld to merge coincident vertices.",
+        DefectKind::SeveralComponents => "Use --keep-largest, or --component N to choose one.",
+        DefectKind::NonManifoldEdges => {
+            "No automatic fix: remove the extra faces (fins, internal walls) in a mesh editor, \
+             or try --keep-largest if they belong to a stray piece."
+        }
+        DefectKind::InconsistentOrientation => "Use --reorient.",
+        DefectKind::SeveralBoundaryLoops => {
+            "use --fill-holes to fill all but the longest for the flattening (they stay open \
+             in the output), or cut from each hole to the outer boundary."
+        }
+        DefectKind::NoFaces
+        | DefectKind::NonManifoldVertices
+        | DefectKind::NonOrientable
+        | DefectKind::ClosedSurface
+        | DefectKind::PositiveGenus => return None,
+    })
+}
+
+/// A defect's problem and remedy, the remedy as flags.
+pub fn defect_message(d: &Defect) -> String {
+    match flag_remedy(d.kind) {
+        Some(remedy) => format!("{} {remedy}", d.problem),
+        None => d.message(),
+    }
+}
+
+/// A defect as the command line reports it (JSON of `inspect --json` and
+/// `flatten --report`).
+#[derive(Serialize)]
+pub struct CliDefect {
+    pub kind: DefectKind,
+    pub count: usize,
+    pub examples: Vec<Vec<u64>>,
+    pub message: String,
+    pub blocks_flattening: bool,
+}
+
+impl From<&Defect> for CliDefect {
+    fn from(d: &Defect) -> Self {
+        Self {
+            kind: d.kind,
+            count: d.count,
+            examples: d.examples.clone(),
+            message: defect_message(d),
+            blocks_flattening: d.blocks_flattening,
+        }
+    }
+}
+
+/// A numeric option out of range, as the flag that set it.
+pub fn option_message(e: &OptionError) -> String {
+    match e {
+        OptionError::Tolerance(t) => format!("--tolerance must be positive, got {t}"),
+        OptionError::ArmijoC(c) => format!("--armijo-c must be in (0, 1), got {c}"),
+        OptionError::CoarseVertices(n) => {
+            format!("--coarse-vertices must be at least 16, got {n}")
+        }
+        other => other.to_string(),
+    }
+}
+
+/// A flattening error with its remedy as flags.
+pub fn flatten_error(e: FlattenError) -> anyhow::Error {
+    let message = match &e {
+        FlattenError::NotADisc(defects) => format!(
+            "the mesh cannot be flattened as a disc:\n{}",
+            defects
+                .iter()
+                .map(|d| format!("  - {}", defect_message(d)))
+                .collect::<Vec<_>>()
+                .join("\n")
+        ),
+        FlattenError::Degenerate(inner) => {
+            format!("{inner}; run with --drop-degenerate or fix the mesh")
+        }
+        FlattenError::LscmFlipped(n) => format!(
+            "the LSCM start flips or degenerates {n} triangles; use --start auto (falls back \
+             to mean-value coordinates, injective by construction)"
+        ),
+        FlattenError::Option(o) => option_message(o),
+        _ => return e.into(),
+    };
+    anyhow::anyhow!(message)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use surfmap::TriMesh;
+    use surfmap::mesh::validate::validate;
+
+    /// Every defect kind a messy mesh shows is worded with flags that exist, and never
+    /// with the library's function names.
+    #[test]
+    fn remedies_name_flags_not_functions() {
+        let mut m = TriMesh::new(
+            vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [1.0, 1.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.5, 0.5, f64::NAN],
+                [5.0, 0.0, 0.0],
+                [6.0, 0.0, 0.0],
+                [5.0, 1.0, 0.0],
+            ],
+            vec![[0, 1, 2], [0, 3, 2], [0, 0, 1], [6, 7, 8]],
+        );
+        m.triangles.push([1, 4, 2]);
+        let defects = validate(&m, &surfmap::Topology::new(&m));
+        assert!(defects.len() >= 5, "{defects:?}");
+        for d in &defects {
+            let text = defect_message(d);
+            assert!(!text.contains("repair::") && !text.contains('`'), "{text}");
+            assert!(text.starts_with(&d.problem), "{text}");
+            if flag_remedy(d.kind).is_some() {
+                assert!(text.contains(" --"), "{text}");
+            }
+        }
+    }
+}

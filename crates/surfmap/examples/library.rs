@@ -1,0 +1,137 @@
+//! surfmap as a library, start to finish, without the command-line tool: a surface built
+//! from plain arrays in code (a bumpy patch with two "eyes" and a "mouth" cut out), refused
+//! as it is (not a disc: four boundary loops), flattened with its holes filled for the
+//! solve, its report read (iterations, energy, flips, distortion), its UVs normalized into
+//! [0, 1]² and written as an OBJ into a temporary folder.
+//!
+//! `cargo run --release -p surfmap --example library`
+
+use surfmap::mesh::validate::DefectKind;
+use surfmap::{Alpha, FlattenError, FlattenOptions, MeasureOptions, TriMesh, Uvs};
+
+/// A bumpy square patch of `n × n` quads (two triangles each) with three holes: strips
+/// of quads removed (two eyes, one mouth). A strip one quad high leaves no vertex
+/// without a triangle, so every vertex gets a UV.
+fn patch_with_holes(n: usize) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+    let mut positions = Vec::with_capacity((n + 1) * (n + 1));
+    for j in 0..=n {
+        for i in 0..=n {
+            let (x, y) = (i as f64 / n as f64 - 0.5, j as f64 / n as f64 - 0.5);
+            let z = 0.3 * (-8.0 * (x * x + y * y)).exp() + 0.04 * (9.0 * x).sin() * (7.0 * y).cos();
+            positions.push([x, y, z]);
+        }
+    }
+    let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+    let (eye_row, mouth_row) = (2 * n / 3, n / 4);
+    let removed = |i: usize, j: usize| {
+        let left_eye = j == eye_row && (n / 4..n / 4 + n / 10).contains(&i);
+        let right_eye = j == eye_row && (3 * n / 4 - n / 10..3 * n / 4).contains(&i);
+        let mouth = j == mouth_row && (3 * n / 8..5 * n / 8).contains(&i);
+        left_eye || right_eye || mouth
+    };
+    let mut triangles = Vec::with_capacity(2 * n * n);
+    for j in 0..n {
+        for i in 0..n {
+            if removed(i, j) {
+                continue;
+            }
+            triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    (positions, triangles)
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let (positions, triangles) = patch_with_holes(40);
+    let mesh = TriMesh::new(positions, triangles);
+    println!(
+        "patch: {} vertices, {} triangles",
+        mesh.num_vertices(),
+        mesh.num_triangles()
+    );
+
+    // As it is, the patch is not a disc: the error lists every defect with its remedy.
+    let options = FlattenOptions::new(Alpha::balanced());
+    match surfmap::flatten(&mesh, &options) {
+        Err(FlattenError::NotADisc(defects)) => {
+            for d in &defects {
+                println!("refused: {}", d.message());
+            }
+            assert!(
+                defects
+                    .iter()
+                    .any(|d| d.kind == DefectKind::SeveralBoundaryLoops)
+            );
+        }
+        other => panic!("expected a refusal, got {other:?}"),
+    }
+
+    // Filled for the solve, the holes stay open in the map (UVs for the patch's own
+    // vertices only).
+    let map = surfmap::flatten(&mesh, &options.with_fill_holes(true))?;
+    assert_eq!(map.uvs.len(), mesh.num_vertices());
+    println!(
+        "flattened: {} holes filled, start {}, {} warm-start steps, {} Newton iterations, {}, energy {:.6} per unit area, {} flipped triangles, {:.3} s",
+        map.holes_filled,
+        map.start_description(),
+        map.warm_start_iterations,
+        map.iterations,
+        if map.converged {
+            "converged"
+        } else {
+            "NOT converged"
+        },
+        map.energy,
+        map.flipped_triangles,
+        map.time_total
+    );
+    for entry in &map.log {
+        println!(
+            "  stage {} iteration {:>2}: energy {:.8}, step {:.3}",
+            entry.stage, entry.iteration, entry.energy, entry.step
+        );
+    }
+
+    // Distortion, as for any other tool's map (thesis §4.1.4: min / mean / max).
+    let report = surfmap::distortion_report_per_vertex(
+        &mesh.positions,
+        &mesh.triangles,
+        &map.uvs,
+        &MeasureOptions::default(),
+    )?;
+    let m = &report.measures;
+    println!(
+        "distortion (min / mean / max): angle {:.4} / {:.4} / {:.4}, area {:.4} / {:.4} / {:.4}, length {:.4} / {:.4} / {:.4}",
+        m.angle.min,
+        m.angle.mean,
+        m.angle.max,
+        m.area.min,
+        m.area.mean,
+        m.area.max,
+        m.length.min,
+        m.length.mean,
+        m.length.max
+    );
+    println!(
+        "flips {}, boundary self-intersecting: {}, symmetric Dirichlet {:.6}",
+        report.flipped_triangles,
+        report.boundary_overlap.self_intersecting,
+        report.symmetric_dirichlet
+    );
+
+    // Texture coordinates in [0, 1]², written with the surface as an OBJ.
+    let uvs = map.normalized_uvs();
+    let dir = std::env::temp_dir().join(format!("surfmap-library-{}", std::process::id()));
+    std::fs::create_dir_all(&dir)?;
+    let path = dir.join("patch.obj");
+    let out = TriMesh {
+        uvs: Some(Uvs::PerVertex(uvs)),
+        ..mesh
+    };
+    surfmap::write_mesh(&path, &out)?;
+    let back = surfmap::read_mesh(&path)?.mesh;
+    assert_eq!(back.vertex_uvs().map(<[_]>::len), Some(out.num_vertices()));
+    println!("wrote {}", path.display());
+    Ok(())
+}
