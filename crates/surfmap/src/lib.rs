@@ -5,8 +5,10 @@
 //! §2.1/§3.1), distortion measures and pictures, and geometry images for matching
 //! (§3.2).
 //!
-//! The modules follow the data flow: [`mesh`] → [`param`] → [`measure`] / [`render`]
-//! → [`raster`]. Nothing downstream is imported upstream.
+//! The modules follow the data flow: [`mesh`] → [`param`] → [`measure`] / [`render`];
+//! [`grid`] (regular grids over ω = [0,1]²: sampling with gradient, pyramid, Eikonal
+//! distances, harmonic extension) → [`raster`] (geometry images of a flattened surface).
+//! Nothing downstream is imported upstream.
 //!
 //! ```
 //! use surfmap::measure::{MeasureOptions, distortion_report_per_vertex};
@@ -49,6 +51,7 @@
 //! ```
 
 pub mod fsutil;
+pub mod grid;
 pub mod linsolve;
 pub mod measure;
 pub mod mesh;
