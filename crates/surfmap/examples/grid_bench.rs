@@ -1,7 +1,11 @@
 //! Speed of the grid kernels the matcher leans on: bilinear sampling with gradient at 1M
-//! random points on a 257² `Grid<f64>` and `Grid<[f64; 3]>` (one thread, and all threads
-//! with rayon), and building the Gaussian pyramid of a 257² and a 1025² metric grid.
-//! Median of `RUNS` runs (default 7).
+//! points on a 257² `Grid<f64>` and `Grid<[f64; 3]>` (one thread, and all threads with
+//! rayon), and building the Gaussian pyramid of a 257² and a 1025² metric grid. Median of
+//! `RUNS` runs (default 7).
+//!
+//! Two point sets: uniformly random over ω and a 2% margin (every sample a cache miss on
+//! the larger grids), and "coherent": a 1000 × 1000 lattice in row order, each point
+//! jittered by up to two cells, as the matcher visits `φ(ξ)` for `ξ` in grid order.
 //!
 //! `cargo run --release -p surfmap --example grid_bench`
 
@@ -31,7 +35,12 @@ fn total<T: Vector>((v, d0, d1): (T, T, T)) -> f64 {
     v.add(d0).add(d1).components().iter().sum()
 }
 
-fn bench_sampling<T: Vector>(name: &str, grid: &Grid<T>, points: &[[f64; 2]], runs: usize) {
+fn bench_sampling<T: Vector>(
+    name: &str,
+    grid: &Grid<T>,
+    (order, points): (&str, &[[f64; 2]]),
+    runs: usize,
+) {
     let serial = median_seconds(runs, || {
         let mut acc = 0.0;
         for &p in points {
@@ -53,8 +62,8 @@ fn bench_sampling<T: Vector>(name: &str, grid: &Grid<T>, points: &[[f64; 2]], ru
     });
     let per = |t: f64| 1e9 * t / points.len() as f64;
     println!(
-        "sample_with_gradient, {name} {0}×{0}, {1} points: serial {2:.1} ms ({3:.1} ns/point), \
-         parallel {4:.1} ms ({5:.1} ns/point, {6} threads)",
+        "sample_with_gradient, {name} {0}×{0}, {1} {order} points: serial {2:.1} ms \
+         ({3:.1} ns/point), parallel {4:.1} ms ({5:.1} ns/point, {6} threads)",
         grid.size(),
         points.len(),
         1e3 * serial,
@@ -89,18 +98,30 @@ fn main() {
         .max(1);
     let n = 257;
     let s = (n - 1) as f64;
-    // Points over ω and a margin around it (5% of them clamped), as φ(ξ) spreads them.
+    // Points over ω and a margin around it (8% of them clamped).
     let mut rng = Rng(12345);
-    let points: Vec<[f64; 2]> = (0..1_000_000)
+    let random: Vec<[f64; 2]> = (0..1_000_000)
         .map(|_| [rng.range(-0.02, 1.02), rng.range(-0.02, 1.02)])
+        .collect();
+    let jitter = 2.0 / s;
+    let coherent: Vec<[f64; 2]> = (0..1_000_000)
+        .map(|k| {
+            let (i, j) = ((k / 1000) as f64 / 999.0, (k % 1000) as f64 / 999.0);
+            [
+                j + rng.range(-jitter, jitter),
+                i + rng.range(-jitter, jitter),
+            ]
+        })
         .collect();
     let scalar = Grid::from_fn(n, |i, j| {
         (7.0 * j as f64 / s).sin() * (3.0 * i as f64 / s).cos()
     })
     .expect("valid size");
-    bench_sampling("Grid<f64>", &scalar, &points, runs);
     let vector = metric_grid(n);
-    bench_sampling("Grid<[f64; 3]>", &vector, &points, runs);
+    for points in [("random", &random[..]), ("coherent", &coherent[..])] {
+        bench_sampling("Grid<f64>", &scalar, points, runs);
+        bench_sampling("Grid<[f64; 3]>", &vector, points, runs);
+    }
 
     for n in [257, 1025] {
         let g = metric_grid(n);

@@ -6,7 +6,7 @@
 //! (§3.2).
 //!
 //! The modules follow the data flow: [`mesh`] → [`param`] → [`measure`] / [`render`];
-//! [`grid`] (regular grids over ω = [0,1]²: sampling with gradient, pyramid, Eikonal
+//! [`grid`] (regular grids over ω = `[0,1]²`: sampling with gradient, pyramid, Eikonal
 //! distances, harmonic extension) → [`raster`] (geometry images of a flattened surface).
 //! Nothing downstream is imported upstream.
 //!

@@ -118,7 +118,10 @@ mod tests {
         }
         // The 2 × 2 grid: one difference per direction.
         let g = gradient(&Grid::from_parts(2, vec![1.0, 2.0, 4.0, 8.0]));
-        assert_eq!(g.as_slice(), &[[1.0, 3.0], [1.0, 6.0], [4.0, 3.0], [4.0, 6.0]]);
+        assert_eq!(
+            g.as_slice(),
+            &[[1.0, 3.0], [1.0, 6.0], [4.0, 3.0], [4.0, 6.0]]
+        );
     }
 
     #[test]
@@ -128,7 +131,11 @@ mod tests {
         let l = laplacian(&f);
         for i in 1..n - 1 {
             for j in 1..n - 1 {
-                assert!((l[(i, j)] - (6.0 + 1.0)).abs() < 1e-9, "{i},{j}: {}", l[(i, j)]);
+                assert!(
+                    (l[(i, j)] - (6.0 + 1.0)).abs() < 1e-9,
+                    "{i},{j}: {}",
+                    l[(i, j)]
+                );
             }
         }
     }
@@ -147,7 +154,12 @@ mod tests {
         let lambda = (2.0 * (a * PI * h).cos() - 2.0 + 2.0 * (b * PI * h).cos() - 2.0) / (h * h);
         let l = laplacian(&f);
         for (v, w) in l.iter().zip(f.iter()) {
-            assert!((v[0] - lambda * w[0]).abs() < 1e-9, "{} vs {}", v[0], lambda * w[0]);
+            assert!(
+                (v[0] - lambda * w[0]).abs() < 1e-9,
+                "{} vs {}",
+                v[0],
+                lambda * w[0]
+            );
             assert_eq!(v[0], v[1]);
         }
         // And λ_h → −(a² + b²) π² as the grid refines.

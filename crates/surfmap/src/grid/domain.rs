@@ -1,4 +1,4 @@
-//! The image domain ω = [0,1]² and its regular grid (thesis §3.2.1, "rough alignment").
+//! The image domain ω = `[0,1]²` and its regular grid (thesis §3.2.1, "rough alignment").
 //!
 //! A flattening's UVs are placed in ω by a uniform scale and a translation (no rotation,
 //! so the aspect ratio and the orientation of the flattening are kept):
@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 
 use super::GridError;
 
-/// The similarity `ξ = scale · uv + offset` that places a flattening in ω = [0,1]².
+/// The similarity `ξ = scale · uv + offset` that places a flattening in ω = `[0,1]²`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct DomainTransform {
     pub scale: f64,

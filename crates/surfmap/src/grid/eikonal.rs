@@ -98,7 +98,11 @@ pub fn solve_eikonal(
     metric.check_same_size(updatable, "the updatable mask")?;
     metric.check_same_size(value, "the distance grid")?;
     let n = metric.size();
-    let (metric, updatable, value) = (metric.as_slice(), updatable.as_slice(), value.as_mut_slice());
+    let (metric, updatable, value) = (
+        metric.as_slice(),
+        updatable.as_slice(),
+        value.as_mut_slice(),
+    );
     let h = 1.0 / (n - 1) as f64;
     // Sources: finite nodes that can update someone, i.e. updatable themselves or with an
     // updatable 8-neighbour (a frozen node inside a frozen region never needs a visit).
@@ -191,7 +195,11 @@ pub fn seed_polyline(
         return Err(GridError::BadPoint { index, point });
     }
     let n = metric.size();
-    let (metric, updatable, value) = (metric.as_slice(), updatable.as_slice(), value.as_mut_slice());
+    let (metric, updatable, value) = (
+        metric.as_slice(),
+        updatable.as_slice(),
+        value.as_mut_slice(),
+    );
     let s = (n - 1) as f64;
     let count = if closed && points.len() > 2 {
         points.len()
@@ -270,7 +278,12 @@ pub fn seed_region_boundary(
 }
 
 /// `min_t ‖x − a − t(b − a)‖_g` over `t ∈ [0, 1]`.
-pub(crate) fn metric_point_segment_distance(g: [f64; 3], x: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+pub(crate) fn metric_point_segment_distance(
+    g: [f64; 3],
+    x: [f64; 2],
+    a: [f64; 2],
+    b: [f64; 2],
+) -> f64 {
     let e = [b[0] - a[0], b[1] - a[1]];
     let p = [x[0] - a[0], x[1] - a[1]];
     let ee = inner(g, e, e);
@@ -392,9 +405,22 @@ mod tests {
         let err = solve_eikonal(&metric, &all, &mut small).unwrap_err();
         assert_eq!(
             err,
-            GridError::SizeMismatch { what: "the distance grid", got: 5, want: 9 }
+            GridError::SizeMismatch {
+                what: "the distance grid",
+                got: 5,
+                want: 9
+            }
         );
-        assert!(seed_polyline(&metric, &Grid::new(17, true).unwrap(), &[[0.5; 2]], false, &mut small).is_err());
+        assert!(
+            seed_polyline(
+                &metric,
+                &Grid::new(17, true).unwrap(),
+                &[[0.5; 2]],
+                false,
+                &mut small
+            )
+            .is_err()
+        );
         let mut d = Grid::new(9, f64::INFINITY).unwrap();
         for bad in [[f64::NAN, 0.5], [0.5, 1e300], [-1.5, 0.0]] {
             let err = seed_polyline(&metric, &all, &[[0.5; 2], bad], false, &mut d).unwrap_err();

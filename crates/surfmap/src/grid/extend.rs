@@ -260,7 +260,11 @@ mod tests {
         for i in 0..n {
             for j in 0..n {
                 let exact = a(j).clamp(100.0, 400.0);
-                assert!((f[(i, j)] - exact).abs() < 1e-9, "{i},{j}: {} vs {exact}", f[(i, j)]);
+                assert!(
+                    (f[(i, j)] - exact).abs() < 1e-9,
+                    "{i},{j}: {} vs {exact}",
+                    f[(i, j)]
+                );
             }
         }
     }
@@ -275,7 +279,11 @@ mod tests {
             let a = (k % 7) as f64;
             let (s, c) = (a.sin(), a.cos());
             let (l1, l2) = (1.0 + 10.0 * ((k / 5) % 3) as f64, 0.01);
-            [l1 * c * c + l2 * s * s, (l1 - l2) * c * s, l1 * s * s + l2 * c * c]
+            [
+                l1 * c * c + l2 * s * s,
+                (l1 - l2) * c * s,
+                l1 * s * s + l2 * c * c,
+            ]
         })
         .unwrap();
         harmonic_extension(&inside, &mut [&mut g]).unwrap();
@@ -311,11 +319,18 @@ mod tests {
         let mut small = Grid::new(9, 0.0).unwrap();
         assert!(matches!(
             ext.apply(&mut [&mut small]),
-            Err(GridError::SizeMismatch { got: 9, want: 17, .. })
+            Err(GridError::SizeMismatch {
+                got: 9,
+                want: 17,
+                ..
+            })
         ));
         let mut bad = f.clone();
         bad.as_mut_slice().iter_mut().for_each(|v| *v = f64::NAN);
-        assert!(matches!(ext.apply(&mut [&mut bad]), Err(GridError::Solve(_))));
+        assert!(matches!(
+            ext.apply(&mut [&mut bad]),
+            Err(GridError::Solve(_))
+        ));
     }
 
     #[test]

@@ -1,4 +1,4 @@
-//! [`Grid<T>`]: one value per node of the `N × N` grid over ω = [0,1]², `N = 2^k + 1`.
+//! [`Grid<T>`]: one value per node of the `N × N` grid over ω = `[0,1]²`, `N = 2^k + 1`.
 //!
 //! Why a type and not a `Vec` with `i · N + j` arithmetic at every use: the size is checked
 //! once (a power of two plus one, so levels nest: every other node of level `k` is a node
@@ -14,7 +14,7 @@ use std::ops::{Index, IndexMut};
 use super::GridError;
 use super::domain::{grid_level, node_position};
 
-/// Values on the nodes of an `N × N` grid over ω = [0,1]², `N = 2^k + 1`; node `(i, j)`
+/// Values on the nodes of an `N × N` grid over ω = `[0,1]²`, `N = 2^k + 1`; node `(i, j)`
 /// (row `i`, column `j`) sits at `ξ = (j, i) / (N − 1)` and is stored at `i · N + j`.
 ///
 /// Constructors accept `3 ≤ N ≤ 4097` ([`grid_level`]); the `2 × 2` grid (`k = 0`) is
@@ -175,7 +175,11 @@ impl<T> Index<(usize, usize)> for Grid<T> {
     /// The value at node `(i, j)`; panics outside the grid.
     #[inline]
     fn index(&self, (i, j): (usize, usize)) -> &T {
-        assert!(j < self.size, "column {j} outside the {0}×{0} grid", self.size);
+        assert!(
+            j < self.size,
+            "column {j} outside the {0}×{0} grid",
+            self.size
+        );
         &self.data[i * self.size + j]
     }
 }
@@ -183,7 +187,11 @@ impl<T> Index<(usize, usize)> for Grid<T> {
 impl<T> IndexMut<(usize, usize)> for Grid<T> {
     #[inline]
     fn index_mut(&mut self, (i, j): (usize, usize)) -> &mut T {
-        assert!(j < self.size, "column {j} outside the {0}×{0} grid", self.size);
+        assert!(
+            j < self.size,
+            "column {j} outside the {0}×{0} grid",
+            self.size
+        );
         &mut self.data[i * self.size + j]
     }
 }
@@ -214,7 +222,10 @@ mod tests {
         assert_eq!(g.get(0, 5), None);
         let h = g.map(|&v| v as f64 * 0.5);
         assert_eq!(h[(4, 2)], 21.0);
-        assert_eq!(g.iter().copied().sum::<usize>(), (&g).into_iter().sum::<usize>());
+        assert_eq!(
+            g.iter().copied().sum::<usize>(),
+            (&g).into_iter().sum::<usize>()
+        );
         let mut m = g.clone();
         m[(0, 4)] = 7;
         m.iter_mut().for_each(|v| *v += 1);
@@ -229,7 +240,10 @@ mod tests {
             let err = Grid::new(bad, 0.0).unwrap_err();
             assert_eq!(err, GridError::BadSize { size: bad });
             let msg = err.to_string();
-            assert!(msg.contains(&bad.to_string()) && msg.contains("257"), "{msg}");
+            assert!(
+                msg.contains(&bad.to_string()) && msg.contains("257"),
+                "{msg}"
+            );
         }
         assert!(Grid::new(4097, 0u8).is_ok());
         assert!(matches!(
@@ -241,7 +255,10 @@ mod tests {
         let b = Grid::new(5, false).unwrap();
         assert!(a.check_same_size(&a, "a").is_ok());
         let msg = a.check_same_size(&b, "the mask").unwrap_err().to_string();
-        assert!(msg.contains("mask") && msg.contains("5×5") && msg.contains("3×3"), "{msg}");
+        assert!(
+            msg.contains("mask") && msg.contains("5×5") && msg.contains("3×3"),
+            "{msg}"
+        );
     }
 
     #[test]

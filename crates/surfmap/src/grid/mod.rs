@@ -1,4 +1,4 @@
-//! Regular grids over the image domain ω = [0,1]² (thesis §3.2): the grid type, bilinear
+//! Regular grids over the image domain ω = `[0,1]²` (thesis §3.2): the grid type, bilinear
 //! sampling with its gradient, finite differences, multigrid transfer, the Gaussian scale
 //! pyramid, the anisotropic Eikonal solver and the harmonic extension.
 //!
@@ -15,6 +15,23 @@
 //!
 //! The module knows nothing of meshes: [`raster`](crate::raster) turns a flattened
 //! surface into grids, the matcher samples them.
+//!
+//! ```
+//! use surfmap::grid::{Grid, MetricPyramid, Pyramid};
+//!
+//! # fn main() -> Result<(), surfmap::grid::GridError> {
+//! // f(ξ) = ξ₀ ξ₁ on the 257² grid; node (i, j) sits at ξ = (j, i)/256.
+//! let f = Grid::from_fn(257, |i, j| (j * i) as f64 / (256.0 * 256.0))?;
+//! let (value, d0, d1) = f.sample_with_gradient([0.3, 0.5]);
+//! assert!((value - 0.15).abs() < 1e-12 && (d0 - 0.5).abs() < 1e-12 && (d1 - 0.3).abs() < 1e-12);
+//!
+//! // A metric image [g11, g12, g22] and its pyramid: 2², 3², 5², …, 257², σ_k = 2^−k.
+//! let g = Grid::new(257, [2.0, 0.5, 1.0])?;
+//! let pyramid: MetricPyramid = Pyramid::new(g);
+//! assert_eq!((pyramid.num_levels(), pyramid.level(3).size(), pyramid.sigma(3)), (9, 9, 0.125));
+//! # Ok(())
+//! # }
+//! ```
 
 pub mod derivative;
 pub mod domain;
@@ -46,9 +63,7 @@ pub enum GridError {
     BadSize { size: usize },
     #[error("{len} values given for a {size}×{size} grid, which has {} nodes", size * size)]
     DataLength { size: usize, len: usize },
-    #[error(
-        "{what} is a {got}×{got} grid but must match the {want}×{want} grid it is used with"
-    )]
+    #[error("{what} is a {got}×{got} grid but must match the {want}×{want} grid it is used with")]
     SizeMismatch {
         what: &'static str,
         got: usize,

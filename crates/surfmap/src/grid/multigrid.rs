@@ -39,7 +39,11 @@ impl<T: Vector> Grid<T> {
         // Fine index of the taps around 2I, mirrored about the border nodes.
         let taps = |m: usize| {
             let m = 2 * m;
-            [if m == 0 { 1 } else { m - 1 }, m, if m + 1 == n { n - 2 } else { m + 1 }]
+            [
+                if m == 0 { 1 } else { m - 1 },
+                m,
+                if m + 1 == n { n - 2 } else { m + 1 },
+            ]
         };
         const W: [f64; 3] = [0.25, 0.5, 0.25];
         let mut out = vec![T::ZERO; c * c];
@@ -190,7 +194,10 @@ mod tests {
             let v = Grid::from_parts(c, (0..c * c).map(|_| rng.range(-1.0, 1.0)).collect());
             let lhs = weighted_dot(&u.restrict().unwrap(), &v);
             let rhs = 0.25 * weighted_dot(&u, &v.prolongate().unwrap());
-            assert!((lhs - rhs).abs() < 1e-12 * (1.0 + lhs.abs()), "{c}: {lhs} vs {rhs}");
+            assert!(
+                (lhs - rhs).abs() < 1e-12 * (1.0 + lhs.abs()),
+                "{c}: {lhs} vs {rhs}"
+            );
         }
     }
 
@@ -202,6 +209,13 @@ mod tests {
             g.prolongate().unwrap_err(),
             GridError::NoFinerLevel { size: MAX_SIZE }
         );
-        assert_eq!(Grid::new(2049, [0.0f64; 0]).unwrap().prolongate().unwrap().size(), MAX_SIZE);
+        assert_eq!(
+            Grid::new(2049, [0.0f64; 0])
+                .unwrap()
+                .prolongate()
+                .unwrap()
+                .size(),
+            MAX_SIZE
+        );
     }
 }

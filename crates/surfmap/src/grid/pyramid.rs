@@ -210,7 +210,10 @@ mod tests {
         let f = |x: f64, y: f64| (a * PI * x).cos() * (b * PI * y).cos();
         let p = Pyramid::new(sampled(n, f));
         assert_eq!(p.num_levels(), 8);
-        assert_eq!(p.sigmas(), &[1.0, 0.5, 0.25, 0.125, 0.0625, 0.03125, 0.015625, 0.0]);
+        assert_eq!(
+            p.sigmas(),
+            &[1.0, 0.5, 0.25, 0.125, 0.0625, 0.03125, 0.015625, 0.0]
+        );
         for k in 2..7 {
             let (lvl, sigma) = (p.level(k), p.sigma(k));
             assert_eq!((lvl.level(), lvl.size()), (k as u32, (1 << k) + 1));
@@ -247,7 +250,11 @@ mod tests {
                     var += lvl[(i, j)] * x * x * hm * hm;
                 }
             }
-            assert!((mass - 1.0).abs() < 1e-4, "level {} mass {mass}", lvl.level());
+            assert!(
+                (mass - 1.0).abs() < 1e-4,
+                "level {} mass {mass}",
+                lvl.level()
+            );
             let s2 = sigma * sigma;
             assert!(
                 (var / mass - s2).abs() < 0.02 * s2,
@@ -281,14 +288,21 @@ mod tests {
         let g = sampled(n, |x, y| {
             let (s, c) = (7.0 * x + 3.0 * y).sin_cos();
             let (l1, l2) = (1.0 + 50.0 * x * x, 0.01 + y);
-            [l1 * c * c + l2 * s * s, (l1 - l2) * c * s, l1 * s * s + l2 * c * c]
+            [
+                l1 * c * c + l2 * s * s,
+                (l1 - l2) * c * s,
+                l1 * s * s + l2 * c * c,
+            ]
         });
         let metric: MetricPyramid = Pyramid::new(g.clone());
         for c in 0..3 {
             assert_eq!(metric.component(c), Pyramid::new(g.component(c)));
         }
         for (lvl, _) in metric.iter() {
-            assert!(lvl.iter().all(|m| m[0] > 0.0 && m[0] * m[2] - m[1] * m[1] > 0.0));
+            assert!(
+                lvl.iter()
+                    .all(|m| m[0] > 0.0 && m[0] * m[2] - m[1] * m[1] > 0.0)
+            );
         }
         let all = Pyramid::build_all(vec![g.component(0), g.component(1).restrict().unwrap()]);
         assert_eq!(all[0], Pyramid::new(g.component(0)));
@@ -302,6 +316,9 @@ mod tests {
             (-3..8).map(|i| mirror(i, 4)).collect::<Vec<_>>(),
             vec![3, 2, 1, 0, 1, 2, 3, 2, 1, 0, 1]
         );
-        assert_eq!((-2..3).map(|i| mirror(i, 2)).collect::<Vec<_>>(), vec![0, 1, 0, 1, 0]);
+        assert_eq!(
+            (-2..3).map(|i| mirror(i, 2)).collect::<Vec<_>>(),
+            vec![0, 1, 0, 1, 0]
+        );
     }
 }

@@ -104,7 +104,10 @@ mod tests {
 
     fn bilinear_gradient(p: [f64; 2]) -> ([f64; 3], [f64; 3]) {
         let (x, y) = (p[0], p[1]);
-        ([2.0 + 0.5 * y, -0.25 + 4.0 * y, 0.0], [-3.0 + 0.5 * x, 4.0 * x, -1.0])
+        (
+            [2.0 + 0.5 * y, -0.25 + 4.0 * y, 0.0],
+            [-3.0 + 0.5 * x, 4.0 * x, -1.0],
+        )
     }
 
     fn close<const D: usize>(a: [f64; D], b: [f64; D], tol: f64) -> bool {
@@ -182,7 +185,11 @@ mod tests {
         let (_, d0, _) = g.sample_with_gradient([1.0, 0.5]);
         assert!(close(d0, bilinear_gradient([1.0, 0.5]).0, 1e-12));
         // Infinite and NaN coordinates: no panic.
-        assert!(close(g.sample([f64::INFINITY, 0.0]), bilinear([1.0, 0.0]), 1e-13));
+        assert!(close(
+            g.sample([f64::INFINITY, 0.0]),
+            bilinear([1.0, 0.0]),
+            1e-13
+        ));
         assert!(g.sample([f64::NAN, 0.5])[0].is_nan());
     }
 

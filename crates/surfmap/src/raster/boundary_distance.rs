@@ -16,10 +16,7 @@ const NONE: u32 = u32::MAX;
 
 /// Signed distance (domain units) from every grid node to the polygon formed by
 /// `segments` (endpoints in domain coordinates); the sign comes from `raster`'s mask.
-pub fn signed_boundary_distance(
-    raster: &Rasterization,
-    segments: &[[[f64; 2]; 2]],
-) -> Grid<f64> {
+pub fn signed_boundary_distance(raster: &Rasterization, segments: &[[[f64; 2]; 2]]) -> Grid<f64> {
     let n = raster.size();
     let s = (n - 1) as f64;
     let segs: Vec<[[f64; 2]; 2]> = segments

@@ -19,7 +19,7 @@ pub struct ImagesManifest {
     pub format: &'static str,
     /// Nodes per side; node `(i, j)` is array element `[i, j]` at `ξ = (j, i)/(size − 1)`.
     pub size: usize,
-    /// `ξ = scale · uv + offset` maps flattening UVs into ω = [0,1]².
+    /// `ξ = scale · uv + offset` maps flattening UVs into ω = `[0,1]²`.
     pub transform: DomainTransform,
     pub scale: SurfaceScale,
     /// The length unit `ℓ` in mesh units (h in 1/ℓ, g in ℓ², feature distances in ℓ).
