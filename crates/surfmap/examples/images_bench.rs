@@ -126,36 +126,43 @@ fn main() {
                 let n = img.size;
                 let outside: Vec<bool> = (0..n * n).map(|k| !img.raster.is_inside(k)).collect();
                 let pyr = img.pyramid.as_ref().unwrap();
-                let lvl = &pyr.levels[5];
+                let lvl = pyr.mean_curvature.level(5);
                 let tiles = vec![
                     (
                         "H (RED +, BLUE -)".to_string(),
-                        diverging_picture(n, &img.mean_curvature),
+                        diverging_picture(n, img.mean_curvature.as_slice()),
                     ),
                     (
                         "H EXTENDED".to_string(),
-                        diverging_picture(n, &img.mean_curvature_extended),
+                        diverging_picture(n, img.mean_curvature_extended.as_slice()),
                     ),
                     (
-                        format!("H, σ=1/{} ({}²)", 1 << lvl.level, lvl.size),
-                        diverging_picture(lvl.size, &lvl.images[0]),
+                        format!("H, σ=1/{} ({}²)", 1 << lvl.level(), lvl.size()),
+                        diverging_picture(lvl.size(), lvl.as_slice()),
                     ),
                     (
                         "POSITION XYZ=RGB".to_string(),
-                        position_picture(n, &img.position),
+                        position_picture(&img.position),
                     ),
-                    ("METRIC G (RGB)".to_string(), metric_picture(n, &img.metric)),
+                    (
+                        "METRIC G (RGB)".to_string(),
+                        metric_picture(n, img.metric.as_slice()),
+                    ),
                     (
                         "G EXTENDED (RGB)".to_string(),
-                        metric_picture(n, &img.metric_extended),
+                        metric_picture(n, img.metric_extended.as_slice()),
                     ),
                     (
                         "BOUNDARY DISTANCE".to_string(),
-                        distance_picture(n, &img.boundary_distance, Some(&outside)),
+                        distance_picture(n, img.boundary_distance.as_slice(), Some(&outside)),
                     ),
                     (
                         "FEATURE DISTANCE".to_string(),
-                        distance_picture(n, img.feature_distance.as_ref().unwrap(), Some(&outside)),
+                        distance_picture(
+                            n,
+                            img.feature_distance.as_ref().unwrap().as_slice(),
+                            Some(&outside),
+                        ),
                     ),
                 ];
                 contact_sheet(&tiles, 4, 320)

@@ -70,7 +70,7 @@
 //! | [`param`] | flattening: initial maps (LSCM, mean-value), per-triangle elements, projected Newton, the multilevel start, [`flatten`] |
 //! | [`measure`] | distortion measures of any map, flips, global overlap |
 //! | [`render`] | PNG pictures: UV layouts, checkerboard renders, plots |
-//! | grid (next) | regular `2^k + 1` grids: sampling, pyramid, Eikonal, harmonic extension |
+//! | [`grid`] | regular `2^k + 1` grids over ω = `[0,1]²`: [`grid::Grid`], bilinear sampling with gradient, finite differences, restriction/prolongation, the typed Gaussian pyramid, Eikonal distances, harmonic extension |
 //! | [`raster`] | geometry images: a flattened surface rasterized onto a grid (§3.2) |
 //!
 //! Internal building blocks are public for benchmarks and probes but hidden from these
@@ -82,6 +82,7 @@
 pub mod energy;
 #[doc(hidden)]
 pub mod fsutil;
+pub mod grid;
 #[doc(hidden)]
 pub mod linsolve;
 pub mod measure;

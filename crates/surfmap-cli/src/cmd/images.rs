@@ -9,7 +9,8 @@ use anyhow::{Context, bail};
 use surfmap::FlattenOptions;
 use surfmap::raster::output::write_image_set;
 use surfmap::raster::{
-    FeatureFile, FeatureMask, FeatureSource, GeometryImages, GeometryImagesOptions, TextureImage,
+    FeatureFile, FeatureMask, FeatureSource, GeometryImages, GeometryImagesOptions,
+    GeometryPyramid, TextureImage,
 };
 
 use super::flatten::flatten_mesh;
@@ -59,7 +60,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         pyramid: !args.no_pyramid,
         ..Default::default()
     };
-    surfmap::raster::domain::grid_level(args.size)?;
+    surfmap::grid::grid_level(args.size)?;
     let features = match &args.features {
         Some(p) => {
             let json = std::fs::read_to_string(p)
@@ -166,10 +167,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 manifest.pyramid.len(),
                 manifest.pyramid[0].size,
                 manifest.pyramid[manifest.pyramid.len() - 1].size,
-                img.pyramid
-                    .as_ref()
-                    .map(|p| p.names.join(", "))
-                    .unwrap_or_default()
+                GeometryPyramid::NAMES.join(", ")
             );
         }
         outln!("  images.json");

@@ -10,13 +10,14 @@
 //! of a node spacing). Cost `O(N² + boundary length / spacing)`.
 
 use super::rasterize::Rasterization;
+use crate::grid::Grid;
 
 const NONE: u32 = u32::MAX;
 
 /// Signed distance (domain units) from every grid node to the polygon formed by
 /// `segments` (endpoints in domain coordinates); the sign comes from `raster`'s mask.
-pub fn signed_boundary_distance(raster: &Rasterization, segments: &[[[f64; 2]; 2]]) -> Vec<f64> {
-    let n = raster.size;
+pub fn signed_boundary_distance(raster: &Rasterization, segments: &[[[f64; 2]; 2]]) -> Grid<f64> {
+    let n = raster.size();
     let s = (n - 1) as f64;
     let segs: Vec<[[f64; 2]; 2]> = segments
         .iter()
@@ -104,13 +105,15 @@ pub fn signed_boundary_distance(raster: &Rasterization, segments: &[[[f64; 2]; 2
             }
         }
     }
-    dist.iter()
+    let signed = dist
+        .iter()
         .enumerate()
         .map(|(k, &d)| {
             let d = d / s;
             if raster.is_inside(k) { -d } else { d }
         })
-        .collect()
+        .collect();
+    Grid::from_parts(n, signed)
 }
 
 /// Euclidean distance from `p` to the segment `[a, b]`.
@@ -131,7 +134,6 @@ pub fn point_segment_distance(p: [f64; 2], [a, b]: [[f64; 2]; 2]) -> f64 {
 mod tests {
     use super::*;
     use crate::raster::boundary::boundary_edges;
-    use crate::raster::domain::node_position;
 
     #[test]
     fn matches_brute_force_on_a_star_polygon() {
@@ -156,15 +158,14 @@ mod tests {
         let mut max_err = 0.0f64;
         for i in 0..n {
             for j in 0..n {
-                let p = node_position(n, i, j);
+                let p = d.node(i, j);
                 let exact = segs
                     .iter()
                     .map(|&s| point_segment_distance(p, s))
                     .fold(f64::INFINITY, f64::min);
-                let k = i * n + j;
-                max_err = max_err.max((d[k].abs() - exact).abs());
+                max_err = max_err.max((d[(i, j)].abs() - exact).abs());
                 if exact > 1e-9 {
-                    assert_eq!(d[k] < 0.0, raster.is_inside(k));
+                    assert_eq!(d[(i, j)] < 0.0, raster.is_inside(i * n + j));
                 }
             }
         }

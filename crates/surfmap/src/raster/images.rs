@@ -15,13 +15,13 @@ use super::RasterError;
 use super::boundary::boundary_edges;
 use super::boundary_distance::signed_boundary_distance;
 use super::curvature::vertex_mean_curvature;
-use super::domain::{DomainTransform, grid_level};
-use super::eikonal::{seed_polyline, seed_region_boundary, solve_eikonal};
-use super::extend::harmonic_extension;
 use super::features::{FeatureSource, colour_name};
 use super::metric::triangle_metrics;
-use super::pyramid::Pyramid;
 use super::rasterize::{OUTSIDE, Rasterization};
+use crate::grid::{
+    DomainTransform, Grid, HarmonicExtension, MetricPyramid, Pyramid, grid_level, seed_polyline,
+    seed_region_boundary, solve_eikonal,
+};
 use crate::mesh::{TriMesh, Uvs};
 
 /// Which length unit the images use (see the module docs).
@@ -102,11 +102,44 @@ pub struct FeatureDistance {
     pub name: String,
     /// Distance on the surface in the metric `g` (units `ℓ`); continued outside the
     /// domain with the extended metric; `∞` where unreachable.
-    pub distance: Vec<f64>,
+    pub distance: Grid<f64>,
 }
 
-/// All images of one surface on a `size × size` grid (node `(i, j)` at index `i·size + j`,
-/// `ξ = (j, i)/(size − 1)`). Values outside the surface are `NaN` unless stated.
+/// The scale pyramids (thesis §3.2.4) of the extended mean curvature and metric.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GeometryPyramid {
+    /// `h` extended to all of ω, level `k` filtered with `σ_k = 2^−k`.
+    pub mean_curvature: Pyramid<f64>,
+    /// `[g11, g12, g22]` extended to all of ω, filtered component-wise (SPD on every level).
+    pub metric: MetricPyramid,
+}
+
+impl GeometryPyramid {
+    /// The scalar images of every level, as written to files: `h`, then the metric's components.
+    pub const NAMES: [&'static str; 4] = ["h", "g11", "g12", "g22"];
+
+    /// Builds both pyramids (concurrently).
+    pub fn new(mean_curvature: Grid<f64>, metric: Grid<[f64; 3]>) -> Self {
+        let (mean_curvature, metric) =
+            rayon::join(|| Pyramid::new(mean_curvature), || Pyramid::new(metric));
+        Self {
+            mean_curvature,
+            metric,
+        }
+    }
+
+    /// Level `k` of the image named `NAMES[image]` (`h`, `g11`, `g12`, `g22`).
+    pub fn scalar_level(&self, k: usize, image: usize) -> Grid<f64> {
+        match image {
+            0 => self.mean_curvature.level(k).clone(),
+            c => self.metric.level(k).component(c - 1),
+        }
+    }
+}
+
+/// All images of one surface on an `N × N` grid ([`Grid`]: node `(i, j)` at
+/// `ξ = (j, i)/(N − 1)`, `N` = [`size`](Self::size)). Values outside the surface are
+/// `NaN` unless stated.
 #[derive(Clone, Debug)]
 pub struct GeometryImages {
     pub size: usize,
@@ -116,24 +149,24 @@ pub struct GeometryImages {
     pub length_unit: f64,
     pub raster: Rasterization,
     /// 3D position (mesh units).
-    pub position: Vec<[f64; 3]>,
+    pub position: Grid<[f64; 3]>,
     /// `[g11, g12, g22]` of `g = DxᵀDx` (constant per triangle).
-    pub metric: Vec<[f64; 3]>,
+    pub metric: Grid<[f64; 3]>,
     /// Signed mean curvature `h` (interpolated from vertices).
-    pub mean_curvature: Vec<f64>,
+    pub mean_curvature: Grid<f64>,
     /// `g` harmonically extended to all of ω (SPD everywhere).
-    pub metric_extended: Vec<[f64; 3]>,
+    pub metric_extended: Grid<[f64; 3]>,
     /// `h` harmonically extended to all of ω.
-    pub mean_curvature_extended: Vec<f64>,
+    pub mean_curvature_extended: Grid<f64>,
     /// Signed distance to ∂ω_A in domain units, negative inside.
-    pub boundary_distance: Vec<f64>,
+    pub boundary_distance: Grid<f64>,
     pub features: Vec<FeatureDistance>,
     /// Distance to the nearest feature (thesis §3.2.2), when there are features.
-    pub feature_distance: Option<Vec<f64>>,
+    pub feature_distance: Option<Grid<f64>>,
     /// Texture colour (black outside), when a texture was given.
-    pub texture: Option<Vec<[u8; 3]>>,
-    /// Pyramid of `h`, `g11`, `g12`, `g22` (extended), when requested.
-    pub pyramid: Option<Pyramid>,
+    pub texture: Option<Grid<[u8; 3]>>,
+    /// Pyramids of the extended `h` and `g`, when requested.
+    pub pyramid: Option<GeometryPyramid>,
     /// Wall-clock seconds per stage, in order; entries named "  of which …" break down the
     /// stage before them (its parts ran concurrently, so they do not add up).
     pub timings: Vec<(&'static str, f64)>,
@@ -169,7 +202,8 @@ impl GeometryImages {
         let raster = Rasterization::new(&xi, &mesh.triangles, n)?;
         lap("rasterize", &mut timings);
         let inside = raster.inside_mask();
-        if !inside.iter().any(|&b| b) {
+        let inside_flags = inside.as_slice();
+        if !inside_flags.iter().any(|&b| b) {
             return Err(RasterError::EmptyDomain);
         }
         let length_unit = match options.scale {
@@ -191,11 +225,9 @@ impl GeometryImages {
             .into_iter()
             .map(|h| [h])
             .collect();
-        let mean_curvature: Vec<f64> = raster
+        let mean_curvature = raster
             .sample_vertex_field(&mesh.triangles, &h_vertex)
-            .into_iter()
-            .map(|v| v[0])
-            .collect();
+            .map(|v| v[0]);
         lap("sample position, metric, curvature", &mut timings);
 
         let segments: Vec<[[f64; 2]; 2]> = boundary_edges(&mesh.triangles)
@@ -214,16 +246,17 @@ impl GeometryImages {
         };
         let texture = texture_image.map(|t| {
             let tex_uv = tex_uv.as_ref().unwrap();
-            (0..n * n)
+            let colours = (0..n * n)
                 .into_par_iter()
                 .map(|k| {
-                    if inside[k] {
+                    if inside_flags[k] {
                         t.sample(tex_uv[k])
                     } else {
                         [0, 0, 0]
                     }
                 })
-                .collect()
+                .collect();
+            Grid::from_parts(n, colours)
         });
         lap("texture", &mut timings);
 
@@ -240,24 +273,27 @@ impl GeometryImages {
         )?;
 
         // Two independent jobs run concurrently: the harmonic extension of h and g (one
-        // Cholesky factorization, four right-hand sides) and the Eikonal solves on the
-        // surface, which read g only on the inside nodes, where it needs no extension.
-        let mut hx = mean_curvature.clone();
-        let mut g11: Vec<f64> = metric.iter().map(|g| g[0]).collect();
-        let mut g12: Vec<f64> = metric.iter().map(|g| g[1]).collect();
-        let mut g22: Vec<f64> = metric.iter().map(|g| g[2]).collect();
+        // Cholesky factorization, four right-hand sides: h and g's three components) and
+        // the Eikonal solves on the surface, which read g only on the inside nodes, where
+        // it needs no extension.
+        let mut mean_curvature_extended = mean_curvature.clone();
+        let mut metric_extended = metric.clone();
         let (extension, inside_solves) = rayon::join(
             || {
                 let t = std::time::Instant::now();
-                harmonic_extension(n, &inside, &mut [&mut hx, &mut g11, &mut g12, &mut g22])
-                    .map(|()| t.elapsed().as_secs_f64())
+                let ext = HarmonicExtension::new(&inside)?;
+                let (h, g) = rayon::join(
+                    || ext.apply(&mut [&mut mean_curvature_extended]),
+                    || ext.apply(&mut [&mut metric_extended]),
+                );
+                h.and(g).map(|()| t.elapsed().as_secs_f64())
             },
             || {
                 let t = std::time::Instant::now();
                 seeds
                     .into_par_iter()
                     .map(|(name, mut d)| {
-                        solve_eikonal(n, &metric, &inside, &mut d)?;
+                        solve_eikonal(&metric, &inside, &mut d)?;
                         Ok((name, d))
                     })
                     .collect::<Result<Vec<_>, RasterError>>()
@@ -266,7 +302,6 @@ impl GeometryImages {
         );
         let extension_time = extension?;
         let (on_surface, inside_time) = inside_solves?;
-        let metric_extended: Vec<[f64; 3]> = (0..n * n).map(|k| [g11[k], g12[k], g22[k]]).collect();
         lap(
             "harmonic extension ‖ feature distances on the surface",
             &mut timings,
@@ -275,32 +310,29 @@ impl GeometryImages {
         timings.push(("  of which feature distances on the surface", inside_time));
 
         // Continue the distances outside the surface with the extended metric.
-        let outside: Vec<bool> = inside.iter().map(|&b| !b).collect();
+        let outside = inside.map(|&b| !b);
         let features_out: Vec<FeatureDistance> = on_surface
             .into_par_iter()
             .map(|(name, mut d)| {
-                solve_eikonal(n, &metric_extended, &outside, &mut d)?;
+                solve_eikonal(&metric_extended, &outside, &mut d)?;
                 Ok(FeatureDistance { name, distance: d })
             })
             .collect::<Result<_, RasterError>>()?;
         let feature_distance = (!features_out.is_empty()).then(|| {
-            (0..n * n)
+            let nearest = (0..n * n)
                 .into_par_iter()
                 .map(|k| {
                     features_out
                         .iter()
-                        .map(|f| f.distance[k])
+                        .map(|f| f.distance.as_slice()[k])
                         .fold(f64::INFINITY, f64::min)
                 })
-                .collect()
+                .collect();
+            Grid::from_parts(n, nearest)
         });
         lap("feature distances outside", &mut timings);
         let pyramid = options.pyramid.then(|| {
-            Pyramid::build(
-                n,
-                ["h", "g11", "g12", "g22"].map(String::from).to_vec(),
-                vec![hx.clone(), g11, g12, g22],
-            )
+            GeometryPyramid::new(mean_curvature_extended.clone(), metric_extended.clone())
         });
         lap("pyramid", &mut timings);
         Ok(Self {
@@ -313,7 +345,7 @@ impl GeometryImages {
             metric,
             mean_curvature,
             metric_extended,
-            mean_curvature_extended: hx,
+            mean_curvature_extended,
             boundary_distance,
             features: features_out,
             feature_distance,
@@ -331,41 +363,40 @@ fn feature_seeds(
     mesh: &TriMesh,
     xi: &[[f64; 2]],
     raster: &Rasterization,
-    metric: &[[f64; 3]],
-    inside: &[bool],
+    metric: &Grid<[f64; 3]>,
+    inside: &Grid<bool>,
     features: FeatureSource<'_>,
     texture_image: Option<&TextureImage>,
     tex_uv: Option<&[[f64; 2]]>,
-) -> Result<Vec<(String, Vec<f64>)>, RasterError> {
-    let n = raster.size;
-    let mut seeds: Vec<(String, Vec<f64>)> = vec![];
+) -> Result<Vec<(String, Grid<f64>)>, RasterError> {
+    let n = raster.size();
+    let mut seeds: Vec<(String, Grid<f64>)> = vec![];
     match features {
         FeatureSource::None => {}
         FeatureSource::Curves(file) => {
             file.validate(mesh.num_vertices())?;
             for f in &file.features {
                 let pts: Vec<[f64; 2]> = f.vertices.iter().map(|&v| xi[v as usize]).collect();
-                let mut d = vec![f64::INFINITY; n * n];
-                seed_polyline(n, metric, inside, &pts, f.closed, &mut d);
+                let mut d = Grid::new(n, f64::INFINITY)?;
+                seed_polyline(metric, inside, &pts, f.closed, &mut d)?;
                 seeds.push((f.name.clone(), d));
             }
         }
         FeatureSource::Mask(mask) => {
             mask.validate(texture_image.map(|t| (t.width, t.height)))?;
             let tex_uv = tex_uv.ok_or(RasterError::NoTextureCoordinates)?;
-            let labels: Vec<[u8; 3]> = (0..n * n)
-                .map(|k| {
-                    if inside[k] {
-                        mask.lookup(tex_uv[k])
-                    } else {
-                        [0, 0, 0]
-                    }
-                })
-                .collect();
+            let labels = Grid::from_fn(n, |i, j| {
+                let k = i * n + j;
+                if inside[(i, j)] {
+                    mask.lookup(tex_uv[k])
+                } else {
+                    [0, 0, 0]
+                }
+            })?;
             for c in mask.region_colours() {
-                let region: Vec<bool> = labels.iter().map(|&l| l == c).collect();
-                let mut d = vec![f64::INFINITY; n * n];
-                seed_region_boundary(n, metric, inside, &region, &mut d);
+                let region = labels.map(|&l| l == c);
+                let mut d = Grid::new(n, f64::INFINITY)?;
+                seed_region_boundary(metric, inside, &region, &mut d)?;
                 seeds.push((colour_name(c), d));
             }
         }
@@ -405,8 +436,9 @@ fn node_texture_coordinates(
     }
     Ok(raster
         .triangle
+        .as_slice()
         .par_iter()
-        .zip(raster.bary.par_iter())
+        .zip(raster.bary.as_slice().par_iter())
         .map(|(&t, b)| {
             if t == OUTSIDE {
                 return [f64::NAN; 2];
@@ -440,10 +472,12 @@ mod tests {
         GeometryImages::compute(&mesh, &uv, features, None, &options).unwrap()
     }
 
-    fn max_inside_error(img: &GeometryImages, f: impl Fn(usize) -> f64) -> f64 {
-        (0..img.size * img.size)
+    /// Largest `f(node)` over the nodes `(i, j)` on the surface.
+    fn max_inside_error(img: &GeometryImages, f: impl Fn((usize, usize)) -> f64) -> f64 {
+        let n = img.size;
+        (0..n * n)
             .filter(|&k| img.raster.is_inside(k))
-            .map(f)
+            .map(|k| f((k / n, k % n)))
             .fold(0.0, f64::max)
     }
 
@@ -453,8 +487,8 @@ mod tests {
         let mut errs = vec![];
         for (m, size) in [(8, 65), (16, 129), (32, 257)] {
             let img = images(testmesh::sphere_cap(m, r, 1.0), size, FeatureSource::None);
-            errs.push(max_inside_error(&img, |k| {
-                (img.mean_curvature[k] - 1.0 / r).abs()
+            errs.push(max_inside_error(&img, |ij| {
+                (img.mean_curvature[ij] - 1.0 / r).abs()
             }));
         }
         assert!(
@@ -463,7 +497,7 @@ mod tests {
         );
 
         let img = images(testmesh::cylinder_patch(16, 1.5), 129, FeatureSource::None);
-        let e = max_inside_error(&img, |k| (img.mean_curvature[k] - 1.0 / 3.0).abs());
+        let e = max_inside_error(&img, |ij| (img.mean_curvature[ij] - 1.0 / 3.0).abs());
         assert!(e < 1e-6, "cylinder {e}");
 
         let img = images(
@@ -471,11 +505,10 @@ mod tests {
             65,
             FeatureSource::None,
         );
-        let e = max_inside_error(&img, |k| img.mean_curvature[k].abs());
+        let e = max_inside_error(&img, |ij| img.mean_curvature[ij].abs());
         assert!(e < 1e-6, "plane {e}");
         // Outside the surface the raw images are NaN, the extended ones finite.
-        let k_out = 0;
-        assert!(!img.raster.is_inside(k_out) && img.mean_curvature[k_out].is_nan());
+        assert!(!img.raster.is_inside(0) && img.mean_curvature[(0, 0)].is_nan());
         assert!(img.mean_curvature_extended.iter().all(|v| v.is_finite()));
     }
 
@@ -488,15 +521,15 @@ mod tests {
         for m in [8, 16, 32] {
             let img = images(testmesh::sphere_cap(m, r, 1.0), 129, FeatureSource::None);
             let s2 = img.transform.scale.powi(2);
-            errs.push(max_inside_error(&img, |k| {
-                let [u, v, z] = img.position[k];
+            errs.push(max_inside_error(&img, |ij| {
+                let [u, v, z] = img.position[ij];
                 let exact = [
                     (1.0 + u * u / (z * z)) / s2,
                     u * v / (z * z) / s2,
                     (1.0 + v * v / (z * z)) / s2,
                 ];
                 (0..3)
-                    .map(|c| (img.metric[k][c] - exact[c]).abs() * s2)
+                    .map(|c| (img.metric[ij][c] - exact[c]).abs() * s2)
                     .fold(0.0, f64::max)
             }));
         }
@@ -510,8 +543,8 @@ mod tests {
         for m in [8, 16] {
             let img = images(testmesh::cylinder_patch(m, 1.5), 65, FeatureSource::None);
             let s2 = img.transform.scale.powi(2);
-            errs.push(max_inside_error(&img, |k| {
-                let g = img.metric[k];
+            errs.push(max_inside_error(&img, |ij| {
+                let g = img.metric[ij];
                 (g[0] * s2 - 1.0)
                     .abs()
                     .max(g[1].abs() * s2)
@@ -542,9 +575,9 @@ mod tests {
             );
             let d = &img.features[0].distance;
             assert_eq!(img.feature_distance.as_ref().unwrap(), d);
-            errs.push(max_inside_error(&img, |k| {
-                let exact = r * (img.position[k][2] / r).clamp(-1.0, 1.0).acos();
-                (d[k] - exact).abs() / r
+            errs.push(max_inside_error(&img, |ij| {
+                let exact = r * (img.position[ij][2] / r).clamp(-1.0, 1.0).acos();
+                (d[ij] - exact).abs() / r
             }));
             assert!(d.iter().all(|v| v.is_finite()));
         }
@@ -571,8 +604,8 @@ mod tests {
                 }
                 for q in [p.wrapping_sub(1), p + 1, p.wrapping_sub(n), p + n] {
                     if q < n * n && img.raster.is_inside(q) && (q % n).abs_diff(p % n) <= 1 {
-                        jump = jump
-                            .max((img.mean_curvature_extended[p] - img.mean_curvature[q]).abs());
+                        let (ext, h) = (&img.mean_curvature_extended, &img.mean_curvature);
+                        jump = jump.max((ext.as_slice()[p] - h.as_slice()[q]).abs());
                     }
                 }
             }
@@ -621,16 +654,19 @@ mod tests {
         assert_eq!(img.features.len(), 1);
         assert_eq!(img.features[0].name, "#ff0000");
         // The feature is the line u = 0: distance |u| on the plane.
-        let e = max_inside_error(&img, |k| {
-            (img.features[0].distance[k] - img.position[k][0].abs()).abs()
+        let e = max_inside_error(&img, |ij| {
+            (img.features[0].distance[ij] - img.position[ij][0].abs()).abs()
         });
         assert!(e < 0.04, "{e}");
         let t = img.texture.as_ref().unwrap();
         let k = 32 * 65 + 10; // u < 0
-        assert!(img.raster.is_inside(k) && t[k] == [255, 0, 0]);
+        assert!(img.raster.is_inside(k) && t.as_slice()[k] == [255, 0, 0]);
         let p = img.pyramid.as_ref().unwrap();
-        assert_eq!(p.levels.len(), 7);
-        assert_eq!(p.levels[6].images[0], img.mean_curvature_extended);
+        assert_eq!(p.mean_curvature.num_levels(), 7);
+        assert_eq!(p.metric.num_levels(), 7);
+        assert_eq!(p.mean_curvature.finest(), &img.mean_curvature_extended);
+        assert_eq!(p.metric.finest(), &img.metric_extended);
+        assert_eq!(p.scalar_level(3, 2), p.metric.level(3).component(1));
         // Wrong mask size, no texture coordinates.
         let small = FeatureMask {
             width: 8,
@@ -664,8 +700,8 @@ mod tests {
         };
         let img = GeometryImages::compute(&mesh, &uv, FeatureSource::None, None, &options).unwrap();
         assert!((img.length_unit - mesh.area().sqrt()).abs() < 1e-12);
-        let e = max_inside_error(&img, |k| {
-            (img.mean_curvature[k] - img.length_unit / r).abs()
+        let e = max_inside_error(&img, |ij| {
+            (img.mean_curvature[ij] - img.length_unit / r).abs()
         });
         assert!(e < 0.01, "{e}");
         assert!(

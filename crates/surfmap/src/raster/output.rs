@@ -7,10 +7,11 @@ use std::path::Path;
 
 use serde::Serialize;
 
-use super::images::{GeometryImages, SurfaceScale};
+use super::RasterError;
+use super::images::{GeometryImages, GeometryPyramid, SurfaceScale};
 use super::npy::save_npy;
 use super::picture::{Picture, distance_picture, diverging_picture, metric_picture};
-use super::{DomainTransform, RasterError};
+use crate::grid::{DomainTransform, Grid};
 
 /// `images.json`.
 #[derive(Clone, Debug, Serialize)]
@@ -18,7 +19,7 @@ pub struct ImagesManifest {
     pub format: &'static str,
     /// Nodes per side; node `(i, j)` is array element `[i, j]` at `ξ = (j, i)/(size − 1)`.
     pub size: usize,
-    /// `ξ = scale · uv + offset` maps flattening UVs into ω = [0, 1]².
+    /// `ξ = scale · uv + offset` maps flattening UVs into ω = `[0,1]²`.
     pub transform: DomainTransform,
     pub scale: SurfaceScale,
     /// The length unit `ℓ` in mesh units (h in 1/ℓ, g in ℓ², feature distances in ℓ).
@@ -92,69 +93,66 @@ pub fn write_image_set(dir: &Path, img: &GeometryImages) -> Result<ImagesManifes
         vec![n, n],
         "triangle id per node, 4294967295 outside",
         None,
-        &|p| save_npy(p, &[n, n], &img.raster.triangle),
+        &|p| save_npy(p, &[n, n], img.raster.triangle.as_slice()),
     )?;
-    let bary: Vec<f32> = img.raster.bary.iter().flatten().copied().collect();
+    let bary: &[f32] = img.raster.bary.as_slice().as_flattened();
     put(
         "barycentric",
         vec![n, n, 3],
         "barycentric coordinates in that triangle",
         None,
-        &|p| save_npy(p, &[n, n, 3], &bary),
+        &|p| save_npy(p, &[n, n, 3], bary),
     )?;
-    let pos: Vec<f64> = img.position.iter().flatten().copied().collect();
-    let bbox = position_picture(n, &img.position);
     put(
         "position",
         vec![n, n, 3],
         "3D position (mesh units), NaN outside",
-        Some(bbox),
-        &|p| save_npy(p, &[n, n, 3], &pos),
+        Some(position_picture(&img.position)),
+        &|p| save_npy(p, &[n, n, 3], img.position.as_flattened()),
     )?;
-    let g: Vec<f64> = img.metric.iter().flatten().copied().collect();
     put(
         "metric",
         vec![n, n, 3],
         "[g11, g12, g22] of g = DxᵀDx (ℓ² per domain unit²), NaN outside",
-        Some(metric_picture(n, &img.metric)),
-        &|p| save_npy(p, &[n, n, 3], &g),
+        Some(metric_picture(n, img.metric.as_slice())),
+        &|p| save_npy(p, &[n, n, 3], img.metric.as_flattened()),
     )?;
-    let gx: Vec<f64> = img.metric_extended.iter().flatten().copied().collect();
     put(
         "metric_extended",
         vec![n, n, 3],
         "g harmonically extended to ω",
-        Some(metric_picture(n, &img.metric_extended)),
-        &|p| save_npy(p, &[n, n, 3], &gx),
+        Some(metric_picture(n, img.metric_extended.as_slice())),
+        &|p| save_npy(p, &[n, n, 3], img.metric_extended.as_flattened()),
     )?;
     put(
         "mean_curvature",
         vec![n, n],
         "signed mean curvature H = (κ1+κ2)/2 in 1/ℓ, NaN outside",
-        Some(diverging_picture(n, &img.mean_curvature)),
-        &|p| save_npy(p, &[n, n], &img.mean_curvature),
+        Some(diverging_picture(n, img.mean_curvature.as_slice())),
+        &|p| save_npy(p, &[n, n], img.mean_curvature.as_slice()),
     )?;
     put(
         "mean_curvature_extended",
         vec![n, n],
         "h harmonically extended to ω",
-        Some(diverging_picture(n, &img.mean_curvature_extended)),
-        &|p| save_npy(p, &[n, n], &img.mean_curvature_extended),
+        Some(diverging_picture(n, img.mean_curvature_extended.as_slice())),
+        &|p| save_npy(p, &[n, n], img.mean_curvature_extended.as_slice()),
     )?;
+    let distance = |d: &Grid<f64>| distance_picture(n, d.as_slice(), Some(&outside));
     put(
         "boundary_distance",
         vec![n, n],
         "signed distance to the domain boundary (domain units), negative inside",
-        Some(distance_picture(n, &img.boundary_distance, Some(&outside))),
-        &|p| save_npy(p, &[n, n], &img.boundary_distance),
+        Some(distance(&img.boundary_distance)),
+        &|p| save_npy(p, &[n, n], img.boundary_distance.as_slice()),
     )?;
     for (i, f) in img.features.iter().enumerate() {
         put(
             &format!("feature_{i}"),
             vec![n, n],
             &format!("distance on the surface to feature '{}' (ℓ)", f.name),
-            Some(distance_picture(n, &f.distance, Some(&outside))),
-            &|p| save_npy(p, &[n, n], &f.distance),
+            Some(distance(&f.distance)),
+            &|p| save_npy(p, &[n, n], f.distance.as_slice()),
         )?;
     }
     if let Some(d) = &img.feature_distance {
@@ -162,48 +160,48 @@ pub fn write_image_set(dir: &Path, img: &GeometryImages) -> Result<ImagesManifes
             "feature_distance",
             vec![n, n],
             "distance to the nearest feature (ℓ)",
-            Some(distance_picture(n, d, Some(&outside))),
-            &|p| save_npy(p, &[n, n], d),
+            Some(distance(d)),
+            &|p| save_npy(p, &[n, n], d.as_slice()),
         )?;
     }
     if let Some(t) = &img.texture {
-        let flat: Vec<u8> = t.iter().flatten().copied().collect();
         put(
             "texture",
             vec![n, n, 3],
             "texture colour (RGB), black outside",
-            Some(Picture::from_grid(n, |k| t[k])),
-            &|p| save_npy(p, &[n, n, 3], &flat),
+            Some(Picture::from_grid(n, |k| t.as_slice()[k])),
+            &|p| save_npy(p, &[n, n, 3], t.as_slice().as_flattened()),
         )?;
     }
     let mut pyramid = vec![];
     if let Some(pyr) = &img.pyramid {
-        for lvl in &pyr.levels {
-            let m = lvl.size;
+        for (k, (lvl, sigma)) in pyr.mean_curvature.iter().enumerate() {
+            let m = lvl.size();
             let mut entries = vec![];
-            for (name, data) in pyr.names.iter().zip(&lvl.images) {
-                let base = format!("pyramid_{:02}_{name}", lvl.level);
+            for (c, name) in GeometryPyramid::NAMES.iter().enumerate() {
+                let data = pyr.scalar_level(k, c);
+                let base = format!("pyramid_{:02}_{name}", lvl.level());
                 let npy = format!("{base}.npy");
-                save_npy(&dir.join(&npy), &[m, m], data)?;
-                let png = if name == "h" {
+                save_npy(&dir.join(&npy), &[m, m], data.as_slice())?;
+                let png = if *name == "h" {
                     let f = format!("{base}.png");
-                    diverging_picture(m, data).save_png(&dir.join(&f))?;
+                    diverging_picture(m, data.as_slice()).save_png(&dir.join(&f))?;
                     Some(f)
                 } else {
                     None
                 };
                 entries.push(ImageEntry {
-                    name: name.clone(),
+                    name: name.to_string(),
                     npy,
                     png,
                     shape: vec![m, m],
-                    description: format!("{name} filtered with σ = {}", lvl.sigma),
+                    description: format!("{name} filtered with σ = {sigma}"),
                 });
             }
             pyramid.push(PyramidEntry {
-                level: lvl.level,
+                level: lvl.level(),
                 size: m,
-                sigma: lvl.sigma,
+                sigma,
                 images: entries,
             });
         }
@@ -224,7 +222,9 @@ pub fn write_image_set(dir: &Path, img: &GeometryImages) -> Result<ImagesManifes
 }
 
 /// Positions as RGB, each coordinate scaled to its bounding box.
-pub fn position_picture(n: usize, pos: &[[f64; 3]]) -> Picture {
+pub fn position_picture(pos: &Grid<[f64; 3]>) -> Picture {
+    let n = pos.size();
+    let pos = pos.as_slice();
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
     for p in pos.iter().filter(|p| p[0].is_finite()) {

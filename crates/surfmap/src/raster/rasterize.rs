@@ -11,28 +11,29 @@
 use rayon::prelude::*;
 
 use super::RasterError;
+use crate::grid::Grid;
 
 /// Triangle id stored for nodes outside the flattened surface.
 pub const OUTSIDE: u32 = u32::MAX;
 
-/// Per-node triangle id and barycentric coordinates on an `size × size` grid.
+/// Per-node triangle id and barycentric coordinates on an `N × N` grid.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Rasterization {
-    pub size: usize,
-    /// Triangle containing node `i · size + j`, or [`OUTSIDE`].
-    pub triangle: Vec<u32>,
+    /// Triangle containing each node, or [`OUTSIDE`].
+    pub triangle: Grid<u32>,
     /// Barycentric coordinates of the node w.r.t. the triangle's corners (zero outside).
-    pub bary: Vec<[f32; 3]>,
+    pub bary: Grid<[f32; 3]>,
 }
 
 const BAND_ROWS: usize = 8;
 
 impl Rasterization {
     /// Rasterizes triangles given by their domain coordinates `xi` (one per vertex, in
-    /// ω = [0, 1]²). Degenerate or flipped domain triangles are an error: the input must be
+    /// ω = `[0,1]²`). Degenerate or flipped domain triangles are an error: the input must be
     /// a flip-free flattening.
     pub fn new(xi: &[[f64; 2]], triangles: &[[u32; 3]], size: usize) -> Result<Self, RasterError> {
-        super::domain::grid_level(size)?;
+        let mut triangle = Grid::new(size, OUTSIDE)?;
+        let mut bary = Grid::new(size, [0.0f32; 3])?;
         let n = size;
         let nodes_per_unit = (n - 1) as f64;
         crate::mesh::check_indices(triangles, xi.len())?;
@@ -76,11 +77,10 @@ impl Rasterization {
             }
         }
 
-        let mut triangle = vec![OUTSIDE; n * n];
-        let mut bary = vec![[0.0f32; 3]; n * n];
         triangle
+            .as_mut_slice()
             .par_chunks_mut(BAND_ROWS * n)
-            .zip(bary.par_chunks_mut(BAND_ROWS * n))
+            .zip(bary.as_mut_slice().par_chunks_mut(BAND_ROWS * n))
             .enumerate()
             .for_each(|(band, (tri_out, bary_out))| {
                 let row0 = band * BAND_ROWS;
@@ -126,22 +126,24 @@ impl Rasterization {
                     }
                 }
             });
-        Ok(Self {
-            size,
-            triangle,
-            bary,
-        })
+        Ok(Self { triangle, bary })
     }
 
-    /// Whether node `k` lies on the flattened surface.
+    /// `N`: grid nodes per side.
+    #[inline]
+    pub fn size(&self) -> usize {
+        self.triangle.size()
+    }
+
+    /// Whether the node at index `k` (`i · N + j`) lies on the flattened surface.
     #[inline]
     pub fn is_inside(&self, k: usize) -> bool {
-        self.triangle[k] != OUTSIDE
+        self.triangle.as_slice()[k] != OUTSIDE
     }
 
     /// The inside mask as booleans.
-    pub fn inside_mask(&self) -> Vec<bool> {
-        self.triangle.iter().map(|&t| t != OUTSIDE).collect()
+    pub fn inside_mask(&self) -> Grid<bool> {
+        self.triangle.map(|&t| t != OUTSIDE)
     }
 
     /// Interpolates a per-vertex field linearly across triangles; `NaN` outside.
@@ -149,10 +151,12 @@ impl Rasterization {
         &self,
         triangles: &[[u32; 3]],
         values: &[[f64; D]],
-    ) -> Vec<[f64; D]> {
-        self.triangle
+    ) -> Grid<[f64; D]> {
+        let data = self
+            .triangle
+            .as_slice()
             .par_iter()
-            .zip(self.bary.par_iter())
+            .zip(self.bary.as_slice().par_iter())
             .map(|(&t, b)| {
                 if t == OUTSIDE {
                     return [f64::NAN; D];
@@ -163,12 +167,15 @@ impl Rasterization {
                     b0 * values[i0][d] + b1 * values[i1][d] + b2 * values[i2][d]
                 })
             })
-            .collect()
+            .collect();
+        Grid::from_parts(self.size(), data)
     }
 
     /// Samples a per-triangle (piecewise constant) field; `NaN` outside.
-    pub fn sample_triangle_field<const D: usize>(&self, values: &[[f64; D]]) -> Vec<[f64; D]> {
-        self.triangle
+    pub fn sample_triangle_field<const D: usize>(&self, values: &[[f64; D]]) -> Grid<[f64; D]> {
+        let data = self
+            .triangle
+            .as_slice()
             .par_iter()
             .map(|&t| {
                 if t == OUTSIDE {
@@ -177,14 +184,14 @@ impl Rasterization {
                     values[t as usize]
                 }
             })
-            .collect()
+            .collect();
+        Grid::from_parts(self.size(), data)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::raster::domain::node_position;
 
     /// Two triangles forming the square [0.2, 0.7]²; a third far triangle with a hole between.
     fn square() -> (Vec<[f64; 2]>, Vec<[u32; 3]>) {
@@ -204,26 +211,26 @@ mod tests {
         let s = r.sample_vertex_field(&tris, &f);
         for i in 0..n {
             for j in 0..n {
-                let p = node_position(n, i, j);
+                let p = s.node(i, j);
                 let inside_exact = (0.2 - 1e-12..=0.7 + 1e-12).contains(&p[0])
                     && (0.2 - 1e-12..=0.7 + 1e-12).contains(&p[1]);
                 let k = i * n + j;
                 assert_eq!(r.is_inside(k), inside_exact, "node {i},{j}");
+                assert_eq!(r.inside_mask()[(i, j)], inside_exact);
                 if inside_exact {
                     let exact = 3.0 * p[0] - 2.0 * p[1] + 1.0;
-                    assert!((s[k][0] - exact).abs() < 1e-6);
-                    let b = r.bary[k];
+                    assert!((s[(i, j)][0] - exact).abs() < 1e-6);
+                    let b = r.bary[(i, j)];
                     assert!(
                         b.iter().all(|&x| x >= -1e-6) && (b.iter().sum::<f32>() - 1.0).abs() < 1e-6
                     );
                 } else {
-                    assert!(s[k][0].is_nan());
+                    assert!(s[(i, j)][0].is_nan());
                 }
             }
         }
         // Diagonal nodes are shared; the lower triangle id wins.
-        let k = 32 * n + 32; // ξ = (0.5, 0.5) is on the diagonal
-        assert_eq!(r.triangle[k], 0);
+        assert_eq!(r.triangle[(32, 32)], 0); // ξ = (0.5, 0.5) is on the diagonal
     }
 
     #[test]

@@ -15,7 +15,8 @@
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
-use super::RasterError;
+use super::GridError;
+use super::grid::Grid;
 
 /// The 8-neighbourhood in counter-clockwise order as `(di, dj)` (row, column).
 const RING: [(i64, i64); 8] = [
@@ -45,7 +46,7 @@ impl Ord for Entry {
 
 /// `‖w‖_g` for `g = [g11, g12, g22]`.
 #[inline]
-pub fn metric_norm(g: [f64; 3], w: [f64; 2]) -> f64 {
+pub(crate) fn metric_norm(g: [f64; 3], w: [f64; 2]) -> f64 {
     (g[0] * w[0] * w[0] + 2.0 * g[1] * w[0] * w[1] + g[2] * w[1] * w[1])
         .max(0.0)
         .sqrt()
@@ -62,7 +63,7 @@ fn inner(g: [f64; 3], a: [f64; 2], b: [f64; 2]) -> f64 {
 /// `‖w‖² = D / (A − δ²)` (requires `δ² < A`) and `λ = (−δ‖w‖ − B) / A`; otherwise the
 /// minimum is at an end point (the edge updates, done separately).
 #[inline]
-pub fn triangle_update(du: f64, dv: f64, u: [f64; 2], v: [f64; 2], g: [f64; 3]) -> f64 {
+pub(crate) fn triangle_update(du: f64, dv: f64, u: [f64; 2], v: [f64; 2], g: [f64; 3]) -> f64 {
     let e = [u[0] - v[0], u[1] - v[1]];
     let delta = du - dv;
     let a = inner(g, e, e);
@@ -82,19 +83,26 @@ pub fn triangle_update(du: f64, dv: f64, u: [f64; 2], v: [f64; 2], g: [f64; 3]) 
     }
 }
 
-/// Solves the Eikonal equation on an `size × size` grid with per-node metric `metric`
+/// Solves the Eikonal equation on the grid of the per-node metric `metric`
 /// (`[g11, g12, g22]`, domain units).
 ///
-/// `value` holds the initial data: finite at seeds (their distance to the feature),
-/// `∞` elsewhere; it is overwritten with the distance. Only nodes with `updatable[k]`
-/// change; every finite node is a source. Nodes never reached stay `∞`.
+/// `value` holds the initial data: finite at seeds (their distance to the feature, e.g.
+/// from [`seed_polyline`] or [`seed_region_boundary`]), `∞` elsewhere; it is overwritten
+/// with the distance. Only nodes with `updatable` set change; every finite node is a
+/// source. Nodes never reached stay `∞`. All three grids must have the same size.
 pub fn solve_eikonal(
-    size: usize,
-    metric: &[[f64; 3]],
-    updatable: &[bool],
-    value: &mut [f64],
-) -> Result<(), RasterError> {
-    let n = size;
+    metric: &Grid<[f64; 3]>,
+    updatable: &Grid<bool>,
+    value: &mut Grid<f64>,
+) -> Result<(), GridError> {
+    metric.check_same_size(updatable, "the updatable mask")?;
+    metric.check_same_size(value, "the distance grid")?;
+    let n = metric.size();
+    let (metric, updatable, value) = (
+        metric.as_slice(),
+        updatable.as_slice(),
+        value.as_mut_slice(),
+    );
     let h = 1.0 / (n - 1) as f64;
     // Sources: finite nodes that can update someone, i.e. updatable themselves or with an
     // updatable 8-neighbour (a frozen node inside a frozen region never needs a visit).
@@ -126,7 +134,7 @@ pub fn solve_eikonal(
         }
         pops += 1;
         if pops > max_pops {
-            return Err(RasterError::EikonalStalled { pops });
+            return Err(GridError::EikonalStalled { pops });
         }
         let (pi, pj) = ((p / n) as i64, (p % n) as i64);
         for (m, &(di, dj)) in RING.iter().enumerate() {
@@ -167,18 +175,31 @@ pub fn solve_eikonal(
 const SEED_RADIUS: i64 = 6;
 
 /// Seeds `value` near a polyline (domain coordinates; one point is a point feature):
-/// every updatable node within `SEED_RADIUS` = 6 nodes of the curve (a box around each
-/// sample point) gets its distance to the curve in its own metric,
-/// `min_t ‖ξ − a − t(b − a)‖_{g(ξ)}`.
+/// every updatable node within 6 nodes of the curve gets its distance to the curve in
+/// its own metric, `min_t ‖ξ − a − t(b − a)‖_{g(ξ)}`, if that is smaller than its value.
+/// Points must be finite and lie in `[−1, 2]²`; all three grids must have the same size.
 pub fn seed_polyline(
-    size: usize,
-    metric: &[[f64; 3]],
-    updatable: &[bool],
+    metric: &Grid<[f64; 3]>,
+    updatable: &Grid<bool>,
     points: &[[f64; 2]],
     closed: bool,
-    value: &mut [f64],
-) {
-    let n = size;
+    value: &mut Grid<f64>,
+) -> Result<(), GridError> {
+    metric.check_same_size(updatable, "the updatable mask")?;
+    metric.check_same_size(value, "the distance grid")?;
+    if let Some((index, &point)) = points
+        .iter()
+        .enumerate()
+        .find(|(_, p)| !p.iter().all(|c| (-1.0..=2.0).contains(c)))
+    {
+        return Err(GridError::BadPoint { index, point });
+    }
+    let n = metric.size();
+    let (metric, updatable, value) = (
+        metric.as_slice(),
+        updatable.as_slice(),
+        value.as_mut_slice(),
+    );
     let s = (n - 1) as f64;
     let count = if closed && points.len() > 2 {
         points.len()
@@ -216,19 +237,29 @@ pub fn seed_polyline(
             }
         }
     }
+    Ok(())
 }
 
 /// Seeds `value` on both sides of the boundary of a node region: for every grid edge
 /// `(p, q)` between updatable nodes with `in_region[p] ≠ in_region[q]`, the boundary is
-/// put at the edge midpoint, so each end gets half the edge's length in its metric.
+/// put at the edge midpoint, so each end gets half the edge's length in its metric (if
+/// that is smaller than its value). All four grids must have the same size.
 pub fn seed_region_boundary(
-    size: usize,
-    metric: &[[f64; 3]],
-    updatable: &[bool],
-    in_region: &[bool],
-    value: &mut [f64],
-) {
-    let n = size;
+    metric: &Grid<[f64; 3]>,
+    updatable: &Grid<bool>,
+    in_region: &Grid<bool>,
+    value: &mut Grid<f64>,
+) -> Result<(), GridError> {
+    metric.check_same_size(updatable, "the updatable mask")?;
+    metric.check_same_size(in_region, "the region mask")?;
+    metric.check_same_size(value, "the distance grid")?;
+    let n = metric.size();
+    let (metric, updatable, in_region, value) = (
+        metric.as_slice(),
+        updatable.as_slice(),
+        in_region.as_slice(),
+        value.as_mut_slice(),
+    );
     let h = 1.0 / (n - 1) as f64;
     for i in 0..n {
         for j in 0..n {
@@ -243,10 +274,16 @@ pub fn seed_region_boundary(
             }
         }
     }
+    Ok(())
 }
 
 /// `min_t ‖x − a − t(b − a)‖_g` over `t ∈ [0, 1]`.
-pub fn metric_point_segment_distance(g: [f64; 3], x: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+pub(crate) fn metric_point_segment_distance(
+    g: [f64; 3],
+    x: [f64; 2],
+    a: [f64; 2],
+    b: [f64; 2],
+) -> f64 {
     let e = [b[0] - a[0], b[1] - a[1]];
     let p = [x[0] - a[0], x[1] - a[1]];
     let ee = inner(g, e, e);
@@ -259,25 +296,23 @@ pub fn metric_point_segment_distance(g: [f64; 3], x: [f64; 2], a: [f64; 2], b: [
 }
 
 #[cfg(test)]
-#[allow(clippy::needless_range_loop)]
 mod tests {
     use super::*;
-    use crate::raster::domain::node_position;
 
     fn constant_metric_point_error(n: usize, g: [f64; 3]) -> f64 {
-        let metric = vec![g; n * n];
-        let all = vec![true; n * n];
-        let mut d = vec![f64::INFINITY; n * n];
+        let metric = Grid::new(n, g).unwrap();
+        let all = Grid::new(n, true).unwrap();
+        let mut d = Grid::new(n, f64::INFINITY).unwrap();
         let c = [0.43, 0.51];
-        seed_polyline(n, &metric, &all, &[c], false, &mut d);
-        solve_eikonal(n, &metric, &all, &mut d).unwrap();
+        seed_polyline(&metric, &all, &[c], false, &mut d).unwrap();
+        solve_eikonal(&metric, &all, &mut d).unwrap();
         let mut max_rel = 0.0f64;
         for i in 0..n {
             for j in 0..n {
-                let p = node_position(n, i, j);
+                let p = d.node(i, j);
                 let exact = metric_norm(g, [p[0] - c[0], p[1] - c[1]]);
                 if exact > 0.3 {
-                    max_rel = max_rel.max((d[i * n + j] - exact).abs() / exact);
+                    max_rel = max_rel.max((d[(i, j)] - exact).abs() / exact);
                 }
             }
         }
@@ -303,25 +338,25 @@ mod tests {
     fn identity_metric_line_distance_is_exact() {
         // Distance to a straight line is linear: the scheme reproduces it up to rounding.
         let n = 65;
-        let metric = vec![[1.0, 0.0, 1.0]; n * n];
-        let all = vec![true; n * n];
-        let mut d = vec![f64::INFINITY; n * n];
+        let metric = Grid::new(n, [1.0, 0.0, 1.0]).unwrap();
+        let all = Grid::new(n, true).unwrap();
+        let mut d = Grid::new(n, f64::INFINITY).unwrap();
         let (a, b) = ([-0.5, 0.075], [1.5, 0.575]);
-        seed_polyline(n, &metric, &all, &[a, b], false, &mut d);
-        solve_eikonal(n, &metric, &all, &mut d).unwrap();
+        seed_polyline(&metric, &all, &[a, b], false, &mut d).unwrap();
+        solve_eikonal(&metric, &all, &mut d).unwrap();
         let (a, nrm) = ([0.0, 0.2], (0.25f64 * 0.25 + 1.0).sqrt());
         for i in 0..n {
             for j in 0..n {
-                let p = node_position(n, i, j);
+                let p = d.node(i, j);
                 let exact = ((p[1] - a[1]) * 1.0 - (p[0] - a[0]) * 0.25).abs() / nrm;
                 // Away from the grid's sides, whose characteristics start outside the grid.
                 if !(0.3..=0.7).contains(&p[0]) {
                     continue;
                 }
                 assert!(
-                    (d[i * n + j] - exact).abs() < 1e-9,
+                    (d[(i, j)] - exact).abs() < 1e-9,
                     "{i},{j}: {} vs {exact}",
-                    d[i * n + j]
+                    d[(i, j)]
                 );
             }
         }
@@ -330,33 +365,67 @@ mod tests {
     #[test]
     fn region_boundary_seeds_sit_at_edge_midpoints() {
         let n = 17;
-        let metric = vec![[4.0, 0.0, 1.0]; n * n];
-        let all = vec![true; n * n];
-        let region: Vec<bool> = (0..n * n).map(|k| k % n < 8).collect(); // columns 0..7
-        let mut d = vec![f64::INFINITY; n * n];
-        seed_region_boundary(n, &metric, &all, &region, &mut d);
-        solve_eikonal(n, &metric, &all, &mut d).unwrap();
+        let metric = Grid::new(n, [4.0, 0.0, 1.0]).unwrap();
+        let all = Grid::new(n, true).unwrap();
+        let region = Grid::from_fn(n, |_, j| j < 8).unwrap(); // columns 0..7
+        let mut d = Grid::new(n, f64::INFINITY).unwrap();
+        seed_region_boundary(&metric, &all, &region, &mut d).unwrap();
+        solve_eikonal(&metric, &all, &mut d).unwrap();
         // Boundary at ξ_x = 7.5 h; metric stretches x by 2.
         let h = 1.0 / 16.0;
-        for k in 0..n * n {
-            let exact = 2.0 * ((k % n) as f64 - 7.5).abs() * h;
-            assert!((d[k] - exact).abs() < 1e-12);
+        for i in 0..n {
+            for j in 0..n {
+                let exact = 2.0 * (j as f64 - 7.5).abs() * h;
+                assert!((d[(i, j)] - exact).abs() < 1e-12);
+            }
         }
     }
 
     #[test]
     fn unreachable_and_frozen_nodes() {
         let n = 9;
-        let metric = vec![[1.0, 0.0, 1.0]; n * n];
+        let metric = Grid::new(n, [1.0, 0.0, 1.0]).unwrap();
         // A wall of non-updatable nodes in column 4 cuts the grid in two.
-        let upd: Vec<bool> = (0..n * n).map(|k| k % n != 4).collect();
-        let mut d = vec![f64::INFINITY; n * n];
-        d[0] = 0.0;
-        solve_eikonal(n, &metric, &upd, &mut d).unwrap();
-        assert!(
-            d.iter()
-                .enumerate()
-                .all(|(k, v)| (k % n < 4) == v.is_finite())
+        let upd = Grid::from_fn(n, |_, j| j != 4).unwrap();
+        let mut d = Grid::new(n, f64::INFINITY).unwrap();
+        d[(0, 0)] = 0.0;
+        solve_eikonal(&metric, &upd, &mut d).unwrap();
+        for i in 0..n {
+            for j in 0..n {
+                assert_eq!(j < 4, d[(i, j)].is_finite(), "{i},{j}");
+            }
+        }
+    }
+
+    #[test]
+    fn mismatched_grids_and_bad_points_are_errors() {
+        let metric = Grid::new(9, [1.0, 0.0, 1.0]).unwrap();
+        let all = Grid::new(9, true).unwrap();
+        let mut small = Grid::new(5, f64::INFINITY).unwrap();
+        let err = solve_eikonal(&metric, &all, &mut small).unwrap_err();
+        assert_eq!(
+            err,
+            GridError::SizeMismatch {
+                what: "the distance grid",
+                got: 5,
+                want: 9
+            }
         );
+        assert!(
+            seed_polyline(
+                &metric,
+                &Grid::new(17, true).unwrap(),
+                &[[0.5; 2]],
+                false,
+                &mut small
+            )
+            .is_err()
+        );
+        let mut d = Grid::new(9, f64::INFINITY).unwrap();
+        for bad in [[f64::NAN, 0.5], [0.5, 1e300], [-1.5, 0.0]] {
+            let err = seed_polyline(&metric, &all, &[[0.5; 2], bad], false, &mut d).unwrap_err();
+            assert!(matches!(err, GridError::BadPoint { index: 1, .. }), "{err}");
+        }
+        assert!(d.iter().all(|v| v.is_infinite()));
     }
 }

@@ -1,4 +1,4 @@
-//! The image domain ω = [0, 1]² and its regular grid (thesis §3.2.1, "rough alignment").
+//! The image domain ω = `[0,1]²` and its regular grid (thesis §3.2.1, "rough alignment").
 //!
 //! A flattening's UVs are placed in ω by a uniform scale and a translation (no rotation,
 //! so the aspect ratio and the orientation of the flattening are kept):
@@ -7,12 +7,13 @@
 //!
 //! The grid has `N × N` nodes, `N = 2^k + 1`; node `(i, j)` (row `i`, column `j`) sits
 //! at `ξ = (j, i) / (N − 1)` and is stored at index `i · N + j` (row `i = 0` is `ξ_y = 0`).
+//! [`grid_level`] checks a size; [`MAX_SIZE`] bounds it.
 
 use serde::{Deserialize, Serialize};
 
-use super::RasterError;
+use super::GridError;
 
-/// The similarity `ξ = scale · uv + offset` that places a flattening in ω = [0, 1]².
+/// The similarity `ξ = scale · uv + offset` that places a flattening in ω = `[0,1]²`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct DomainTransform {
     pub scale: f64,
@@ -22,17 +23,15 @@ pub struct DomainTransform {
 impl DomainTransform {
     /// Fits the bounding box of `uvs` into `[margin, 1 − margin]²`, centred, keeping the
     /// aspect ratio: `scale = (1 − 2·margin) / max(width, height)`.
-    pub fn fit(uvs: &[[f64; 2]], margin: f64) -> Result<Self, RasterError> {
+    pub fn fit(uvs: &[[f64; 2]], margin: f64) -> Result<Self, GridError> {
         if !(0.0..0.5).contains(&margin) {
-            return Err(RasterError::BadOption(format!(
-                "margin {margin} must lie in [0, 0.5)"
-            )));
+            return Err(GridError::BadMargin { margin });
         }
         let mut lo = [f64::INFINITY; 2];
         let mut hi = [f64::NEG_INFINITY; 2];
         for (v, uv) in uvs.iter().enumerate() {
             if !(uv[0].is_finite() && uv[1].is_finite()) {
-                return Err(RasterError::NonFiniteUv { vertex: v });
+                return Err(GridError::NonFiniteUv { vertex: v });
             }
             for k in 0..2 {
                 lo[k] = lo[k].min(uv[k]);
@@ -41,7 +40,7 @@ impl DomainTransform {
         }
         let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]);
         if uvs.is_empty() || extent.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
-            return Err(RasterError::DegenerateDomain);
+            return Err(GridError::DegenerateDomain);
         }
         let scale = (1.0 - 2.0 * margin) / extent;
         let offset = [
@@ -71,11 +70,15 @@ impl DomainTransform {
 }
 
 /// Checks that `size = 2^k + 1` with `3 ≤ size ≤ MAX_SIZE` and returns `k`.
-pub fn grid_level(size: usize) -> Result<u32, RasterError> {
+///
+/// This is the rule for every grid made from data ([`Grid::new`](super::Grid::new) and
+/// its siblings, geometry images). The `2 × 2` grid (`k = 0`) exists only as the coarsest
+/// level of a hierarchy, reached by restriction (the pyramid's `σ_0 = 1` level).
+pub fn grid_level(size: usize) -> Result<u32, GridError> {
     if (3..=MAX_SIZE).contains(&size) && (size - 1).is_power_of_two() {
         Ok((size - 1).trailing_zeros())
     } else {
-        Err(RasterError::BadSize { size })
+        Err(GridError::BadSize { size })
     }
 }
 
@@ -114,7 +117,10 @@ mod tests {
         assert!(DomainTransform::fit(&[], 0.0).is_err());
         assert!(DomainTransform::fit(&[[1.0, 1.0], [1.0, 1.0]], 0.0).is_err());
         assert!(DomainTransform::fit(&[[f64::NAN, 1.0], [0.0, 0.0]], 0.0).is_err());
-        assert!(DomainTransform::fit(&[[0.0, 1.0], [1.0, 0.0]], 0.5).is_err());
+        assert!(matches!(
+            DomainTransform::fit(&[[0.0, 1.0], [1.0, 0.0]], 0.5),
+            Err(GridError::BadMargin { .. })
+        ));
         assert_eq!(grid_level(257).unwrap(), 8);
         assert_eq!(grid_level(3).unwrap(), 1);
         assert!(grid_level(256).is_err());
