@@ -13,12 +13,11 @@ use std::time::Instant;
 use surfmap::mesh::io::read_mesh;
 use surfmap::param::flatten::{FlattenOptions, flatten};
 use surfmap::raster::output::position_picture;
-use surfmap::raster::picture::{
-    contact_sheet, distance_picture, diverging_picture, metric_picture,
-};
+use surfmap::raster::picture::{distance_picture, diverging_picture, metric_picture};
 use surfmap::raster::{
     FeatureCurve, FeatureFile, FeatureSource, GeometryImages, GeometryImagesOptions,
 };
+use surfmap::render::{contact_sheet, save_png};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -169,8 +168,7 @@ fn main() {
                         distance_picture(n, img.feature_distance.as_ref().unwrap(), Some(&outside)),
                     ),
                 ];
-                contact_sheet(&tiles, 4, 320)
-                    .save_png(std::path::Path::new(out))
+                save_png(std::path::Path::new(out), &contact_sheet(&tiles, 4, 320))
                     .expect("write sheet");
                 println!("wrote {out}");
             }

@@ -1,4 +1,4 @@
-//! Geometry images (thesis §3.2): a flattened surface placed in ω = [0,1]² and sampled on
+//! Geometry images (thesis §3.2): a flattened surface placed in ω = \[0,1\]² and sampled on
 //! a regular `N × N` grid (`N = 2^k + 1`): inside mask, triangle id and barycentric
 //! coordinates, 3D position, metric `g`, mean curvature `h`, texture colour, signed
 //! distance to the domain boundary, feature distance maps in the metric `g`, harmonic

@@ -9,8 +9,9 @@ use serde::Serialize;
 
 use super::images::{GeometryImages, SurfaceScale};
 use super::npy::save_npy;
-use super::picture::{Picture, distance_picture, diverging_picture, metric_picture};
+use super::picture::{OUTSIDE_GREY, distance_picture, diverging_picture, metric_picture};
 use super::{DomainTransform, RasterError};
+use crate::render::{RgbImage, grid_image, save_png};
 
 /// `images.json`.
 #[derive(Clone, Debug, Serialize)]
@@ -18,7 +19,7 @@ pub struct ImagesManifest {
     pub format: &'static str,
     /// Nodes per side; node `(i, j)` is array element `[i, j]` at `ξ = (j, i)/(size − 1)`.
     pub size: usize,
-    /// `ξ = scale · uv + offset` maps flattening UVs into ω = [0,1]².
+    /// `ξ = scale · uv + offset` maps flattening UVs into ω = \[0,1\]².
     pub transform: DomainTransform,
     pub scale: SurfaceScale,
     /// The length unit `ℓ` in mesh units (h in 1/ℓ, g in ℓ², feature distances in ℓ).
@@ -54,7 +55,7 @@ pub fn write_image_set(dir: &Path, img: &GeometryImages) -> Result<ImagesManifes
     let mut put = |name: &str,
                    shape: Vec<usize>,
                    desc: &str,
-                   png: Option<Picture>,
+                   png: Option<RgbImage>,
                    write: &dyn Fn(&Path) -> std::io::Result<()>|
      -> Result<(), RasterError> {
         let npy = format!("{name}.npy");
@@ -62,7 +63,7 @@ pub fn write_image_set(dir: &Path, img: &GeometryImages) -> Result<ImagesManifes
         let png_name = match png {
             Some(p) => {
                 let f = format!("{name}.png");
-                p.save_png(&dir.join(&f))?;
+                save_png(&dir.join(&f), &p)?;
                 Some(f)
             }
             None => None,
@@ -82,7 +83,7 @@ pub fn write_image_set(dir: &Path, img: &GeometryImages) -> Result<ImagesManifes
         "mask",
         vec![n, n],
         "1 on the surface, 0 outside",
-        Some(Picture::from_grid(n, |k| {
+        Some(grid_image(n, n, |k| {
             if inside[k] == 1 { [255; 3] } else { [0; 3] }
         })),
         &|p| save_npy(p, &[n, n], &inside),
@@ -172,7 +173,7 @@ pub fn write_image_set(dir: &Path, img: &GeometryImages) -> Result<ImagesManifes
             "texture",
             vec![n, n, 3],
             "texture colour (RGB), black outside",
-            Some(Picture::from_grid(n, |k| t[k])),
+            Some(grid_image(n, n, |k| t[k])),
             &|p| save_npy(p, &[n, n, 3], &flat),
         )?;
     }
@@ -187,7 +188,7 @@ pub fn write_image_set(dir: &Path, img: &GeometryImages) -> Result<ImagesManifes
                 save_npy(&dir.join(&npy), &[m, m], data)?;
                 let png = if name == "h" {
                     let f = format!("{base}.png");
-                    diverging_picture(m, data).save_png(&dir.join(&f))?;
+                    save_png(&dir.join(&f), &diverging_picture(m, data))?;
                     Some(f)
                 } else {
                     None
@@ -224,7 +225,7 @@ pub fn write_image_set(dir: &Path, img: &GeometryImages) -> Result<ImagesManifes
 }
 
 /// Positions as RGB, each coordinate scaled to its bounding box.
-pub fn position_picture(n: usize, pos: &[[f64; 3]]) -> Picture {
+pub fn position_picture(n: usize, pos: &[[f64; 3]]) -> RgbImage {
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
     for p in pos.iter().filter(|p| p[0].is_finite()) {
@@ -233,10 +234,10 @@ pub fn position_picture(n: usize, pos: &[[f64; 3]]) -> Picture {
             hi[c] = hi[c].max(p[c]);
         }
     }
-    Picture::from_grid(n, |k| {
+    grid_image(n, n, |k| {
         let p = pos[k];
         if !p[0].is_finite() {
-            return super::picture::OUTSIDE_GREY;
+            return OUTSIDE_GREY;
         }
         std::array::from_fn(|c| {
             (255.0 * (p[c] - lo[c]) / (hi[c] - lo[c]).max(1e-300)).round() as u8

@@ -29,7 +29,7 @@ const BAND_ROWS: usize = 8;
 
 impl Rasterization {
     /// Rasterizes triangles given by their domain coordinates `xi` (one per vertex, in
-    /// ω = [0,1]²). Degenerate or flipped domain triangles are an error: the input must be
+    /// ω = \[0,1\]²). Degenerate or flipped domain triangles are an error: the input must be
     /// a flip-free flattening.
     pub fn new(xi: &[[f64; 2]], triangles: &[[u32; 3]], size: usize) -> Result<Self, RasterError> {
         super::domain::grid_level(size)?;
