@@ -11,13 +11,13 @@ use crate::render::grid_image::{NO_DATA, grid_image, image_with_colormap};
 pub const OUTSIDE_GREY: [u8; 3] = NO_DATA;
 
 /// Scalar image with the blue–white–red map symmetric about 0 (range: 98th percentile
-/// of |v|); non-finite nodes grey.
+/// of |v|); non-finite nodes grey. Only the `⌊len / size⌋` full rows are drawn.
 pub fn diverging_picture(size: usize, values: &[f64]) -> RgbImage {
     image_with_colormap(values, size, &ColorScale::symmetric(values, 0.98))
 }
 
 /// Distance image: viridis over `[0, max]` with dark iso-lines every `max/10`;
-/// `NaN`/`∞` grey; `dim` darkens nodes where `dim[k]` is true (e.g. outside the surface).
+/// `NaN`/`∞` (and nodes past the end of `values`) grey; `dim` darkens nodes where `dim[k]` is true (e.g. outside the surface).
 pub fn distance_picture(size: usize, values: &[f64], dim: Option<&[bool]>) -> RgbImage {
     let max = values
         .iter()
@@ -28,16 +28,15 @@ pub fn distance_picture(size: usize, values: &[f64], dim: Option<&[bool]>) -> Rg
     let step = max / 10.0;
     let line = 0.6 * max / size as f64;
     grid_image(size, size, |k| {
-        let v = values[k];
-        if !v.is_finite() {
+        let Some(&v) = values.get(k).filter(|v| v.is_finite()) else {
             return OUTSIDE_GREY;
-        }
+        };
         let mut c = Colormap::Viridis.at_rgb8(v.abs() / max);
         let r = v.abs() % step;
         if r < line || step - r < line {
             c = c.map(|x| x / 3);
         }
-        if dim.is_some_and(|d| d[k]) {
+        if dim.is_some_and(|d| d.get(k) == Some(&true)) {
             c = c.map(|x| x / 2 + 32);
         }
         c
@@ -45,16 +44,16 @@ pub fn distance_picture(size: usize, values: &[f64], dim: Option<&[bool]>) -> Rg
 }
 
 /// Metric `[g11, g12, g22]` as RGB (thesis Fig. 3.6b): `g11`, `g22` scaled by their
-/// 98th percentile, `g12` mapped from `[−r, r]`.
+/// 98th percentile, `g12` mapped from `[−r, r]`; nodes outside (`NaN`, or past the end
+/// of `g`) grey.
 pub fn metric_picture(size: usize, g: &[[f64; 3]]) -> RgbImage {
     let r11 = abs_quantile(g.iter().map(|g| g[0]), 0.98);
     let r12 = abs_quantile(g.iter().map(|g| g[1]), 0.98);
     let r22 = abs_quantile(g.iter().map(|g| g[2]), 0.98);
     grid_image(size, size, |k| {
-        let [a, b, c] = g[k];
-        if a.is_nan() {
+        let Some(&[a, b, c]) = g.get(k).filter(|g| !g[0].is_nan()) else {
             return OUTSIDE_GREY;
-        }
+        };
         let to = |x: f64| (x.clamp(0.0, 1.0) * 255.0).round() as u8;
         [to(a / r11), to(0.5 + 0.5 * b / r12), to(c / r22)]
     })
@@ -106,5 +105,12 @@ mod tests {
         assert_eq!(p.get_pixel(0, 1).0, [255, 128, 255]); // node 0, bottom-left
         assert_eq!(p.get_pixel(1, 1).0, [255, 0, 128]); // node 1, bottom-right
         assert_eq!(p.get_pixel(1, 0).0, OUTSIDE_GREY); // node 3, top-right
+        // Too few values for the grid: the missing nodes are grey, no panic.
+        assert_eq!(metric_picture(3, &g).get_pixel(2, 0).0, OUTSIDE_GREY);
+        assert_eq!(
+            distance_picture(3, &[0.5; 4], None).get_pixel(2, 0).0,
+            OUTSIDE_GREY
+        );
+        assert_eq!(diverging_picture(3, &[0.5; 4]).dimensions(), (3, 1));
     }
 }
