@@ -10,7 +10,12 @@ use common::*;
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
-use surfmap::raster::picture::Picture;
+use surfmap::render::{RgbImage, save_png};
+
+/// A `width × height` picture of one colour.
+fn solid(width: u32, height: u32, c: [u8; 3]) -> RgbImage {
+    RgbImage::from_raw(width, height, c.repeat((width * height) as usize)).unwrap()
+}
 
 /// `surfmap demo` writes `surface.obj` (no texture coordinates) and `conformal.obj`
 /// (the same surface with a flattening as `vt`).
@@ -149,18 +154,22 @@ fn texture_and_feature_mask_through_the_meshs_own_uvs() {
     let dir = temp_dir("images-mask");
     let (_, textured) = demo(&dir);
     let texture = dir.join("texture.png");
-    let mut t = Picture::new(8, 8, [200, 40, 40]);
-    t.rgb[..32].fill([40, 40, 200]); // top half blue
-    t.save_png(&texture).unwrap();
-    // Mask of the texture's size: a square region in the middle.
-    let mask = dir.join("mask.png");
-    let mut m = Picture::new(8, 8, [0, 0, 0]);
-    for y in 2..6 {
-        for x in 2..6 {
-            m.rgb[y * 8 + x] = [255, 0, 0];
+    let mut t = solid(8, 8, [200, 40, 40]);
+    for y in 0..4 {
+        for x in 0..8 {
+            t.get_pixel_mut(x, y).0 = [40, 40, 200]; // top half blue
         }
     }
-    m.save_png(&mask).unwrap();
+    save_png(&texture, &t).unwrap();
+    // Mask of the texture's size: a square region in the middle.
+    let mask = dir.join("mask.png");
+    let mut m = solid(8, 8, [0, 0, 0]);
+    for y in 2..6 {
+        for x in 2..6 {
+            m.get_pixel_mut(x, y).0 = [255, 0, 0];
+        }
+    }
+    save_png(&mask, &m).unwrap();
     let out_dir = dir.join("img");
     let out = run(&[
         textured.as_os_str(),
@@ -233,9 +242,9 @@ fn bad_input_fails_with_a_message_naming_the_problem() {
 
     // Mask of the wrong size: the message gives both sizes.
     let texture = dir.join("texture.png");
-    Picture::new(8, 4, [90, 90, 90]).save_png(&texture).unwrap();
+    save_png(&texture, &solid(8, 4, [90, 90, 90])).unwrap();
     let mask = dir.join("mask.png");
-    Picture::new(5, 3, [0, 255, 0]).save_png(&mask).unwrap();
+    save_png(&mask, &solid(5, 3, [0, 255, 0])).unwrap();
     let out = run(&[
         textured.as_os_str(),
         "-o".as_ref(),

@@ -11,13 +11,12 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use surfmap::raster::output::position_picture;
-use surfmap::raster::picture::{
-    contact_sheet, distance_picture, diverging_picture, metric_picture,
-};
+use surfmap::raster::picture::{distance_picture, diverging_picture, metric_picture};
 use surfmap::raster::{
     FeatureCurve, FeatureFile, FeatureSource, GeometryImages, GeometryImagesOptions,
 };
 use surfmap::{FlattenOptions, flatten, read_mesh};
+use surfmap::render::{contact_sheet, save_png};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -165,8 +164,7 @@ fn main() {
                         ),
                     ),
                 ];
-                contact_sheet(&tiles, 4, 320)
-                    .save_png(std::path::Path::new(out))
+                save_png(std::path::Path::new(out), &contact_sheet(&tiles, 4, 320))
                     .expect("write sheet");
                 println!("wrote {out}");
             }

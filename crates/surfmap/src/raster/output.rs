@@ -10,8 +10,9 @@ use serde::Serialize;
 use super::RasterError;
 use super::images::{GeometryImages, GeometryPyramid, SurfaceScale};
 use super::npy::save_npy;
-use super::picture::{Picture, distance_picture, diverging_picture, metric_picture};
+use super::picture::{OUTSIDE_GREY, distance_picture, diverging_picture, metric_picture};
 use crate::grid::{DomainTransform, Grid};
+use crate::render::{RgbImage, grid_image, save_png};
 
 /// `images.json`.
 #[derive(Clone, Debug, Serialize)]
@@ -55,7 +56,7 @@ pub fn write_image_set(dir: &Path, img: &GeometryImages) -> Result<ImagesManifes
     let mut put = |name: &str,
                    shape: Vec<usize>,
                    desc: &str,
-                   png: Option<Picture>,
+                   png: Option<RgbImage>,
                    write: &dyn Fn(&Path) -> std::io::Result<()>|
      -> Result<(), RasterError> {
         let npy = format!("{name}.npy");
@@ -63,7 +64,7 @@ pub fn write_image_set(dir: &Path, img: &GeometryImages) -> Result<ImagesManifes
         let png_name = match png {
             Some(p) => {
                 let f = format!("{name}.png");
-                p.save_png(&dir.join(&f))?;
+                save_png(&dir.join(&f), &p)?;
                 Some(f)
             }
             None => None,
@@ -83,7 +84,7 @@ pub fn write_image_set(dir: &Path, img: &GeometryImages) -> Result<ImagesManifes
         "mask",
         vec![n, n],
         "1 on the surface, 0 outside",
-        Some(Picture::from_grid(n, |k| {
+        Some(grid_image(n, n, |k| {
             if inside[k] == 1 { [255; 3] } else { [0; 3] }
         })),
         &|p| save_npy(p, &[n, n], &inside),
@@ -169,7 +170,7 @@ pub fn write_image_set(dir: &Path, img: &GeometryImages) -> Result<ImagesManifes
             "texture",
             vec![n, n, 3],
             "texture colour (RGB), black outside",
-            Some(Picture::from_grid(n, |k| t.as_slice()[k])),
+            Some(grid_image(n, n, |k| t.as_slice()[k])),
             &|p| save_npy(p, &[n, n, 3], t.as_slice().as_flattened()),
         )?;
     }
@@ -185,7 +186,7 @@ pub fn write_image_set(dir: &Path, img: &GeometryImages) -> Result<ImagesManifes
                 save_npy(&dir.join(&npy), &[m, m], data.as_slice())?;
                 let png = if *name == "h" {
                     let f = format!("{base}.png");
-                    diverging_picture(m, data.as_slice()).save_png(&dir.join(&f))?;
+                    save_png(&dir.join(&f), &diverging_picture(m, data.as_slice()))?;
                     Some(f)
                 } else {
                     None
@@ -222,7 +223,7 @@ pub fn write_image_set(dir: &Path, img: &GeometryImages) -> Result<ImagesManifes
 }
 
 /// Positions as RGB, each coordinate scaled to its bounding box.
-pub fn position_picture(pos: &Grid<[f64; 3]>) -> Picture {
+pub fn position_picture(pos: &Grid<[f64; 3]>) -> RgbImage {
     let n = pos.size();
     let pos = pos.as_slice();
     let mut lo = [f64::INFINITY; 3];
@@ -233,10 +234,10 @@ pub fn position_picture(pos: &Grid<[f64; 3]>) -> Picture {
             hi[c] = hi[c].max(p[c]);
         }
     }
-    Picture::from_grid(n, |k| {
+    grid_image(n, n, |k| {
         let p = pos[k];
         if !p[0].is_finite() {
-            return super::picture::OUTSIDE_GREY;
+            return OUTSIDE_GREY;
         }
         std::array::from_fn(|c| {
             (255.0 * (p[c] - lo[c]) / (hi[c] - lo[c]).max(1e-300)).round() as u8

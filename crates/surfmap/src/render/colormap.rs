@@ -1,45 +1,79 @@
-//! Colour maps and value ranges for colouring triangles by a measure, and the colour
-//! bar that explains them.
+//! Colour maps (sequential [`Colormap::Viridis`], diverging [`Colormap::BlueWhiteRed`]),
+//! value ranges that map numbers onto them ([`ColorScale`]), and the colour bar that
+//! explains them.
 
 use image::RgbImage;
 
-use super::canvas::Canvas;
+use super::canvas::{Canvas, to_rgb8};
 use super::font::{draw_text, format_number, text_height};
 
-/// Viridis, piecewise linear through 9 samples of the original map; `t ∈ [0, 1]`.
-pub fn viridis(t: f64) -> [f32; 3] {
-    const C: [[f32; 3]; 9] = [
-        [0.267, 0.005, 0.329],
-        [0.283, 0.141, 0.458],
-        [0.254, 0.265, 0.530],
-        [0.207, 0.372, 0.553],
-        [0.164, 0.471, 0.558],
-        [0.128, 0.567, 0.551],
-        [0.135, 0.659, 0.518],
-        [0.478, 0.821, 0.319],
-        [0.993, 0.906, 0.144],
-    ];
-    let t = if t.is_finite() {
-        t.clamp(0.0, 1.0)
-    } else {
-        1.0
-    };
-    let x = t * (C.len() - 1) as f64;
-    let i = (x.floor() as usize).min(C.len() - 2);
-    let f = (x - i as f64) as f32;
-    [0, 1, 2].map(|k| C[i][k] + f * (C[i + 1][k] - C[i][k]))
+/// A colour map: piecewise linear in RGB through evenly spaced stops on `t ∈ [0, 1]`
+/// (stop `k` of `n` sits at `t = k / (n − 1)`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Colormap {
+    /// Sequential, for magnitudes: matplotlib's viridis sampled at `t = k/8`; dark
+    /// purple `#440154` at 0, teal `#21918c` at ½, yellow `#fde725` at 1, luminance
+    /// increasing throughout.
+    Viridis,
+    /// Diverging, for signed values with 0 at `t = ½`: blue `(33, 77, 191)` at 0,
+    /// near-white `(247, 247, 247)` at ½, red `(191, 31, 38)` at 1.
+    BlueWhiteRed,
 }
 
-/// A value range mapped onto the colour map, linear or logarithmic.
+impl Colormap {
+    /// The stops, 8-bit RGB.
+    pub fn stops(self) -> &'static [[u8; 3]] {
+        match self {
+            Colormap::Viridis => &[
+                [0x44, 0x01, 0x54],
+                [0x47, 0x2d, 0x7b],
+                [0x3b, 0x52, 0x8b],
+                [0x2c, 0x72, 0x8e],
+                [0x21, 0x91, 0x8c],
+                [0x28, 0xae, 0x80],
+                [0x5e, 0xc9, 0x62],
+                [0xad, 0xdc, 0x30],
+                [0xfd, 0xe7, 0x25],
+            ],
+            Colormap::BlueWhiteRed => &[[33, 77, 191], [247, 247, 247], [191, 31, 38]],
+        }
+    }
+
+    /// The colour at `t` (clamped to `[0, 1]`; a non-finite `t` gives the colour at 1),
+    /// RGB in `[0, 1]`.
+    pub fn at(self, t: f64) -> [f32; 3] {
+        let c = self.stops();
+        let t = if t.is_finite() {
+            t.clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
+        let x = t * (c.len() - 1) as f64;
+        let i = (x.floor() as usize).min(c.len() - 2);
+        let f = (x - i as f64) as f32;
+        [0, 1, 2].map(|k| {
+            let (a, b) = (c[i][k] as f32, c[i + 1][k] as f32);
+            (a + f * (b - a)) / 255.0
+        })
+    }
+
+    /// [`Colormap::at`] as 8-bit RGB.
+    pub fn at_rgb8(self, t: f64) -> [u8; 3] {
+        to_rgb8(self.at(t))
+    }
+}
+
+/// A value range and the colour map it is drawn with; linear or logarithmic.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ColorScale {
     pub lo: f64,
     pub hi: f64,
     pub log: bool,
+    pub map: Colormap,
 }
 
 impl ColorScale {
-    /// Range from the 1st to the 99th percentile of the finite values (robust to a
+    /// Viridis over the 1st to the 99th percentile of the finite values (robust to a
     /// few extreme triangles); logarithmic when all are positive and span more than a
     /// factor of 10. `None` when there is no finite value.
     pub fn auto(values: &[f64]) -> Option<Self> {
@@ -56,7 +90,25 @@ impl ColorScale {
             hi += 1e-3 * m;
         }
         let log = lo > 0.0 && hi / lo > 10.0;
-        Some(Self { lo, hi, log })
+        Some(Self {
+            lo,
+            hi,
+            log,
+            map: Colormap::Viridis,
+        })
+    }
+
+    /// Blue–white–red over `[−r, r]`, linear, with `r` the `q`-quantile of the finite
+    /// values' magnitudes ([`abs_quantile`]): 0 is white, and the few values beyond
+    /// `±r` saturate.
+    pub fn symmetric(values: &[f64], q: f64) -> Self {
+        let r = abs_quantile(values.iter().copied(), q);
+        Self {
+            lo: -r,
+            hi: r,
+            log: false,
+            map: Colormap::BlueWhiteRed,
+        }
     }
 
     /// Position of `x` in `[0, 1]` (clamped; non-finite maps to 1).
@@ -72,14 +124,27 @@ impl ColorScale {
         t.clamp(0.0, 1.0)
     }
 
+    /// The colour of `x`: `map` at [`ColorScale::position`].
     pub fn color(&self, x: f64) -> [f32; 3] {
-        viridis(self.position(x))
+        self.map.at(self.position(x))
     }
 }
 
-/// Draws a vertical colour bar into the rectangle `(x, y, w, h)` of the canvas
-/// (high values on top).
-pub fn color_bar(canvas: &mut Canvas, x: f64, y: f64, w: f64, h: f64) {
+/// The `q`-quantile of the finite values' magnitudes (a robust range for signed data);
+/// 1 when there is no finite non-zero value to take it from.
+pub fn abs_quantile(values: impl Iterator<Item = f64>, q: f64) -> f64 {
+    let mut v: Vec<f64> = values.filter(|x| x.is_finite()).map(f64::abs).collect();
+    if v.is_empty() {
+        return 1.0;
+    }
+    let k = ((v.len() - 1) as f64 * q.clamp(0.0, 1.0)) as usize;
+    let (_, x, _) = v.select_nth_unstable_by(k, |a, b| a.total_cmp(b));
+    if *x > 0.0 { *x } else { 1.0 }
+}
+
+/// Draws a vertical colour bar of `map` into the rectangle `(x, y, w, h)` of the canvas
+/// (`t = 1`, the high values, on top).
+pub fn color_bar(canvas: &mut Canvas, map: Colormap, x: f64, y: f64, w: f64, h: f64) {
     let steps = 128;
     for i in 0..steps {
         let t0 = i as f64 / steps as f64;
@@ -89,7 +154,7 @@ pub fn color_bar(canvas: &mut Canvas, x: f64, y: f64, w: f64, h: f64) {
             y + h * (1.0 - t1),
             x + w,
             y + h * (1.0 - t0) + 0.01,
-            viridis(0.5 * (t0 + t1)),
+            map.at(0.5 * (t0 + t1)),
         );
     }
 }
@@ -142,14 +207,82 @@ pub fn label_color_bar(
 mod tests {
     use super::*;
 
+    /// Relative luminance (Rec. 709 weights) of an RGB colour in `[0, 1]`.
+    fn luminance(c: [f32; 3]) -> f32 {
+        0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+    }
+
     #[test]
     fn viridis_runs_dark_to_bright() {
-        let lum = |c: [f32; 3]| 0.3 * c[0] + 0.59 * c[1] + 0.11 * c[2];
         let mut prev = -1.0;
-        for i in 0..=20 {
-            let l = lum(viridis(i as f64 / 20.0));
-            assert!(l > prev);
+        for i in 0..=64 {
+            let l = luminance(Colormap::Viridis.at(i as f64 / 64.0));
+            assert!(l > prev, "luminance falls at t = {}/64", i);
             prev = l;
+        }
+    }
+
+    #[test]
+    fn maps_hit_their_documented_colours() {
+        // Endpoints and midpoint, as the docs state them (viridis: matplotlib's values).
+        let v = Colormap::Viridis;
+        assert_eq!(v.at_rgb8(0.0), [0x44, 0x01, 0x54]);
+        assert_eq!(v.at_rgb8(0.5), [0x21, 0x91, 0x8c]);
+        assert_eq!(v.at_rgb8(1.0), [0xfd, 0xe7, 0x25]);
+        let d = Colormap::BlueWhiteRed;
+        assert_eq!(d.at_rgb8(0.0), [33, 77, 191]);
+        assert_eq!(d.at_rgb8(0.5), [247, 247, 247]);
+        assert_eq!(d.at_rgb8(1.0), [191, 31, 38]);
+        // Out of range clamps; non-finite gives the top colour.
+        assert_eq!(v.at_rgb8(-3.0), v.at_rgb8(0.0));
+        assert_eq!(d.at_rgb8(7.0), d.at_rgb8(1.0));
+        assert_eq!(v.at_rgb8(f64::NAN), v.at_rgb8(1.0));
+        // Halfway between two stops is their mean (piecewise linear in RGB).
+        let (a, b) = (v.stops()[2], v.stops()[3]);
+        let mid = v.at(2.5 / 8.0);
+        for k in 0..3 {
+            assert!((mid[k] * 255.0 - 0.5 * (a[k] as f32 + b[k] as f32)).abs() < 1e-3);
+        }
+        // The diverging map is blue below ½ and red above, whiter towards ½.
+        let (lo, hi) = (d.at(0.3), d.at(0.7));
+        assert!(lo[2] > lo[0] && hi[0] > hi[2]);
+        assert!(luminance(d.at(0.4)) > luminance(d.at(0.1)));
+    }
+
+    #[test]
+    fn symmetric_scale_centres_zero_on_white() {
+        let v: Vec<f64> = (0..=100)
+            .map(|i| i as f64 - 50.0)
+            .chain([1e9, f64::NAN])
+            .collect();
+        let s = ColorScale::symmetric(&v, 0.9);
+        // |v| sorted: 0, 1, 1, 2, 2, …, 50, 50, 1e9 (102 finite values); k = 90.
+        assert_eq!((s.lo, s.hi, s.log), (-45.0, 45.0, false));
+        assert_eq!(to_rgb8(s.color(0.0)), [247, 247, 247]);
+        assert_eq!(to_rgb8(s.color(1e9)), [191, 31, 38]);
+        assert_eq!(to_rgb8(s.color(-45.0)), [33, 77, 191]);
+        // Nothing to take a range from: ±1.
+        assert_eq!(ColorScale::symmetric(&[f64::NAN, 0.0], 0.98).hi, 1.0);
+    }
+
+    #[test]
+    fn colour_bar_runs_from_the_low_colour_at_the_bottom_to_the_high_colour_on_top() {
+        for map in [Colormap::Viridis, Colormap::BlueWhiteRed] {
+            let mut c = Canvas::new(20, 140, 1, [1.0; 3]);
+            color_bar(&mut c, map, 5.0, 6.0, 10.0, 128.0);
+            let img = c.into_image();
+            let px = |y: u32| img.get_pixel(10, y).0;
+            // Each of the 128 bands is one pixel high; band i, i pixels above the
+            // bottom, holds the colour at t = (i + ½)/128.
+            let band = |i: f64| map.at_rgb8((i + 0.5) / 128.0);
+            let close = |a: [u8; 3], b: [u8; 3]| (0..3).all(|k| a[k].abs_diff(b[k]) <= 1);
+            assert!(close(px(6), band(127.0)), "{map:?} top {:?}", px(6));
+            assert!(close(px(133), band(0.0)), "{map:?} bottom {:?}", px(133));
+            assert!(close(px(70), band(63.0)), "{map:?} middle {:?}", px(70));
+            assert!(!close(px(6), px(133)));
+            // Outside the bar: background.
+            assert_eq!(img.get_pixel(2, 50).0, [255; 3]);
+            assert_eq!(img.get_pixel(10, 2).0, [255; 3]);
         }
     }
 

@@ -1,4 +1,4 @@
-//! A tiny built-in 5×7 bitmap font (digits, Latin capitals, some punctuation, α σ)
+//! A tiny built-in 5×7 bitmap font (digits, Latin capitals, some punctuation, α σ Σ γ Γ ²)
 //! for labels in pictures. Lower-case letters are drawn as capitals; characters
 //! without a glyph are drawn as a hollow box.
 
@@ -77,6 +77,8 @@ fn glyph(c: char) -> [u8; 7] {
         '√' => [0x07, 0x04, 0x04, 0x04, 0x14, 0x0C, 0x04],
         'α' => [0, 0, 0x0D, 0x12, 0x12, 0x12, 0x0D],
         'σ' => [0, 0, 0x0F, 0x12, 0x12, 0x12, 0x0C],
+        'Σ' => [0x1F, 0x10, 0x08, 0x04, 0x08, 0x10, 0x1F],
+        '²' => [0x0C, 0x02, 0x04, 0x08, 0x0E, 0, 0],
         'Γ' => [0x1F, 0x10, 0x10, 0x10, 0x10, 0x10, 0x10],
         'γ' => [0, 0, 0x11, 0x0A, 0x04, 0x04, 0x04],
         '∞' => [0, 0, 0x0A, 0x15, 0x15, 0x0A, 0],
@@ -147,6 +149,28 @@ pub fn draw_text_centered(
 /// Formats a number compactly for labels: 3–4 significant digits, exponent form for
 /// very large or small magnitudes, `INF`/`NAN` spelled out.
 pub fn format_number(x: f64) -> String {
+    if x == 0.0 {
+        return "0".into();
+    }
+    format_by_magnitude(x, 1e-3..1e5, 2, &[(100.0, 1), (1.0, 3)], 4)
+}
+
+/// At most 4 characters for a non-negative number (tables): `1.00`, `12.3`, `1234`,
+/// `1E-3`; non-finite as [`format_number`].
+pub fn format_short(x: f64) -> String {
+    format_by_magnitude(x, 1e-2..1e4, 0, &[(100.0, 0), (10.0, 1)], 2)
+}
+
+/// `x` in upper-case exponent form with `exp_decimals` decimals when `|x|` is non-zero
+/// and outside `plain`; otherwise with the decimals of the first `(bound, decimals)` step
+/// whose bound `|x|` reaches (steps in decreasing order), `last` decimals below them all.
+fn format_by_magnitude(
+    x: f64,
+    plain: std::ops::Range<f64>,
+    exp_decimals: usize,
+    steps: &[(f64, usize)],
+    last: usize,
+) -> String {
     if x.is_nan() {
         return "NAN".into();
     }
@@ -154,18 +178,14 @@ pub fn format_number(x: f64) -> String {
         return if x > 0.0 { "INF".into() } else { "-INF".into() };
     }
     let a = x.abs();
-    if a == 0.0 {
-        "0".into()
-    } else if !(1e-3..1e5).contains(&a) {
-        let s = format!("{x:.2e}");
-        s.to_uppercase()
-    } else if a >= 100.0 {
-        format!("{x:.1}")
-    } else if a >= 1.0 {
-        format!("{x:.3}")
-    } else {
-        format!("{x:.4}")
+    if a != 0.0 && !plain.contains(&a) {
+        return format!("{x:.exp_decimals$e}").to_uppercase();
     }
+    let decimals = steps
+        .iter()
+        .find(|(bound, _)| a >= *bound)
+        .map_or(last, |s| s.1);
+    format!("{x:.decimals$}")
 }
 
 #[cfg(test)]
@@ -195,21 +215,44 @@ mod tests {
         }
     }
 
+    /// Bounding box `[x0, x1) × [y0, y1)` of the pixels of colour `c`.
+    fn ink_box(img: &RgbImage, c: [u8; 3]) -> Option<[u32; 4]> {
+        img.enumerate_pixels()
+            .filter(|(_, _, p)| p.0 == c)
+            .fold(None, |b, (x, y, _)| {
+                let [x0, y0, x1, y1] = b.unwrap_or([x, y, x + 1, y + 1]);
+                Some([x0.min(x), y0.min(y), x1.max(x + 1), y1.max(y + 1)])
+            })
+    }
+
     #[test]
     fn text_is_drawn_inside_its_box_and_clipped() {
         let mut img = RgbImage::new(60, 20);
         draw_text(&mut img, 2, 3, "A1", 2, [255, 0, 0]);
         let w = text_width("A1", 2);
-        let mut lit = 0;
-        for (x, y, p) in img.enumerate_pixels() {
-            if p.0 == [255, 0, 0] {
-                lit += 1;
-                assert!(x >= 2 && x < 2 + w && y >= 3 && y < 3 + text_height(2));
-            }
-        }
+        let lit = img.pixels().filter(|p| p.0 == [255, 0, 0]).count();
+        let [x0, y0, x1, y1] = ink_box(&img, [255, 0, 0]).unwrap();
+        assert!(x0 >= 2 && x1 <= 2 + w && y0 >= 3 && y1 <= 3 + text_height(2));
         assert!(lit > 20);
+        // "H" fills its cell's outer columns and all rows, so "HH" inks exactly the box
+        // text_width × text_height at the given corner.
+        let mut img = RgbImage::new(80, 40);
+        draw_text(&mut img, 7, 11, "HH", 3, [0, 255, 0]);
+        assert_eq!(
+            ink_box(&img, [0, 255, 0]),
+            Some([7, 11, 7 + text_width("HH", 3), 11 + text_height(3)])
+        );
+        // The gap column between the two glyphs stays empty.
+        let gap = 7 + 3 * GLYPH_W;
+        assert!((11..11 + 21).all(|y| img.get_pixel(gap, y).0 != [0, 255, 0]));
+        // Centred text: its box is centred on cx (to a pixel).
+        let mut img = RgbImage::new(80, 20);
+        draw_text_centered(&mut img, 40, 2, "HIH", 1, [0, 0, 255]);
+        let [x0, _, x1, _] = ink_box(&img, [0, 0, 255]).unwrap();
+        assert!((x0 + x1) as i64 / 2 - 40 <= 1 && 40 - (x0 + x1) as i64 / 2 <= 1);
         // Far outside: nothing drawn, no panic.
         draw_text(&mut img, -500, 900, "XYZ", 3, [0, 255, 0]);
+        assert_eq!(ink_box(&img, [0, 255, 0]), None);
     }
 
     #[test]
@@ -219,5 +262,13 @@ mod tests {
         assert_eq!(format_number(123.456), "123.5");
         assert_eq!(format_number(1.5e-7), "1.50E-7");
         assert_eq!(format_number(f64::INFINITY), "INF");
+        assert_eq!(format_number(-2.5e6), "-2.50E6");
+        assert_eq!(format_number(0.0), "0");
+        assert_eq!(format_short(1.0), "1.00");
+        assert_eq!(format_short(12.34), "12.3");
+        assert_eq!(format_short(1234.0), "1234");
+        assert_eq!(format_short(0.001), "1E-3");
+        assert_eq!(format_short(0.0), "0.00");
+        assert_eq!(format_short(f64::NAN), "NAN");
     }
 }

@@ -297,4 +297,56 @@ mod tests {
         // Bad input: no panic.
         let _ = checker_render(&pos, &[[0, 1, 999]], &uv[..1], 8, "", (64, 64));
     }
+
+    #[test]
+    fn checkerboard_of_a_flat_square_alternates_across_the_known_edges() {
+        // The unit square in the plane z = 0, UVs = (x, y), 2 × 2 checks: the view looks
+        // down +z with +y up and +x right, so the cell [0, ½)² (even, light) is bottom
+        // left, [½, 1) × [0, ½) (odd, dark) bottom right, and so on.
+        let square = crate::mesh::generate::unit_square();
+        let (pos, tris) = (&square.positions, &square.triangles);
+        let uv_of = |t: &[u32; 3]| t.map(|v| [pos[v as usize][0], pos[v as usize][1]]);
+        let uv: Vec<[[f64; 2]; 3]> = tris.iter().map(uv_of).collect();
+        let img = checker_render(pos, tris, &uv, 2, "", (200, 200));
+        let [x0, y0, x1, y1] = img
+            .enumerate_pixels()
+            .filter(|(_, _, p)| p.0 != [255; 3])
+            .fold([u32::MAX, u32::MAX, 0, 0], |b, (x, y, _)| {
+                [b[0].min(x), b[1].min(y), b[2].max(x + 1), b[3].max(y + 1)]
+            });
+        let (w, h) = ((x1 - x0) as f64, (y1 - y0) as f64);
+        assert!((w - h).abs() <= 2.0 && w > 150.0, "{w} × {h}");
+        // Pixel at the point (u, v) of the square.
+        let at = |u: f64, v: f64| {
+            img.get_pixel((x0 as f64 + u * w) as u32, (y1 as f64 - v * h) as u32)
+                .0
+        };
+        // Seen head-on, Lambert shading scales both colours by 0.25 + 0.75 cos θ, with θ
+        // the angle to the light direction (1, 0.35, 0.25) in the (view, up, right) frame.
+        let shade = 0.25 + 0.75 / (1.0f64 + 0.35 * 0.35 + 0.25 * 0.25).sqrt();
+        let expect = |c: [f64; 3]| c.map(|x| (x * shade).round() as u8);
+        let (light, dark) = (expect([245.0, 240.0, 230.0]), expect([215.0, 95.0, 35.0]));
+        let near = |p: [u8; 3], q: [u8; 3]| (0..3).all(|k| p[k].abs_diff(q[k]) <= 2);
+        for (u, v, want, cell) in [
+            (0.25, 0.25, light, "bottom left"),
+            (0.75, 0.25, dark, "bottom right"),
+            (0.25, 0.75, dark, "top left"),
+            (0.75, 0.75, light, "top right"),
+        ] {
+            assert!(near(at(u, v), want), "{cell}: {:?} vs {want:?}", at(u, v));
+        }
+        // Across the check edge u = ½ the colour flips; across the mesh's diagonal edge
+        // (inside one check) it does not: the UVs interpolate continuously.
+        assert!(near(at(0.45, 0.2), light) && near(at(0.55, 0.2), dark));
+        assert!(near(at(0.3, 0.2), light) && near(at(0.2, 0.3), light));
+        assert!(near(at(0.8, 0.7), light) && near(at(0.7, 0.8), light));
+        // Mirrored UVs (u → 1 − u) swap the bottom-left check.
+        let mirrored: Vec<[[f64; 2]; 3]> =
+            uv.iter().map(|t| t.map(|p| [1.0 - p[0], p[1]])).collect();
+        let m = checker_render(pos, tris, &mirrored, 2, "", (200, 200));
+        let p = m
+            .get_pixel((x0 as f64 + 0.25 * w) as u32, (y1 as f64 - 0.25 * h) as u32)
+            .0;
+        assert!(near(p, dark), "mirrored bottom left {p:?}");
+    }
 }

@@ -6,10 +6,11 @@
 use image::RgbImage;
 
 use super::canvas::{Canvas, rgb};
-use super::font::{draw_text, draw_text_centered, format_number, text_height, text_width};
+use super::font::{
+    draw_text, draw_text_centered, format_number, format_short, text_height, text_width,
+};
 use super::surface::draw_surface;
-use super::uv_layout::{Rect, draw_layout};
-use crate::measure::jacobian::signed_uv_area;
+use super::uv_layout::{Rect, draw_layout, orientation_fill};
 use crate::measure::{
     MeasureOptions, MinMeanMax, ThesisMeasures, corner_uvs_from_vertex_uvs,
     distortion_report_per_vertex,
@@ -80,19 +81,13 @@ pub fn tradeoff_sheet(panels: &[TradeoffPanel], size: (u32, u32)) -> RgbImage {
             w: col_w - 2.0 * pad,
             h: pic_h - pad,
         };
-        let total: f64 = corners
-            .iter()
-            .map(|c| signed_uv_area(*c))
-            .filter(|a| a.is_finite())
-            .sum();
-        let o = if total < 0.0 { -1.0 } else { 1.0 };
-        draw_layout(&mut canvas, ruv, p.triangles, &corners, |t| {
-            if o * signed_uv_area(corners[t]) < 0.0 {
-                rgb(230, 40, 40)
-            } else {
-                rgb(225, 228, 235)
-            }
-        });
+        draw_layout(
+            &mut canvas,
+            ruv,
+            p.triangles,
+            &corners,
+            orientation_fill(&corners),
+        );
     }
     // Table under each panel.
     let table_y = pic_top + 2.0 * pic_h + 4.0;
@@ -107,9 +102,9 @@ pub fn tradeoff_sheet(panels: &[TradeoffPanel], size: (u32, u32)) -> RgbImage {
         {
             let text = format!(
                 "{name} {:>6} {:>6} {:>6}",
-                short(s.min),
-                short(s.mean),
-                short(s.max)
+                format_short(s.min),
+                format_short(s.mean),
+                format_short(s.max)
             );
             labels.push((x0 as i64, row(k + 1), text, false));
         }
@@ -168,23 +163,19 @@ pub fn tradeoff_sheet(panels: &[TradeoffPanel], size: (u32, u32)) -> RgbImage {
         .iter()
         .enumerate()
         {
-            let pts: Vec<Option<[f64; 2]>> = series
+            let pts: Vec<[f64; 2]> = series
                 .iter()
                 .enumerate()
                 .map(|(i, s)| {
                     s.as_ref()
                         .map(sel)
                         .filter(|v| *v > 0.0 && v.is_finite())
-                        .map(|v| [sx(i), sy(v)])
+                        .map_or([f64::NAN; 2], |v| [sx(i), sy(v)])
                 })
                 .collect();
-            for pair in pts.windows(2) {
-                if let (Some(a), Some(b)) = (pair[0], pair[1]) {
-                    canvas.line(a, b, 1.6, colors[k]);
-                }
-            }
-            for p in pts.iter().flatten() {
-                canvas.fill_rect(p[0] - 2.5, p[1] - 2.5, p[0] + 2.5, p[1] + 2.5, colors[k]);
+            canvas.polyline(&pts, 1.6, colors[k]);
+            for p in pts.iter().filter(|p| p[0].is_finite()) {
+                canvas.marker(*p, 2.5, colors[k]);
             }
         }
         labels.push((
@@ -217,23 +208,6 @@ pub fn tradeoff_sheet(panels: &[TradeoffPanel], size: (u32, u32)) -> RgbImage {
         }
     }
     img
-}
-
-/// Up to 4 significant characters for the table.
-fn short(x: f64) -> String {
-    if !x.is_finite() {
-        return format_number(x);
-    }
-    let a = x.abs();
-    if a >= 1e4 || (a < 1e-2 && a > 0.0) {
-        format!("{x:.0e}").to_uppercase()
-    } else if a >= 100.0 {
-        format!("{x:.0}")
-    } else if a >= 10.0 {
-        format!("{x:.1}")
-    } else {
-        format!("{x:.2}")
-    }
 }
 
 #[cfg(test)]
@@ -289,13 +263,5 @@ mod tests {
         }];
         let _ = tradeoff_sheet(&bad, (300, 300));
         let _ = tradeoff_sheet(&[], (300, 300));
-    }
-
-    #[test]
-    fn short_numbers() {
-        assert_eq!(short(1.0), "1.00");
-        assert_eq!(short(12.34), "12.3");
-        assert_eq!(short(1234.0), "1234");
-        assert_eq!(short(0.001), "1E-3");
     }
 }
