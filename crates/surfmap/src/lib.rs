@@ -59,4 +59,4 @@ pub mod render;
 pub mod testing;
 pub(crate) mod vec3;
 
-pub use mesh::{BoundaryLoop, Topology, TriMesh, Uvs};
+pub use mesh::{BoundaryLoop, PointLocator, SurfacePoint, Topology, TriMesh, Uvs};

@@ -4,11 +4,15 @@
 pub mod decimate;
 pub mod generate;
 pub mod io;
+pub mod locate;
 pub mod repair;
 pub mod subdivide;
+pub mod surface_point;
 pub mod topology;
 pub mod validate;
 
+pub use locate::PointLocator;
+pub use surface_point::SurfacePoint;
 pub use topology::{BoundaryLoop, Topology};
 
 /// Texture coordinates attached to a mesh.
