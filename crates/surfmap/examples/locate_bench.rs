@@ -40,14 +40,16 @@ fn brute_force(uvs: &[[f64; 2]], triangles: &[[u32; 3]], p: [f64; 2]) -> Option<
     let orient = |a: [f64; 2], b: [f64; 2], c: [f64; 2]| {
         (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
     };
-    triangles.iter().position(|t| {
-        let [a, b, c] = t.map(|v| uvs[v as usize]);
-        let area = orient(a, b, c);
-        [orient(p, b, c), orient(a, p, c), orient(a, b, p)]
-            .iter()
-            .all(|&x| x / area >= -1e-12)
-    })
-    .map(|t| t as u32)
+    triangles
+        .iter()
+        .position(|t| {
+            let [a, b, c] = t.map(|v| uvs[v as usize]);
+            let area = orient(a, b, c);
+            [orient(p, b, c), orient(a, p, c), orient(a, b, p)]
+                .iter()
+                .all(|&x| x / area >= -1e-12)
+        })
+        .map(|t| t as u32)
 }
 
 fn main() {
@@ -60,7 +62,11 @@ fn main() {
         }
     }
     let mesh = match &path {
-        Some(p) => read_mesh(std::path::Path::new(p)).expect("readable mesh").mesh,
+        Some(p) => {
+            read_mesh(std::path::Path::new(p))
+                .expect("readable mesh")
+                .mesh
+        }
         None => bumpy_disc(91, 0.5),
     };
     let map = flatten(&mesh, &FlattenOptions::default()).expect("a disc mesh");
@@ -115,6 +121,22 @@ fn main() {
             rayon::current_num_threads()
         );
     }
+    let outside: Vec<[f64; 2]> = uniform
+        .iter()
+        .copied()
+        .filter(|&p| locator.locate(p).is_none())
+        .collect();
+    let nearest = timed(runs, || {
+        for &p in &outside {
+            black_box(locator.nearest(p));
+        }
+    });
+    println!(
+        "nearest for the {} uniform points outside: {:.2} ms ({:.2} µs/point, serial)",
+        outside.len(),
+        1e3 * nearest,
+        1e6 * nearest / outside.len() as f64
+    );
     let sample = &uniform[..1000];
     let brute = timed(runs.min(3), || {
         for &p in sample {

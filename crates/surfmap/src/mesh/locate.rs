@@ -23,16 +23,22 @@
 //! in no triangle exactly) the one whose smallest `λ` is largest, with its coordinates
 //! clamped to `≥ 0` and renormalized to sum 1.
 //!
-//! **Data structure**: an adaptive bucket grid. A uniform grid over the bounding box
-//! has about as many cells as triangles (square cells); each triangle is listed in the
-//! cells its bounding box (padded by the tolerance) overlaps. A cell that still lists
-//! more than [`SPLIT_ABOVE`] triangles — where the flattening is denser than average,
-//! common after a conformal map — gets its own grid of the same kind, down to
-//! [`MAX_DEPTH`] levels, so the work per query stays bounded where the triangles are
-//! small. Building costs `O(F)` time and memory (times the depth in the worst case); a
-//! query computes one cell per level and the barycentric coordinates of the few
-//! triangles listed there, without allocating. Degenerate UV triangles (zero area) cover
-//! no point and are left out.
+//! **Data structure**: an adaptive bucket grid. A uniform grid of square cells over the
+//! bounding box has about as many cells as triangles; each triangle is listed in the
+//! cells its footprint meets (its bounding box padded by the tolerance, then a
+//! separating-axis test against its edges, so a long diagonal sliver is not listed all
+//! over its box). A cell that still lists more than [`SPLIT_ABOVE`] triangles — where
+//! the flattening is denser than average, as after a conformal map, whose triangle
+//! areas can vary by 10⁷ — gets a grid of the same kind of its own, down to
+//! [`MAX_DEPTH`] levels, unless that would not pay (fans around a vertex) or would
+//! exceed a memory budget of [`REFINE_BUDGET`] entries per triangle. On flattened scans
+//! this cuts the triangles tested per query (for points distributed like the triangles)
+//! by 3–9× against a single uniform grid (BENCHMARKS.md, "Point location").
+//!
+//! Building costs `O(F)` time and memory for triangles about the size of their cells
+//! (long thin triangles add the cells they cross). A query computes one cell per level
+//! and the barycentric coordinates of the few triangles listed there, without
+//! allocating. Degenerate UV triangles (zero area) cover no point and are left out.
 
 use rayon::prelude::*;
 
@@ -46,11 +52,11 @@ pub const TOLERANCE: f64 = 1e-12;
 /// A grid cell listing more triangles than this is refined by a grid of its own.
 pub const SPLIT_ABOVE: usize = 8;
 
-/// Largest number of nested grid levels (the top grid is level 0).
+/// Largest number of grid levels, the top grid included.
 pub const MAX_DEPTH: u32 = 8;
 
 /// All refinements together may list at most this many entries per triangle, which
-/// bounds the memory at `O(F)` whatever the mesh.
+/// bounds their memory at `O(F)` whatever the mesh.
 pub const REFINE_BUDGET: usize = 16;
 
 /// Grid cells per listed triangle.
@@ -195,8 +201,14 @@ impl Grid {
     fn cell_of(&self, p: [f64; 2]) -> [u32; 2] {
         let clamp = |x: f64, n: u32| x.max(0.0).min((n - 1) as f64) as u32;
         [
-            clamp(((p[0] - self.origin[0]) * self.inv_size[0]).floor(), self.nx),
-            clamp(((p[1] - self.origin[1]) * self.inv_size[1]).floor(), self.ny),
+            clamp(
+                ((p[0] - self.origin[0]) * self.inv_size[0]).floor(),
+                self.nx,
+            ),
+            clamp(
+                ((p[1] - self.origin[1]) * self.inv_size[1]).floor(),
+                self.ny,
+            ),
         ]
     }
 
@@ -277,14 +289,24 @@ impl PointLocator {
         let scale = lo.iter().chain(&hi).fold(0.0f64, |s, x| s.max(x.abs()));
         let mut footprints = vec![Footprint::default(); triangles.len()];
         let mut listed = Vec::with_capacity(triangles.len());
-        let mut domain = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
+        let mut domain = [
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        ];
         for (t, c) in corners.iter().enumerate() {
             if affine[t].a[0].is_nan() {
                 continue;
             }
             let mut b = [c[0][0], c[0][1], c[0][0], c[0][1]];
             for p in &c[1..] {
-                b = [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])];
+                b = [
+                    b[0].min(p[0]),
+                    b[1].min(p[1]),
+                    b[2].max(p[0]),
+                    b[3].max(p[1]),
+                ];
             }
             let pad = 1e-10 * ((b[2] - b[0]) + (b[3] - b[1])) + 8.0 * f64::EPSILON * scale;
             let b = [b[0] - pad, b[1] - pad, b[2] + pad, b[3] + pad];
@@ -502,7 +524,6 @@ impl PointLocator {
             }
         }
     }
-
 }
 
 /// Where a triangle may hold points within the tolerance: its bounding box
@@ -535,8 +556,8 @@ impl Build<'_> {
         let c = self.corners[t as usize];
         let pad = self.footprints[t as usize].pad;
         let (lo, hi) = ([lo[0] - pad, lo[1] - pad], [hi[0] + pad, hi[1] + pad]);
-        let area2 = (c[1][0] - c[0][0]) * (c[2][1] - c[0][1])
-            - (c[1][1] - c[0][1]) * (c[2][0] - c[0][0]);
+        let area2 =
+            (c[1][0] - c[0][0]) * (c[2][1] - c[0][1]) - (c[1][1] - c[0][1]) * (c[2][0] - c[0][0]);
         let sign = area2.signum();
         (0..3).all(|m| {
             let (a, b) = (c[m], c[(m + 1) % 3]);
@@ -556,7 +577,12 @@ impl Build<'_> {
     /// when it would not pay — more than half of the triangles per cell on average, as
     /// for a fan around a high-valence vertex, whose triangles all share the cell of the
     /// vertex — or when its entries would exceed the budget left.
-    fn grid(&mut self, rect: [f64; 4], tris: &[u32], depth: u32) -> Result<Option<u32>, LocateError> {
+    fn grid(
+        &mut self,
+        rect: [f64; 4],
+        tris: &[u32],
+        depth: u32,
+    ) -> Result<Option<u32>, LocateError> {
         let (w, h) = (rect[2] - rect[0], rect[3] - rect[1]);
         // Square cells, about CELLS_PER_TRIANGLE per triangle; any aspect ratio.
         let cells = (tris.len() as f64 * CELLS_PER_TRIANGLE).ceil().max(1.0);
@@ -735,8 +761,8 @@ mod tests {
     fn brute_distance(uvs: &[[f64; 2]], triangles: &[[u32; 3]], p: [f64; 2]) -> f64 {
         let segment = |a: [f64; 2], b: [f64; 2]| {
             let (ab, ap) = ([b[0] - a[0], b[1] - a[1]], [p[0] - a[0], p[1] - a[1]]);
-            let s = ((ap[0] * ab[0] + ap[1] * ab[1]) / (ab[0] * ab[0] + ab[1] * ab[1]))
-                .clamp(0.0, 1.0);
+            let s =
+                ((ap[0] * ab[0] + ap[1] * ab[1]) / (ab[0] * ab[0] + ab[1] * ab[1])).clamp(0.0, 1.0);
             (ap[0] - s * ab[0]).hypot(ap[1] - s * ab[1])
         };
         triangles
@@ -776,12 +802,17 @@ mod tests {
         l.map(|x| margin + k * x)
     }
 
-    /// Test domains: `(name, uvs, triangles)`.
-    fn domains() -> Vec<(&'static str, Vec<[f64; 2]>, Vec<[u32; 3]>)> {
+    /// A test domain: `(name, uvs, triangles)`.
+    type Domain = (&'static str, Vec<[f64; 2]>, Vec<[u32; 3]>);
+
+    fn domains() -> Vec<Domain> {
         let disc = polar_disc(12, 40);
         let grid = grid_disc(16);
         // Very anisotropic: the grid stretched to 1000 × 0.001.
-        let thin = xy(&grid).iter().map(|p| [1e3 * p[0], 1e-3 * p[1]]).collect();
+        let thin = xy(&grid)
+            .iter()
+            .map(|p| [1e3 * p[0], 1e-3 * p[1]])
+            .collect();
         // Mirrored (clockwise triangles).
         let mirrored = xy(&disc).iter().map(|p| [-p[0], p[1]]).collect();
         // Graded: r → r³ makes the center triangles ~10⁶ times smaller in area.
@@ -805,7 +836,11 @@ mod tests {
             ("spiral", spiral_uvs, spiral_tris),
             ("annulus", annulus_uvs, annulus_tris),
             ("conformal annulus", conformal.0, conformal.1),
-            ("flattened bumpy disc", flattened_bumpy_disc(), bumpy_disc(10, 0.4).triangles),
+            (
+                "flattened bumpy disc",
+                flattened_bumpy_disc(),
+                bumpy_disc(10, 0.4).triangles,
+            ),
         ]
     }
 
@@ -838,7 +873,10 @@ mod tests {
         let tris = disc
             .triangles
             .iter()
-            .filter(|t| t.iter().all(|&v| uvs[v as usize][0].hypot(uvs[v as usize][1]) > 0.35))
+            .filter(|t| {
+                t.iter()
+                    .all(|&v| uvs[v as usize][0].hypot(uvs[v as usize][1]) > 0.35)
+            })
             .copied()
             .collect();
         (uvs, tris)
@@ -862,10 +900,15 @@ mod tests {
                 samples.extend((0..4).map(|_| random_interior(&mut rng, 1e-6)));
                 for l in samples {
                     let p = [0, 1].map(|k| l[0] * c[0][k] + l[1] * c[1][k] + l[2] * c[2][k]);
-                    let s = locator.locate(p).unwrap_or_else(|| panic!("{name}: {p:?} lost"));
+                    let s = locator
+                        .locate(p)
+                        .unwrap_or_else(|| panic!("{name}: {p:?} lost"));
                     assert_eq!(s.triangle as usize, t, "{name}: {p:?}");
                     for m in 0..3 {
-                        assert!((s.barycentric[m] - l[m]).abs() < 1e-9, "{name}: {s:?} vs {l:?}");
+                        assert!(
+                            (s.barycentric[m] - l[m]).abs() < 1e-9,
+                            "{name}: {s:?} vs {l:?}"
+                        );
                     }
                     assert_reconstructs(&uvs, &tris, s, p);
                 }
@@ -882,13 +925,20 @@ mod tests {
                 for m in 0..3 {
                     let (a, b) = (uvs[tri[m] as usize], uvs[tri[(m + 1) % 3] as usize]);
                     // The vertex itself: found in a triangle that has it as a corner.
-                    let s = locator.locate(a).unwrap_or_else(|| panic!("{name}: vertex {a:?}"));
+                    let s = locator
+                        .locate(a)
+                        .unwrap_or_else(|| panic!("{name}: vertex {a:?}"));
                     let at = tris[s.triangle as usize].iter().position(|&v| v == tri[m]);
-                    assert!(at.is_some_and(|k| s.barycentric[k] > 1.0 - 1e-9), "{name}: {s:?}");
+                    assert!(
+                        at.is_some_and(|k| s.barycentric[k] > 1.0 - 1e-9),
+                        "{name}: {s:?}"
+                    );
                     // Points of the edge, rounded as computed.
                     for t in [0.5, rng.uniform(), rng.uniform()] {
                         let p = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])];
-                        let s = locator.locate(p).unwrap_or_else(|| panic!("{name}: edge {p:?}"));
+                        let s = locator
+                            .locate(p)
+                            .unwrap_or_else(|| panic!("{name}: edge {p:?}"));
                         assert_reconstructs(&uvs, &tris, s, p);
                         assert!(brute_containing(&uvs, &tris, p).contains(&s.triangle));
                         assert_eq!(locator.locate(p), Some(s), "deterministic");
@@ -908,7 +958,12 @@ mod tests {
             let r = rng.range(1.0 + 1e-9, 3.0);
             assert_eq!(locator.locate([r * angle.cos(), r * angle.sin()]), None);
         }
-        for p in [[1e300, 0.0], [f64::NAN, 0.0], [0.0, f64::INFINITY], [-5.0, -5.0]] {
+        for p in [
+            [1e300, 0.0],
+            [f64::NAN, 0.0],
+            [0.0, f64::INFINITY],
+            [-5.0, -5.0],
+        ] {
             assert_eq!(locator.locate(p), None, "{p:?}");
         }
         // The annulus: the hole (r < 0.35·cos(π/48), inside its inner polygon) is outside.
@@ -967,7 +1022,10 @@ mod tests {
             }
         }
         let tri = tris[s.triangle as usize];
-        let support: Vec<u32> = (0..3).filter(|&m| s.barycentric[m] > 0.0).map(|m| tri[m]).collect();
+        let support: Vec<u32> = (0..3)
+            .filter(|&m| s.barycentric[m] > 0.0)
+            .map(|m| tri[m])
+            .collect();
         match support[..] {
             [v] => uses.iter().any(|(e, &n)| n == 1 && (e.0 == v || e.1 == v)),
             [a, b] => uses[&(a.min(b), a.max(b))] == 1,
@@ -1025,7 +1083,10 @@ mod tests {
         let mut uvs = Vec::new();
         for j in 0..=m {
             for i in 0..n {
-                let (s, theta) = (-7.0 * j as f64 / m as f64, std::f64::consts::TAU * i as f64 / n as f64);
+                let (s, theta) = (
+                    -7.0 * j as f64 / m as f64,
+                    std::f64::consts::TAU * i as f64 / n as f64,
+                );
                 uvs.push([s.exp() * theta.cos(), s.exp() * theta.sin()]);
             }
         }
@@ -1083,14 +1144,23 @@ mod tests {
         for _ in 0..1000 {
             let p = rng.point(0.7);
             let s = locator.locate(p).unwrap();
-            assert_eq!(brute_containing(&xy(&fan), &fan.triangles, p), vec![s.triangle]);
+            assert_eq!(
+                brute_containing(&xy(&fan), &fan.triangles, p),
+                vec![s.triangle]
+            );
         }
     }
 
     #[test]
     fn bounds_are_the_uvs_of_the_triangles() {
         // Vertex 4 is unused: its (even non-finite) UV does not count.
-        let uvs = [[0.0, -1.0], [2.0, 0.0], [1.0, 3.0], [0.5, 0.5], [f64::NAN, 9.0]];
+        let uvs = [
+            [0.0, -1.0],
+            [2.0, 0.0],
+            [1.0, 3.0],
+            [0.5, 0.5],
+            [f64::NAN, 9.0],
+        ];
         let locator = PointLocator::new(&uvs, &[[0, 1, 2], [0, 2, 3]]).unwrap();
         assert_eq!(locator.bounds(), ([0.0, -1.0], [2.0, 3.0]));
     }
@@ -1109,7 +1179,10 @@ mod tests {
     #[test]
     fn bad_input_is_named() {
         let uvs = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
-        assert_eq!(PointLocator::new(&uvs, &[]).unwrap_err(), LocateError::NoTriangles);
+        assert_eq!(
+            PointLocator::new(&uvs, &[]).unwrap_err(),
+            LocateError::NoTriangles
+        );
         let err = PointLocator::new(&uvs, &[[0, 1, 2], [0, 2, 7]]).unwrap_err();
         assert_eq!(
             err,
@@ -1119,10 +1192,19 @@ mod tests {
                 num_uvs: 3
             }
         );
-        assert!(err.to_string().contains("triangle 1 uses vertex 7"), "{err}");
+        assert!(
+            err.to_string().contains("triangle 1 uses vertex 7"),
+            "{err}"
+        );
         let nan = [[0.0, 0.0], [1.0, f64::NAN], [0.0, 1.0]];
         let err = PointLocator::new(&nan, &[[0, 1, 2]]).unwrap_err();
-        assert_eq!(err, LocateError::NonFiniteUv { vertex: 1, triangle: 0 });
+        assert_eq!(
+            err,
+            LocateError::NonFiniteUv {
+                vertex: 1,
+                triangle: 0
+            }
+        );
         assert!(err.to_string().contains("vertex 1"), "{err}");
         let line = [[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]];
         let err = PointLocator::new(&line, &[[0, 1, 2], [1, 1, 2]]).unwrap_err();
