@@ -978,20 +978,23 @@ mod tests {
         }
     }
 
+    /// A uniformly random point of the locator's bounds grown by `margin` times their
+    /// size on every side.
+    fn random_around(rng: &mut Rng, locator: &PointLocator, margin: f64) -> [f64; 2] {
+        let (lo, hi) = locator.bounds();
+        [0, 1].map(|k| {
+            let grow = margin * (hi[k] - lo[k]);
+            rng.range(lo[k] - grow, hi[k] + grow)
+        })
+    }
+
     #[test]
     fn locate_many_agrees_with_brute_force() {
         let mut rng = Rng(2024);
         for (name, uvs, tris) in domains() {
             let locator = PointLocator::new(&uvs, &tris).unwrap();
-            let (lo, hi) = locator.bounds();
-            let (w, h) = (hi[0] - lo[0], hi[1] - lo[1]);
             let points: Vec<[f64; 2]> = (0..10_000)
-                .map(|_| {
-                    [
-                        rng.range(lo[0] - 0.1 * w, hi[0] + 0.1 * w),
-                        rng.range(lo[1] - 0.1 * h, hi[1] + 0.1 * h),
-                    ]
-                })
+                .map(|_| random_around(&mut rng, &locator, 0.1))
                 .collect();
             let found = locator.locate_many(&points);
             let inside = found.iter().flatten().count();
@@ -1038,14 +1041,9 @@ mod tests {
         let mut rng = Rng(99);
         for (name, uvs, tris) in domains() {
             let locator = PointLocator::new(&uvs, &tris).unwrap();
-            let (lo, hi) = locator.bounds();
-            let (w, h) = (hi[0] - lo[0], hi[1] - lo[1]);
             let mut outside = 0;
             for _ in 0..400 {
-                let p = [
-                    rng.range(lo[0] - 0.5 * w, hi[0] + 0.5 * w),
-                    rng.range(lo[1] - 0.5 * h, hi[1] + 0.5 * h),
-                ];
+                let p = random_around(&mut rng, &locator, 0.5);
                 let n = locator.nearest(p).unwrap();
                 let expected = brute_distance(&uvs, &tris, p);
                 assert!(
