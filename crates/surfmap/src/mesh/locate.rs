@@ -33,7 +33,8 @@
 //! [`MAX_DEPTH`] levels, unless that would not pay (fans around a vertex) or would
 //! exceed a memory budget of [`REFINE_BUDGET`] entries per triangle. On flattened scans
 //! this cuts the triangles tested per query (for points distributed like the triangles)
-//! by 3–9× against a single uniform grid (BENCHMARKS.md, "Point location").
+//! by 2–5× against a single uniform grid, for 1.3–1.6 grid levels per query on average
+//! (BENCHMARKS.md, "Point location").
 //!
 //! Building costs `O(F)` time and memory for triangles about the size of their cells
 //! (long thin triangles add the cells they cross). A query computes one cell per level
@@ -50,7 +51,7 @@ use super::SurfacePoint;
 pub const TOLERANCE: f64 = 1e-12;
 
 /// A grid cell listing more triangles than this is refined by a grid of its own.
-pub const SPLIT_ABOVE: usize = 8;
+pub const SPLIT_ABOVE: usize = 16;
 
 /// Largest number of grid levels, the top grid included.
 pub const MAX_DEPTH: u32 = 8;
@@ -195,20 +196,15 @@ struct Grid {
 }
 
 impl Grid {
-    /// The cell of `p`, clamped into the grid. Monotone in each coordinate, so a
-    /// triangle whose bounding box contains `p` is listed in `p`'s cell.
+    /// The cell of `p`, clamped into the grid: `⌊(p − origin) / size⌋` per axis. The
+    /// saturating cast truncates, which is the floor for the non-negative values that
+    /// are not clamped to 0 anyway. Monotone in each coordinate, so a triangle whose
+    /// bounding box contains `p` is listed in `p`'s cell.
     #[inline(always)]
     fn cell_of(&self, p: [f64; 2]) -> [u32; 2] {
-        let clamp = |x: f64, n: u32| x.max(0.0).min((n - 1) as f64) as u32;
         [
-            clamp(
-                ((p[0] - self.origin[0]) * self.inv_size[0]).floor(),
-                self.nx,
-            ),
-            clamp(
-                ((p[1] - self.origin[1]) * self.inv_size[1]).floor(),
-                self.ny,
-            ),
+            (((p[0] - self.origin[0]) * self.inv_size[0]) as u32).min(self.nx - 1),
+            (((p[1] - self.origin[1]) * self.inv_size[1]) as u32).min(self.ny - 1),
         ]
     }
 
@@ -243,11 +239,12 @@ impl PointLocator {
     /// The flattening should be flip-free (an injective map); if triangles overlap,
     /// [`Self::locate`] returns the lowest-index one containing the point.
     pub fn new(uvs: &[[f64; 2]], triangles: &[[u32; 3]]) -> Result<Self, LocateError> {
-        Self::with_depth(uvs, triangles, MAX_DEPTH)
+        Self::with_max_depth(uvs, triangles, MAX_DEPTH)
     }
 
-    /// [`Self::new`] with at most `max_depth` grid levels (1: a uniform grid).
-    fn with_depth(
+    /// [`Self::new`] with at most `max_depth` grid levels instead of [`MAX_DEPTH`]
+    /// (`1`, or `0`, gives a single uniform grid: for comparisons).
+    pub fn with_max_depth(
         uvs: &[[f64; 2]],
         triangles: &[[u32; 3]],
         max_depth: u32,
@@ -342,6 +339,16 @@ impl PointLocator {
             cells,
             entries,
         })
+    }
+
+    /// Heap memory held by the locator, in bytes (about 120–150 per triangle).
+    pub fn memory_bytes(&self) -> usize {
+        use std::mem::size_of;
+        self.affine.len() * size_of::<Affine>()
+            + self.corners.len() * size_of::<[[f64; 2]; 3]>()
+            + self.grids.len() * size_of::<Grid>()
+            + self.cells.len() * size_of::<Cell>()
+            + self.entries.len() * size_of::<u32>()
     }
 
     /// Bounding box `(min, max)` of the UVs of the triangles' vertices.
@@ -1116,7 +1123,7 @@ mod tests {
             total as f64 / tris.len() as f64
         };
         let refined = PointLocator::new(&uvs, &tris).unwrap();
-        let uniform = PointLocator::with_depth(&uvs, &tris, 1).unwrap();
+        let uniform = PointLocator::with_max_depth(&uvs, &tris, 1).unwrap();
         assert_eq!(uniform.grids.len(), 1);
         let (r, u) = (mean_candidates(&refined), mean_candidates(&uniform));
         eprintln!(
@@ -1129,7 +1136,7 @@ mod tests {
         // A fan of 2000 triangles around one vertex: refining cannot separate them
         // there, and the refinements stay within their budget.
         let fan = polar_disc(1, 2000);
-        let uniform = PointLocator::with_depth(&xy(&fan), &fan.triangles, 1).unwrap();
+        let uniform = PointLocator::with_max_depth(&xy(&fan), &fan.triangles, 1).unwrap();
         let locator = PointLocator::new(&xy(&fan), &fan.triangles).unwrap();
         eprintln!(
             "fan: {} grids, {} entries (uniform grid {})",

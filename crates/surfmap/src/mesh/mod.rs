@@ -1,5 +1,6 @@
 //! Triangle meshes: positions and triangles (connectivity kept apart from derived
-//! topology), file input/output, validation and opt-in repairs.
+//! topology), file input/output, validation and opt-in repairs; points on a mesh
+//! ([`SurfacePoint`]) and their location in a flattening ([`PointLocator`]).
 
 pub mod decimate;
 pub mod generate;
