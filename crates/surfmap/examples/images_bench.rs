@@ -15,8 +15,8 @@ use surfmap::raster::picture::{distance_picture, diverging_picture, metric_pictu
 use surfmap::raster::{
     FeatureCurve, FeatureFile, FeatureSource, GeometryImages, GeometryImagesOptions,
 };
-use surfmap::{FlattenOptions, flatten, read_mesh};
 use surfmap::render::{contact_sheet, save_png};
+use surfmap::{FlattenOptions, flatten, read_mesh};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();

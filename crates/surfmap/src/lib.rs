@@ -99,7 +99,9 @@ pub use measure::{
     DistortionReport, MeasureError, MeasureOptions, distortion_report, distortion_report_per_vertex,
 };
 pub use mesh::io::{MeshFile, read_mesh, write_mesh, write_obj};
-pub use mesh::{BoundaryLoop, Disc, IndexError, NotADisc, Topology, TriMesh, Uvs};
+pub use mesh::{
+    BoundaryLoop, Disc, IndexError, NotADisc, PointLocator, SurfacePoint, Topology, TriMesh, Uvs,
+};
 pub use param::flatten::{
     CoarseLevel, FlattenError, FlattenOptions, Flattening, IterationLog, Multilevel,
     NewtonSettings, Start, StartMap, StopReason, flatten, flatten_with_progress,

@@ -1,17 +1,22 @@
 //! Triangle meshes: positions and triangles (connectivity kept apart from derived
 //! topology), file input/output, validation, the validated [`Disc`], opt-in repairs and
-//! decimation.
+//! decimation; points on a mesh ([`SurfacePoint`]) and their location in a flattening
+//! ([`PointLocator`]).
 
 pub mod decimate;
 pub mod disc;
 pub mod generate;
 pub mod io;
+pub mod locate;
 pub mod repair;
 pub mod subdivide;
+pub mod surface_point;
 pub mod topology;
 pub mod validate;
 
 pub use disc::{Disc, NotADisc, PositionError};
+pub use locate::PointLocator;
+pub use surface_point::SurfacePoint;
 pub use topology::{BoundaryLoop, Topology};
 
 use crate::vec3::{cross3, norm3, sub3};
