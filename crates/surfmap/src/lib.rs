@@ -85,6 +85,7 @@ pub mod fsutil;
 pub mod grid;
 #[doc(hidden)]
 pub mod linsolve;
+pub mod matching;
 pub mod measure;
 pub mod mesh;
 pub mod param;

@@ -1,0 +1,480 @@
+//! The multiscale matching driver (thesis §3.2.4, Fig. 3.7) with the initial
+//! alignment of the two parameter domains.
+//!
+//! Levels `k = k₀ … K` live on `(2^k + 1)²` grids; level `k` uses images filtered with
+//! `σ_k = 2^−k` (the finest unfiltered) and the cut-off width `ε_k = 2^{1−k}` (thesis:
+//! `ε = 2σ_k`; on the finest level, where `σ = 0`, two grid cells). Each level is
+//! minimized by [`super::ncg`] and prolongated (exactly, as a P1 map) to the next.
+//!
+//! Alignment: both flattenings preserve orientation, so ω_A and ω_B differ by a
+//! similarity of the plane. With paired landmarks or features it is their
+//! least-squares fit; otherwise rotations of ω_A about its centroid are tried at the
+//! coarse levels and the lowest energy (per matched area) is kept.
+
+use serde::Serialize;
+
+use super::MatchError;
+use super::deformation::{Deformation, node};
+use super::energy::{B_SD, B_X, Betas, LevelEnergy, Similarity3, chi};
+use super::ncg::{LevelLog, NcgSettings, minimize};
+use super::precondition::SobolevPreconditioner;
+use super::similarity::{Similarity2, fit_similarity_2d, fit_similarity_3d};
+use super::surface::MatchSurface;
+use crate::mesh::TriMesh;
+use crate::raster::{FeatureCurve, FeatureFile};
+
+/// How the initial similarity between ω_A and ω_B is found.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Align {
+    /// From the features/landmarks when given, else by searching rotations.
+    #[default]
+    Auto,
+    /// From the features/landmarks (an error without them).
+    Features,
+    /// Search rotations even when features are given.
+    Search,
+    /// The domains as placed in ω (the thesis's "rough alignment").
+    None,
+}
+
+/// Paired landmark points: `a[i]` on A corresponds to `b[i]` on B.
+#[derive(Clone, Debug, PartialEq, serde::Deserialize, Serialize)]
+pub struct Landmarks {
+    pub names: Vec<String>,
+    #[serde(rename = "A")]
+    pub a: Vec<u32>,
+    #[serde(rename = "B")]
+    pub b: Vec<u32>,
+}
+
+/// Optional user guidance, paired by name between A and B.
+#[derive(Clone, Debug, Default)]
+pub struct Guidance {
+    pub landmarks: Option<Landmarks>,
+    pub features_a: Option<FeatureFile>,
+    pub features_b: Option<FeatureFile>,
+}
+
+/// Options of [`match_surfaces`].
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct MatchOptions {
+    /// Finest grid, `2^K + 1` nodes per side.
+    pub size: usize,
+    /// Coarsest level `k₀` (grid `2^k₀ + 1`).
+    pub coarsest_level: usize,
+    pub betas: Betas,
+    /// `(αl, αa)` of the regularization density (2.8).
+    pub alpha: (f64, f64),
+    /// Factor of B's metric far outside ω_B (thesis §2.2.5: a "softer" material).
+    pub soft: f64,
+    pub ncg: NcgSettings,
+    pub align: Align,
+    /// Rotations tried by the alignment search.
+    pub align_rotations: usize,
+    /// Levels (from `k₀`) solved for every rotation tried.
+    pub align_levels: usize,
+    /// Fill holes (eyes, mouth) for the flattenings.
+    pub fill_holes: bool,
+    /// Let the position term's similarity scale (else a rigid motion).
+    pub allow_scale: bool,
+    /// Sobolev preconditioner width in grid cells of each level (`λ = (w·h_k)²`);
+    /// 0: plain L² gradients, as the thesis.
+    pub sobolev_cells: f64,
+}
+
+impl Default for MatchOptions {
+    fn default() -> Self {
+        Self {
+            size: 257,
+            coarsest_level: 3,
+            betas: Betas {
+                bend: 1.0,
+                reg: 0.01,
+                features: 5.0,
+                position: 100.0,
+            },
+            alpha: (0.5, 0.5),
+            soft: 0.1,
+            ncg: NcgSettings::default(),
+            align: Align::Auto,
+            align_rotations: 12,
+            align_levels: 2,
+            fill_holes: true,
+            allow_scale: true,
+            sobolev_cells: 4.0,
+        }
+    }
+}
+
+/// The alignment that was used.
+#[derive(Clone, Debug, Serialize)]
+pub struct AlignmentReport {
+    pub method: String,
+    pub similarity: Similarity2,
+    /// Rotations tried (degrees) and the score of each (search only).
+    pub candidates: Vec<(f64, f64)>,
+}
+
+/// A computed match.
+#[derive(Clone, Debug)]
+pub struct SurfaceMatch {
+    pub a: MatchSurface,
+    pub b: MatchSurface,
+    /// φ on the finest grid.
+    pub deformation: Deformation,
+    pub levels: Vec<LevelLog>,
+    pub alignment: AlignmentReport,
+    /// The position term's similarity at the end (A's ℓ units → B's ℓ units).
+    pub similarity: Similarity3,
+    pub min_det: f64,
+    pub seconds_solve: f64,
+}
+
+/// `ε_k` of level `k`.
+fn epsilon(k: usize) -> f64 {
+    2.0 * 0.5f64.powi(k as i32)
+}
+
+/// Pairs the features of A and B by name (landmarks become point features named
+/// `landmark:NAME`); returns both feature files and, for the alignment, the paired
+/// domain positions (feature centroids).
+fn paired_features(
+    a: &TriMesh,
+    b: &TriMesh,
+    g: &Guidance,
+) -> Result<(Option<FeatureFile>, Option<FeatureFile>), MatchError> {
+    let mut fa: Vec<FeatureCurve> = g.features_a.as_ref().map_or(vec![], |f| f.features.clone());
+    let mut fb: Vec<FeatureCurve> = g.features_b.as_ref().map_or(vec![], |f| f.features.clone());
+    for f in &fa {
+        if !fb.iter().any(|x| x.name == f.name) {
+            return Err(MatchError::Guidance(format!(
+                "feature '{}' is given on A but not on B; features are paired by name",
+                f.name
+            )));
+        }
+    }
+    for f in &fb {
+        if !fa.iter().any(|x| x.name == f.name) {
+            return Err(MatchError::Guidance(format!(
+                "feature '{}' is given on B but not on A; features are paired by name",
+                f.name
+            )));
+        }
+    }
+    fb.sort_by_key(|f| fa.iter().position(|x| x.name == f.name));
+    if let Some(lm) = &g.landmarks {
+        if lm.a.len() != lm.b.len() || lm.a.len() != lm.names.len() {
+            return Err(MatchError::Guidance(format!(
+                "landmarks: {} names, {} ids on A, {} on B; give one id per name on each surface",
+                lm.names.len(),
+                lm.a.len(),
+                lm.b.len()
+            )));
+        }
+        for (i, name) in lm.names.iter().enumerate() {
+            for (side, ids, mesh) in [("A", &lm.a, a), ("B", &lm.b, b)] {
+                if ids[i] as usize >= mesh.num_vertices() {
+                    return Err(MatchError::Guidance(format!(
+                        "landmark '{name}': vertex {} of {side} does not exist ({side} has {} vertices)",
+                        ids[i],
+                        mesh.num_vertices()
+                    )));
+                }
+            }
+            fa.push(FeatureCurve {
+                name: format!("landmark:{name}"),
+                vertices: vec![lm.a[i]],
+                closed: false,
+            });
+            fb.push(FeatureCurve {
+                name: format!("landmark:{name}"),
+                vertices: vec![lm.b[i]],
+                closed: false,
+            });
+        }
+    }
+    if fa.is_empty() {
+        return Ok((None, None));
+    }
+    Ok((
+        Some(FeatureFile { features: fa }),
+        Some(FeatureFile { features: fb }),
+    ))
+}
+
+/// Domain centroid of every feature of a surface.
+fn feature_centroids(s: &MatchSurface, f: &FeatureFile) -> Vec<[f64; 2]> {
+    f.features
+        .iter()
+        .map(|c| {
+            let mut m = [0.0; 2];
+            for &v in &c.vertices {
+                let p = s.vertex_domain_position(v as usize);
+                m[0] += p[0];
+                m[1] += p[1];
+            }
+            let k = c.vertices.len() as f64;
+            [m[0] / k, m[1] / k]
+        })
+        .collect()
+}
+
+/// Matches surface A onto surface B.
+pub fn match_surfaces(
+    mesh_a: &TriMesh,
+    mesh_b: &TriMesh,
+    guidance: &Guidance,
+    options: &MatchOptions,
+) -> Result<SurfaceMatch, MatchError> {
+    let (fa, fb) = paired_features(mesh_a, mesh_b, guidance)?;
+    let (sa, sb) = rayon::join(
+        || MatchSurface::new(mesh_a, fa.as_ref(), options.size, options.fill_holes),
+        || MatchSurface::new(mesh_b, fb.as_ref(), options.size, options.fill_holes),
+    );
+    let (sa, sb) = (sa?, sb?);
+    solve(sa, sb, fa.as_ref(), fb.as_ref(), options)
+}
+
+/// The multiscale solve on prepared surfaces.
+pub fn solve(
+    sa: MatchSurface,
+    sb: MatchSurface,
+    fa: Option<&FeatureFile>,
+    fb: Option<&FeatureFile>,
+    options: &MatchOptions,
+) -> Result<SurfaceMatch, MatchError> {
+    let clock = std::time::Instant::now();
+    let top = sa.num_levels() - 1;
+    if options.coarsest_level > top {
+        return Err(MatchError::Option(format!(
+            "coarsest level {} is finer than the finest grid (level {top})",
+            options.coarsest_level
+        )));
+    }
+    let features: Vec<usize> = (0..sa.feature_names.len()).collect();
+    let solver = Solver {
+        a: &sa,
+        b: &sb,
+        features: &features,
+        options,
+    };
+    let k0 = options.coarsest_level;
+    let (ca, area_a) = sa.domain_centroid_and_area();
+    let (cb, area_b) = sb.domain_centroid_and_area();
+    let scale = (area_b / area_a).sqrt();
+    let use_features = match options.align {
+        Align::Features => {
+            if fa.is_none() {
+                return Err(MatchError::Guidance(
+                    "alignment from features needs features or landmarks".into(),
+                ));
+            }
+            true
+        }
+        Align::Auto => fa.is_some(),
+        Align::Search | Align::None => false,
+    };
+    let mut levels = vec![];
+    let (mut phi, mut similarity, alignment, start_level) = if use_features {
+        let pa = feature_centroids(&sa, fa.unwrap());
+        let pb = feature_centroids(&sb, fb.unwrap());
+        let s = if pa.len() >= 2 {
+            fit_similarity_2d(&pa, &pb).ok_or_else(|| {
+                MatchError::Guidance("the features/landmarks of A all lie at one point".into())
+            })?
+        } else {
+            Similarity2::about(pa[0], 0.0, scale, pb[0])
+        };
+        let phi = Deformation::from_map(sa.level_size(k0), |p| s.apply(p));
+        let report = AlignmentReport {
+            method: "features".into(),
+            similarity: s,
+            candidates: vec![],
+        };
+        (phi, Similarity3::identity(), report, k0)
+    } else if options.align == Align::None {
+        let s = Similarity2::identity();
+        let phi = Deformation::identity(sa.level_size(k0));
+        let report = AlignmentReport {
+            method: "none".into(),
+            similarity: s,
+            candidates: vec![],
+        };
+        (phi, Similarity3::identity(), report, k0)
+    } else {
+        // Rotation search at the coarse levels.
+        let last = (k0 + options.align_levels.max(1) - 1).min(top);
+        let mut best: Option<(f64, Deformation, Similarity3, Similarity2, Vec<LevelLog>)> = None;
+        let mut candidates = vec![];
+        for r in 0..options.align_rotations.max(1) {
+            let angle = 2.0 * std::f64::consts::PI * r as f64 / options.align_rotations.max(1) as f64;
+            let s = Similarity2::about(ca, angle, scale, cb);
+            let mut phi = Deformation::from_map(sa.level_size(k0), |p| s.apply(p));
+            let mut sim = Similarity3::identity();
+            let mut logs = vec![];
+            for k in k0..=last {
+                if k > k0 {
+                    phi = phi.prolongate();
+                }
+                logs.push(solver.level(k, &mut phi, &mut sim));
+            }
+            let score = solver.alignment_score(last, &phi, &sim);
+            candidates.push((angle.to_degrees(), score));
+            if best.as_ref().is_none_or(|b| score < b.0) {
+                best = Some((score, phi, sim, s, logs));
+            }
+        }
+        let (_, phi, sim, s, logs) = best.unwrap();
+        levels.extend(logs);
+        let report = AlignmentReport {
+            method: "rotation search".into(),
+            similarity: s,
+            candidates,
+        };
+        (phi, sim, report, last + 1)
+    };
+    for k in start_level..=top {
+        if k > k0 {
+            phi = phi.prolongate();
+        }
+        levels.push(solver.level(k, &mut phi, &mut similarity));
+    }
+    let min_det = phi.min_jacobian_determinant();
+    Ok(SurfaceMatch {
+        a: sa,
+        b: sb,
+        deformation: phi,
+        levels,
+        alignment,
+        similarity,
+        min_det,
+        seconds_solve: clock.elapsed().as_secs_f64(),
+    })
+}
+
+struct Solver<'s> {
+    a: &'s MatchSurface,
+    b: &'s MatchSurface,
+    features: &'s [usize],
+    options: &'s MatchOptions,
+}
+
+impl Solver<'_> {
+    fn energy(&self, k: usize, similarity: Similarity3) -> LevelEnergy {
+        let eps = epsilon(k);
+        LevelEnergy {
+            a: self.a.level_a(k, eps, self.features),
+            b: self.b.level_b(k, eps, self.options.soft, self.features),
+            epsilon: eps,
+            betas: self.options.betas,
+            alpha: self.options.alpha,
+            similarity,
+        }
+    }
+
+    /// Minimizes level `k` from `phi` (already on level k's grid).
+    fn level(&self, k: usize, phi: &mut Deformation, similarity: &mut Similarity3) -> LevelLog {
+        let mut energy = self.energy(k, *similarity);
+        let allow_scale = self.options.allow_scale;
+        let position = self.options.betas.position != 0.0;
+        let mut refit = |e: &mut LevelEnergy, phi: &Deformation| {
+            if position {
+                if let Some(s) = fit_position_similarity(e, phi, allow_scale) {
+                    e.similarity = s;
+                }
+            }
+        };
+        let n = phi.size;
+        let w = self.options.sobolev_cells / (n - 1) as f64;
+        let precondition = (w > 0.0).then(|| SobolevPreconditioner::new(n, w * w));
+        let log = minimize(
+            &mut energy,
+            phi,
+            &self.options.ncg,
+            k,
+            precondition.as_ref(),
+            &mut refit,
+        );
+        *similarity = energy.similarity;
+        log
+    }
+
+    /// Candidate score of the alignment search: data energy per matched area plus the
+    /// regularization.
+    fn alignment_score(&self, k: usize, phi: &Deformation, sim: &Similarity3) -> f64 {
+        let e = self.energy(k, *sim);
+        let n = e.size();
+        let mut grad = vec![[0.0; 2]; n * n];
+        let t = e.evaluate(&phi.displacement, &mut grad);
+        let (mut matched, mut total) = (0.0, 0.0);
+        for q in 0..n * n {
+            let w = e.a.weight[q] * e.a.chi[q];
+            total += w;
+            let s = e.b.field.value(phi.at(q));
+            matched += w * chi(s[B_SD], e.epsilon).0;
+        }
+        let coverage = matched / total.max(f64::MIN_POSITIVE);
+        (t.bend + t.position + t.features) / coverage.max(1e-3) + t.reg
+    }
+}
+
+/// The similarity of ℝ³ that best maps A's positions onto B's matched positions,
+/// weighted by the node weights and `χ^ε`.
+fn fit_position_similarity(
+    e: &LevelEnergy,
+    phi: &Deformation,
+    allow_scale: bool,
+) -> Option<Similarity3> {
+    let n = e.size();
+    let mut p = Vec::with_capacity(n * n);
+    let mut q = Vec::with_capacity(n * n);
+    let mut w = Vec::with_capacity(n * n);
+    for k in 0..n * n {
+        let wa = e.a.weight[k] * e.a.chi[k];
+        if wa == 0.0 {
+            continue;
+        }
+        let s = e.b.field.value(phi.at(k));
+        let c = chi(s[B_SD], e.epsilon).0;
+        if c == 0.0 {
+            continue;
+        }
+        p.push(e.a.x[k]);
+        q.push([s[B_X], s[B_X + 1], s[B_X + 2]]);
+        w.push(wa * c);
+    }
+    fit_similarity_3d(&p, &q, &w, allow_scale)
+}
+
+impl SurfaceMatch {
+    /// φ(ξ) for a point ξ of ω_A.
+    pub fn map_domain(&self, xi: [f64; 2]) -> [f64; 2] {
+        self.deformation.apply(xi)
+    }
+
+    /// For every vertex of A, its matched point on B in B's mesh units (bilinear in
+    /// B's position image), or `None` where φ leaves ω_B.
+    pub fn vertex_points(&self) -> Vec<Option<[f64; 3]>> {
+        let field = self.b.finest_position_and_distance();
+        (0..self.a.uvs.len())
+            .map(|v| {
+                let xi = self.a.vertex_domain_position(v);
+                let y = self.map_domain(xi);
+                let s = field.value(y);
+                (s[3] <= 0.0).then_some([s[0], s[1], s[2]])
+            })
+            .collect()
+    }
+
+    /// Node positions of φ (for pictures).
+    pub fn grid_positions(&self) -> Vec<[f64; 2]> {
+        let n = self.deformation.size;
+        (0..n * n).map(|k| self.deformation.at(k)).collect::<Vec<_>>()
+    }
+
+    /// Fraction of grid nodes used (for reports): ξ itself.
+    pub fn node(&self, k: usize) -> [f64; 2] {
+        node(self.deformation.size, k)
+    }
+}
