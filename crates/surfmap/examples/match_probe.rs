@@ -26,14 +26,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 "reg" => options.betas.reg = f(),
                 "feat" => options.betas.features = f(),
                 "pos" => options.betas.position = f(),
+                "out" => options.betas.uncovered = f(),
                 "soft" => options.soft = f(),
                 "tol" => options.ncg.tolerance = f(),
                 "maxit" => options.ncg.max_iterations = f() as usize,
                 "refit" => options.ncg.refit_every = f() as usize,
                 "rot" => options.align_rotations = f() as usize,
-                "alevels" => options.align_levels = f() as usize,
-                "scale" => options.allow_scale = f() != 0.0,
+                                "scale" => options.allow_scale = f() != 0.0,
                 "sob" => options.sobolev_cells = f(),
+                "band" => options.position_band = f(),
                 "align" => {
                     options.align = match v {
                         "auto" => Align::Auto,
@@ -96,10 +97,27 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         matched,
         pts.len()
     );
-    let data: Vec<f64> = pts
+    let corr = m.correspondence()?;
+    let data: Vec<f64> = corr
         .iter()
-        .flat_map(|p| p.unwrap_or([f64::NAN; 3]))
+        .flat_map(|p| match p {
+            Some(s) => [s.triangle as f64, s.barycentric[0], s.barycentric[1], s.barycentric[2]],
+            None => [-1.0, 0.0, 0.0, 0.0],
+        })
         .collect();
-    save_npy(Path::new(out), &[pts.len(), 3], &data)?;
+    save_npy(Path::new(out), &[corr.len(), 4], &data)?;
+    if let Ok(dir) = std::env::var("PROBE_DUMP") {
+        let dir = Path::new(&dir);
+        std::fs::create_dir_all(dir)?;
+        let n = m.deformation.size;
+        let phi: Vec<f64> = m.grid_positions().iter().flat_map(|p| *p).collect();
+        save_npy(&dir.join("phi.npy"), &[n, n, 2], &phi)?;
+        for (name, s) in [("A", &m.a), ("B", &m.b)] {
+            let mask: Vec<f64> = s.images.boundary_distance.as_slice().to_vec();
+            save_npy(&dir.join(format!("sd_{name}.npy")), &[n, n], &mask)?;
+            let h: Vec<f64> = s.images.mean_curvature_extended.as_slice().to_vec();
+            save_npy(&dir.join(format!("h_{name}.npy")), &[n, n], &h)?;
+        }
+    }
     Ok(())
 }

@@ -196,17 +196,27 @@ impl Deformation {
     /// has a folded triangle, `∞` if no triangle ever degenerates along `v`.
     pub fn max_fold_free_step(&self, direction: &[[f64; 2]]) -> f64 {
         let n = self.size;
+        let h = 1.0 / (n - 1) as f64;
+        let u = &self.displacement;
         (0..n - 1)
             .into_par_iter()
             .map(|i| {
+                let (y0, y1) = (i as f64 * h, (i + 1) as f64 * h);
                 let mut m = f64::INFINITY;
                 for j in 0..n - 1 {
-                    for tri in cell_triangles(n, i, j) {
-                        // Node order [origin, ξ₀-side, ξ₁-side] is counter-clockwise
-                        // for both triangles, as flip_free_step expects.
-                        let s = flip_free_step(tri.map(|k| self.at(k)), tri.map(|k| direction[k]));
-                        m = m.min(s);
-                    }
+                    let (x0, x1) = (j as f64 * h, (j + 1) as f64 * h);
+                    let k = i * n + j;
+                    let p00 = [x0 + u[k][0], y0 + u[k][1]];
+                    let p01 = [x1 + u[k + 1][0], y0 + u[k + 1][1]];
+                    let p10 = [x0 + u[k + n][0], y1 + u[k + n][1]];
+                    let p11 = [x1 + u[k + n + 1][0], y1 + u[k + n + 1][1]];
+                    let (d00, d01, d10, d11) =
+                        (direction[k], direction[k + 1], direction[k + n], direction[k + n + 1]);
+                    // Node order [origin, ξ₀-side, ξ₁-side] is counter-clockwise for
+                    // both triangles, as flip_free_step expects.
+                    m = m
+                        .min(flip_free_step([p00, p01, p10], [d00, d01, d10]))
+                        .min(flip_free_step([p11, p10, p01], [d11, d10, d01]));
                 }
                 m
             })

@@ -8,9 +8,9 @@
 //! [`solve`] runs the multiscale schedule with the initial alignment
 //! ([`similarity`]).
 
+pub mod align;
 pub mod deformation;
 pub mod energy;
-pub mod field;
 pub mod ncg;
 pub mod precondition;
 pub mod similarity;
@@ -31,6 +31,8 @@ pub enum MatchError {
     Flatten(#[from] crate::param::flatten::FlattenError),
     #[error("geometry images: {0}")]
     Images(#[from] crate::raster::RasterError),
+    #[error("grid: {0}")]
+    Grid(#[from] crate::grid::GridError),
     #[error("{0}")]
     Guidance(String),
     #[error("invalid option: {0}")]

@@ -12,7 +12,7 @@
 use serde::Serialize;
 
 use super::deformation::Deformation;
-use super::energy::{EnergyTerms, LevelEnergy};
+use super::energy::{EnergyTerms, LevelEnergy, Workspace};
 use super::precondition::SobolevPreconditioner;
 
 /// Settings of one level's minimization.
@@ -80,7 +80,8 @@ pub(crate) fn minimize(
     let h = 1.0 / (n - 1) as f64;
     refit(energy, phi);
     let mut grad = vec![[0.0; 2]; n * n];
-    let mut e = energy.evaluate(&phi.displacement, &mut grad);
+    let mut work = Workspace::default();
+    let mut e = energy.evaluate(&phi.displacement, &mut grad, &mut work);
     let start = e;
     let mut evaluations = 1;
     let mut history = vec![e.total];
@@ -133,7 +134,7 @@ pub(crate) fn minimize(
             {
                 *tu = [u[0] + t * d[0], u[1] + t * d[1]];
             }
-            let et = energy.evaluate(&trial.displacement, &mut trial_grad);
+            let et = energy.evaluate(&trial.displacement, &mut trial_grad, &mut work);
             evaluations += 1;
             if et.total.is_finite() && et.total <= e.total + settings.armijo_c * t * slope {
                 let decrease = (e.total - et.total) / e.total.abs().max(f64::MIN_POSITIVE);
@@ -178,7 +179,7 @@ pub(crate) fn minimize(
         }
         if settings.refit_every > 0 && iterations % settings.refit_every == 0 {
             refit(energy, phi);
-            e = energy.evaluate(&phi.displacement, &mut grad);
+            e = energy.evaluate(&phi.displacement, &mut grad, &mut work);
             evaluations += 1;
             apply(&grad, &mut z);
             dir.iter_mut().zip(&z).for_each(|(d, g)| *d = [-g[0], -g[1]]);

@@ -11,16 +11,18 @@
 //! least-squares fit; otherwise rotations of ω_A about its centroid are tried at the
 //! coarse levels and the lowest energy (per matched area) is kept.
 
+use rayon::prelude::*;
 use serde::Serialize;
 
 use super::MatchError;
+use super::align::AlignmentScore;
 use super::deformation::{Deformation, node};
 use super::energy::{B_SD, B_X, Betas, LevelEnergy, Similarity3, chi};
 use super::ncg::{LevelLog, NcgSettings, minimize};
 use super::precondition::SobolevPreconditioner;
 use super::similarity::{Similarity2, fit_similarity_2d, fit_similarity_3d};
 use super::surface::MatchSurface;
-use crate::mesh::TriMesh;
+use crate::mesh::{PointLocator, SurfacePoint, TriMesh};
 use crate::raster::{FeatureCurve, FeatureFile};
 
 /// How the initial similarity between ω_A and ω_B is found.
@@ -72,12 +74,13 @@ pub struct MatchOptions {
     pub align: Align,
     /// Rotations tried by the alignment search.
     pub align_rotations: usize,
-    /// Levels (from `k₀`) solved for every rotation tried.
-    pub align_levels: usize,
     /// Fill holes (eyes, mouth) for the flattenings.
     pub fill_holes: bool,
     /// Let the position term's similarity scale (else a rigid motion).
     pub allow_scale: bool,
+    /// Cut-off width (ω units) of the position term around ω_B: B's harmonically
+    /// extended positions keep pulling A's rim into place up to this far outside.
+    pub position_band: f64,
     /// Sobolev preconditioner width in grid cells of each level (`λ = (w·h_k)²`);
     /// 0: plain L² gradients, as the thesis.
     pub sobolev_cells: f64,
@@ -93,16 +96,17 @@ impl Default for MatchOptions {
                 reg: 0.01,
                 features: 5.0,
                 position: 100.0,
+                uncovered: 0.0,
             },
             alpha: (0.5, 0.5),
             soft: 0.1,
             ncg: NcgSettings::default(),
             align: Align::Auto,
-            align_rotations: 12,
-            align_levels: 2,
+            align_rotations: 24,
             fill_holes: true,
             allow_scale: true,
             sobolev_cells: 4.0,
+            position_band: 0.0,
         }
     }
 }
@@ -130,6 +134,10 @@ pub struct SurfaceMatch {
     pub min_det: f64,
     pub seconds_solve: f64,
 }
+
+/// Points mapped within this many finest-grid cells of B's surface are snapped onto it
+/// ([`SurfaceMatch::correspondence`]).
+pub const SNAP_CELLS: f64 = 1.5;
 
 /// `ε_k` of level `k`.
 fn epsilon(k: usize) -> f64 {
@@ -228,9 +236,17 @@ pub fn match_surfaces(
     options: &MatchOptions,
 ) -> Result<SurfaceMatch, MatchError> {
     let (fa, fb) = paired_features(mesh_a, mesh_b, guidance)?;
+    // One length unit for both: the geometric mean of √area, so the energy's balance
+    // does not depend on the units, and the surfaces' relative size is kept.
+    let unit = (mesh_a.area() * mesh_b.area()).sqrt().sqrt();
+    if !(unit.is_finite() && unit > 0.0) {
+        return Err(MatchError::Option(
+            "a surface has zero or non-finite area".into(),
+        ));
+    }
     let (sa, sb) = rayon::join(
-        || MatchSurface::new(mesh_a, fa.as_ref(), options.size, options.fill_holes),
-        || MatchSurface::new(mesh_b, fb.as_ref(), options.size, options.fill_holes),
+        || MatchSurface::new(mesh_a, fa.as_ref(), options.size, options.fill_holes, unit),
+        || MatchSurface::new(mesh_b, fb.as_ref(), options.size, options.fill_holes, unit),
     );
     let (sa, sb) = (sa?, sb?);
     solve(sa, sb, fa.as_ref(), fb.as_ref(), options)
@@ -260,9 +276,11 @@ pub fn solve(
         options,
     };
     let k0 = options.coarsest_level;
-    let (ca, area_a) = sa.domain_centroid_and_area();
-    let (cb, area_b) = sb.domain_centroid_and_area();
-    let scale = (area_b / area_a).sqrt();
+    let (ca, _) = sa.domain_centroid_and_area();
+    let (cb, _) = sb.domain_centroid_and_area();
+    // UVs are in mesh units and both meshes share ℓ: corresponding lengths match when
+    // ω_A is scaled by the ratio of the domain transforms.
+    let scale = sb.images.transform.scale / sa.images.transform.scale;
     let use_features = match options.align {
         Align::Features => {
             if fa.is_none() {
@@ -303,36 +321,35 @@ pub fn solve(
         };
         (phi, Similarity3::identity(), report, k0)
     } else {
-        // Rotation search at the coarse levels.
-        let last = (k0 + options.align_levels.max(1) - 1).min(top);
-        let mut best: Option<(f64, Deformation, Similarity3, Similarity2, Vec<LevelLog>)> = None;
-        let mut candidates = vec![];
-        for r in 0..options.align_rotations.max(1) {
-            let angle = 2.0 * std::f64::consts::PI * r as f64 / options.align_rotations.max(1) as f64;
-            let s = Similarity2::about(ca, angle, scale, cb);
-            let mut phi = Deformation::from_map(sa.level_size(k0), |p| s.apply(p));
-            let mut sim = Similarity3::identity();
-            let mut logs = vec![];
-            for k in k0..=last {
-                if k > k0 {
-                    phi = phi.prolongate();
+        // Search similarities on a 33² grid (or the finest, if coarser).
+        let ks = 5.min(top);
+        let eps = epsilon(ks);
+        let level_a = sa.level_a(ks, eps, &[]);
+        let level_b = sb.level_b(ks, eps, 1.0, &[]);
+        let inside: Vec<bool> = level_a.chi.iter().map(|&c| c == 1.0).collect();
+        let search = AlignmentScore::new(&level_a, &level_b, &inside, false);
+        let (best, per_rotation) = search.search(ca, cb, scale, options.align_rotations.max(1), 6);
+        if let (Some(fa), Some(fb)) = (fa, fb) {
+            if std::env::var("DEBUG_ALIGN").is_ok() {
+                let pa = feature_centroids(&sa, fa);
+                let pb = feature_centroids(&sb, fb);
+                let s = fit_similarity_2d(&pa, &pb).unwrap();
+                let c = search.score(&s);
+                for (x, y) in pa.iter().zip(&pb) {
+                    let z = s.apply(*x);
+                    eprintln!("  lm A {:.3},{:.3} -> S {:.3},{:.3}  B {:.3},{:.3}  err {:.4}", x[0], x[1], z[0], z[1], y[0], y[1], (z[0]-y[0]).hypot(z[1]-y[1]));
                 }
-                logs.push(solver.level(k, &mut phi, &mut sim));
-            }
-            let score = solver.alignment_score(last, &phi, &sim);
-            candidates.push((angle.to_degrees(), score));
-            if best.as_ref().is_none_or(|b| score < b.0) {
-                best = Some((score, phi, sim, s, logs));
+                eprintln!("landmark similarity: angle {:.1} scale {:.3} score {:.3e} overlap {:.3}; best {:.3e} overlap {:.3}", s.angle().to_degrees(), s.scale(), c.score, c.overlap, best.score, best.overlap);
             }
         }
-        let (_, phi, sim, s, logs) = best.unwrap();
-        levels.extend(logs);
+        let s = best.similarity;
+        let phi = Deformation::from_map(sa.level_size(k0), |p| s.apply(p));
         let report = AlignmentReport {
-            method: "rotation search".into(),
+            method: "similarity search".into(),
             similarity: s,
-            candidates,
+            candidates: per_rotation,
         };
-        (phi, sim, report, last + 1)
+        (phi, Similarity3::identity(), report, k0)
     };
     for k in start_level..=top {
         if k > k0 {
@@ -370,6 +387,7 @@ impl Solver<'_> {
             betas: self.options.betas,
             alpha: self.options.alpha,
             similarity,
+            position_band: self.options.position_band,
         }
     }
 
@@ -399,24 +417,6 @@ impl Solver<'_> {
         *similarity = energy.similarity;
         log
     }
-
-    /// Candidate score of the alignment search: data energy per matched area plus the
-    /// regularization.
-    fn alignment_score(&self, k: usize, phi: &Deformation, sim: &Similarity3) -> f64 {
-        let e = self.energy(k, *sim);
-        let n = e.size();
-        let mut grad = vec![[0.0; 2]; n * n];
-        let t = e.evaluate(&phi.displacement, &mut grad);
-        let (mut matched, mut total) = (0.0, 0.0);
-        for q in 0..n * n {
-            let w = e.a.weight[q] * e.a.chi[q];
-            total += w;
-            let s = e.b.field.value(phi.at(q));
-            matched += w * chi(s[B_SD], e.epsilon).0;
-        }
-        let coverage = matched / total.max(f64::MIN_POSITIVE);
-        (t.bend + t.position + t.features) / coverage.max(1e-3) + t.reg
-    }
 }
 
 /// The similarity of ℝ³ that best maps A's positions onto B's matched positions,
@@ -435,7 +435,7 @@ fn fit_position_similarity(
         if wa == 0.0 {
             continue;
         }
-        let s = e.b.field.value(phi.at(k));
+        let s = e.b.field.sample(phi.at(k));
         let c = chi(s[B_SD], e.epsilon).0;
         if c == 0.0 {
             continue;
@@ -461,10 +461,35 @@ impl SurfaceMatch {
             .map(|v| {
                 let xi = self.a.vertex_domain_position(v);
                 let y = self.map_domain(xi);
-                let s = field.value(y);
+                let s = field.sample(y);
                 (s[3] <= 0.0).then_some([s[0], s[1], s[2]])
             })
             .collect()
+    }
+
+    /// For every vertex of A, its counterpart on B (a triangle of B and barycentric
+    /// coordinates), or `None` where φ maps it outside B's surface (beyond ω_B's border
+    /// or into one of B's holes). A point that φ puts within [`SNAP_CELLS`] grid cells
+    /// of B's surface is snapped onto it: a vertex on A's rim lies exactly on ω_A's
+    /// border, and at the grid's resolution "on the border" and "just outside" are the
+    /// same answer.
+    pub fn correspondence(&self) -> Result<Vec<Option<SurfacePoint>>, MatchError> {
+        let locator = PointLocator::new(&self.b.uvs, &self.b.triangles)
+            .map_err(|e| MatchError::Option(format!("locating points on B: {e}")))?;
+        let to_b = self.b.images.transform;
+        let tolerance = SNAP_CELLS / (self.deformation.size - 1) as f64 / to_b.scale;
+        Ok((0..self.a.uvs.len())
+            .into_par_iter()
+            .map(|v| {
+                let uv = to_b.to_uv(self.map_domain(self.a.vertex_domain_position(v)));
+                locator.locate(uv).or_else(|| {
+                    locator
+                        .nearest(uv)
+                        .filter(|n| n.distance <= tolerance)
+                        .map(|n| n.point)
+                })
+            })
+            .collect())
     }
 
     /// Node positions of φ (for pictures).

@@ -1,22 +1,29 @@
 //! One surface prepared for matching (thesis §3.2.1–§3.2.3): flattened with the
-//! balanced preset (holes filled for the solve), placed in ω = [0,1]², rasterized into
-//! geometry images at the unit-area length scale, every image extended over all of ω,
-//! and restricted to every level of the multiscale pyramid.
+//! balanced preset (holes filled for the solve), placed in ω = `[0,1]²`, rasterized
+//! into geometry images at the unit-area length scale, every image extended over all of
+//! ω, and restricted to every level of the multiscale pyramid.
 
 use super::MatchError;
 use super::energy::{B_CHANNELS, LevelA, LevelB, TriangleA, chi, eta, theta};
-use super::field::Field;
+use crate::grid::{Grid, Pyramid, harmonic_extension};
 use crate::mesh::TriMesh;
 use crate::param::flatten::{FlattenOptions, flatten};
-use crate::raster::extend::harmonic_extension;
-use crate::raster::pyramid::Pyramid;
-use crate::raster::{FeatureFile, FeatureSource, GeometryImages, GeometryImagesOptions};
+use crate::raster::{
+    FeatureFile, FeatureSource, GeometryImages, GeometryImagesOptions, SurfaceScale,
+};
+
+/// Channels of the smoothed pyramid: mean curvature, metric, position (ℓ units).
+const S_H: usize = 0;
+const S_G: usize = 1;
+const S_X: usize = 4;
 
 /// A surface ready to be matched: its flattening, geometry images and pyramid.
 #[derive(Clone, Debug)]
 pub struct MatchSurface {
     /// UV per vertex of the input mesh (mesh units).
     pub uvs: Vec<[f64; 2]>,
+    /// The input mesh's triangles (holes stay open: the fill is for the solve only).
+    pub triangles: Vec<[u32; 3]>,
     /// Holes filled for the flattening.
     pub filled_holes: usize,
     /// Flattening iterations and time (seconds).
@@ -25,32 +32,31 @@ pub struct MatchSurface {
     pub images: GeometryImages,
     /// Names of the features, in the order of the distance maps.
     pub feature_names: Vec<String>,
-    /// Per level `k = 0..=K`: `[h, g11, g12, g22, x, y, z]` filtered with σ_k.
-    smooth: Pyramid,
-    /// Finest signed boundary distance and feature distances.
-    boundary_distance: Vec<f64>,
-    feature_distance: Vec<Vec<f64>>,
+    /// The length unit ℓ (mesh units) of every quantity below: shared by both surfaces
+    /// of a match, so that their sizes compare.
+    pub length_unit: f64,
+    /// Per level: `[h, g11, g12, g22, x, y, z]` filtered with σ_k (x in ℓ units), all
+    /// extended harmonically over ω.
+    smooth: Pyramid<[f64; 7]>,
+    /// Finest feature distances (ℓ units; unreachable nodes far away).
+    feature_distance: Vec<Grid<f64>>,
     pub time_images: f64,
 }
 
 impl MatchSurface {
     /// Flattens `mesh` (filling holes for the solve when `fill_holes`) and computes its
-    /// geometry images on a `size × size` grid, with the distance maps of `features`.
+    /// geometry images on a `size × size` grid, with the distance maps of `features`,
+    /// in the length unit `length_unit` (mesh units): curvature in `1/ℓ`, metric in
+    /// `ℓ²`, positions and distances in `ℓ`.
     pub fn new(
         mesh: &TriMesh,
         features: Option<&FeatureFile>,
         size: usize,
         fill_holes: bool,
+        length_unit: f64,
     ) -> Result<Self, MatchError> {
         let clock = std::time::Instant::now();
-        let (solve_mesh, filled_holes) = if fill_holes {
-            crate::mesh::repair::fill_holes(mesh)
-        } else {
-            (mesh.clone(), 0)
-        };
-        let flat = flatten(&solve_mesh, &FlattenOptions::default())?;
-        let mut uvs = flat.uvs;
-        uvs.truncate(mesh.num_vertices());
+        let flat = flatten(mesh, &FlattenOptions::default().with_fill_holes(fill_holes))?;
         let flatten_time = clock.elapsed().as_secs_f64();
         let clock = std::time::Instant::now();
         let source = match features {
@@ -60,60 +66,46 @@ impl MatchSurface {
         let options = GeometryImagesOptions {
             size,
             pyramid: false,
+            scale: SurfaceScale::Original,
             ..Default::default()
         };
-        let images = GeometryImages::compute(mesh, &uvs, source, None, &options)?;
-        let n = size;
+        let images = GeometryImages::compute(mesh, &flat.uvs, source, None, &options)?;
         let inside = images.raster.inside_mask();
-        let unit = images.length_unit;
-        let mut x: [Vec<f64>; 3] = std::array::from_fn(|c| {
-            images
-                .position
-                .iter()
-                .map(|p| p[c] / unit)
-                .collect::<Vec<f64>>()
-        });
-        {
-            let [x0, x1, x2] = &mut x;
-            harmonic_extension(n, &inside, &mut [x0, x1, x2])?;
-        }
-        let [x0, x1, x2] = x;
-        let g = &images.metric_extended;
-        let smooth = Pyramid::build(
-            n,
-            ["h", "g11", "g12", "g22", "x", "y", "z"]
-                .map(String::from)
-                .to_vec(),
-            vec![
-                images.mean_curvature_extended.clone(),
-                g.iter().map(|v| v[0]).collect(),
-                g.iter().map(|v| v[1]).collect(),
-                g.iter().map(|v| v[2]).collect(),
-                x0,
-                x1,
-                x2,
-            ],
-        );
+        let unit = length_unit;
+        let mut position = images.position.map(|p| p.map(|c| c / unit));
+        harmonic_extension(&inside, &mut [&mut position])?;
+        let h = images.mean_curvature_extended.as_slice();
+        let g = images.metric_extended.as_slice();
+        let x = position.as_slice();
+        let (hs, gs) = (unit, 1.0 / (unit * unit));
+        let finest = Grid::from_fn(size, |i, j| {
+            let k = i * size + j;
+            [
+                h[k] * hs,
+                g[k][0] * gs,
+                g[k][1] * gs,
+                g[k][2] * gs,
+                x[k][0],
+                x[k][1],
+                x[k][2],
+            ]
+        })?;
+        let smooth = Pyramid::new(finest);
         let feature_names = images.features.iter().map(|f| f.name.clone()).collect();
-        // Unreachable nodes (∞) are far from the feature for every purpose here.
         let feature_distance = images
             .features
             .iter()
-            .map(|f| {
-                f.distance
-                    .iter()
-                    .map(|&d| if d.is_finite() { d } else { 1e3 })
-                    .collect()
-            })
+            .map(|f| f.distance.map(|&d| if d.is_finite() { d / unit } else { 1e3 }))
             .collect();
         Ok(Self {
-            uvs,
-            filled_holes,
+            uvs: flat.uvs,
+            triangles: mesh.triangles.clone(),
+            filled_holes: flat.holes_filled,
             flatten_iterations: flat.iterations,
             flatten_time,
-            boundary_distance: images.boundary_distance.clone(),
             images,
             feature_names,
+            length_unit,
             smooth,
             feature_distance,
             time_images: clock.elapsed().as_secs_f64(),
@@ -127,58 +119,43 @@ impl MatchSurface {
 
     /// Number of levels (`K + 1`).
     pub fn num_levels(&self) -> usize {
-        self.smooth.levels.len()
+        self.smooth.num_levels()
     }
 
     /// Grid size of level `k`.
     pub fn level_size(&self, k: usize) -> usize {
-        self.smooth.levels[k].size
+        self.smooth.level(k).size()
     }
 
-    /// `img` (finest grid) sampled at the nodes of level `k` (injection).
-    fn inject(&self, img: &[f64], k: usize) -> Vec<f64> {
+    /// `img` (finest grid) at the nodes of level `k` (injection).
+    fn inject(&self, img: &Grid<f64>, k: usize) -> Vec<f64> {
         let n = self.size();
         let m = self.level_size(k);
         let stride = (n - 1) / (m - 1);
+        let data = img.as_slice();
         (0..m * m)
-            .map(|q| img[(q / m) * stride * n + (q % m) * stride])
+            .map(|q| data[(q / m) * stride * n + (q % m) * stride])
             .collect()
     }
 
-    /// The smoothed images of level `k`: h, metric, position.
-    fn smooth_level(&self, k: usize) -> (&[f64], [&[f64]; 3], [&[f64]; 3]) {
-        let l = &self.smooth.levels[k].images;
-        (&l[0], [&l[1], &l[2], &l[3]], [&l[4], &l[5], &l[6]])
-    }
-
-    /// Node area of the point on the `(i, j)` position of an `m × m` grid
-    /// (trapezoidal rule on ω).
-    fn node_weight(m: usize, k: usize) -> f64 {
+    /// Trapezoidal-rule weight of node `q` of an `m × m` grid over ω.
+    fn node_weight(m: usize, q: usize) -> f64 {
         let h = 1.0 / (m - 1) as f64;
-        let (i, j) = (k / m, k % m);
         let edge = |t: usize| if t == 0 || t == m - 1 { 0.5 } else { 1.0 };
-        h * h * edge(i) * edge(j)
+        h * h * edge(q / m) * edge(q % m)
     }
 
     /// A's data at level `k` with cut-off width `eps`; `features` selects and orders
     /// the distance maps (indices into [`Self::feature_names`]).
     pub(crate) fn level_a(&self, k: usize, eps: f64, features: &[usize]) -> LevelA {
+        let s = self.smooth.level(k).as_slice();
         let m = self.level_size(k);
-        let (h, g, x) = self.smooth_level(k);
-        let sd = self.inject(&self.boundary_distance, k);
-        let gm = |q: usize| [g[0][q], g[1][q], g[2][q]];
+        let sd = self.inject(&self.images.boundary_distance, k);
+        let metric = |q: usize| [s[q][S_G], s[q][S_G + 1], s[q][S_G + 2]];
         let sqrt_det = |v: [f64; 3]| (v[0] * v[2] - v[1] * v[1]).max(0.0).sqrt();
-        let weight = (0..m * m)
-            .map(|q| Self::node_weight(m, q) * sqrt_det(gm(q)))
-            .collect();
-        let chi_nodes: Vec<f64> = sd.iter().map(|&s| chi(s, eps).0).collect();
         let dist: Vec<Vec<f64>> = features
             .iter()
             .map(|&f| self.inject(&self.feature_distance[f], k))
-            .collect();
-        let feature_eta = dist
-            .iter()
-            .map(|d| d.iter().map(|&s| eta(s, eps).0).collect())
             .collect();
         let hh = 1.0 / (m - 1) as f64;
         let area = 0.5 * hh * hh;
@@ -188,19 +165,18 @@ impl MatchSurface {
             for j in 0..m - 1 {
                 for tri in super::deformation::cell_triangles(m, i, j) {
                     let gt: [f64; 3] = std::array::from_fn(|c| {
-                        (g[c][tri[0]] + g[c][tri[1]] + g[c][tri[2]]) / 3.0
+                        tri.iter().map(|&q| metric(q)[c]).sum::<f64>() / 3.0
                     });
                     let det = gt[0] * gt[2] - gt[1] * gt[1];
-                    let g_inv = [gt[2] / det, -gt[1] / det, gt[0] / det];
-                    let sd_c = (sd[tri[0]] + sd[tri[1]] + sd[tri[2]]) / 3.0;
+                    let sd_c = tri.iter().map(|&q| sd[q]).sum::<f64>() / 3.0;
                     triangles.push(TriangleA {
-                        g_inv,
+                        g_inv: [gt[2] / det, -gt[1] / det, gt[0] / det],
                         weight: area * det.max(0.0).sqrt(),
                         area,
                         chi: chi(sd_c, eps).0,
                     });
                     for (f, d) in dist.iter().enumerate() {
-                        let dc = (d[tri[0]] + d[tri[1]] + d[tri[2]]) / 3.0;
+                        let dc = tri.iter().map(|&q| d[q]).sum::<f64>() / 3.0;
                         feature_theta[f].push(theta(dc, eps).0);
                     }
                 }
@@ -208,11 +184,16 @@ impl MatchSurface {
         }
         LevelA {
             size: m,
-            h: h.to_vec(),
-            weight,
-            chi: chi_nodes,
-            x: (0..m * m).map(|q| [x[0][q], x[1][q], x[2][q]]).collect(),
-            feature_eta,
+            h: s.iter().map(|v| v[S_H]).collect(),
+            weight: (0..m * m)
+                .map(|q| Self::node_weight(m, q) * sqrt_det(metric(q)))
+                .collect(),
+            chi: sd.iter().map(|&d| chi(d, eps).0).collect(),
+            x: s.iter().map(|v| [v[S_X], v[S_X + 1], v[S_X + 2]]).collect(),
+            feature_eta: dist
+                .iter()
+                .map(|d| d.iter().map(|&v| eta(v, eps).0).collect())
+                .collect(),
             triangles,
             feature_theta,
         }
@@ -221,64 +202,54 @@ impl MatchSurface {
     /// B's data at level `k`: the metric outside ω_B is scaled by
     /// `soft + (1 − soft)·χ_B^ε` (a "softer" material, thesis §2.2.5).
     pub(crate) fn level_b(&self, k: usize, eps: f64, soft: f64, features: &[usize]) -> LevelB {
+        let s = self.smooth.level(k).as_slice();
         let m = self.level_size(k);
-        let (h, g, x) = self.smooth_level(k);
-        let sd = self.inject(&self.boundary_distance, k);
+        let sd = self.inject(&self.images.boundary_distance, k);
         let data: Vec<[f64; B_CHANNELS]> = (0..m * m)
             .map(|q| {
-                let c = chi(sd[q], eps).0;
-                let f = soft + (1.0 - soft) * c;
+                let f = soft + (1.0 - soft) * chi(sd[q], eps).0;
+                let v = s[q];
                 [
-                    h[q],
+                    v[S_H],
                     sd[q],
-                    f * g[0][q],
-                    f * g[1][q],
-                    f * g[2][q],
-                    x[0][q],
-                    x[1][q],
-                    x[2][q],
+                    f * v[S_G],
+                    f * v[S_G + 1],
+                    f * v[S_G + 2],
+                    v[S_X],
+                    v[S_X + 1],
+                    v[S_X + 2],
                 ]
             })
             .collect();
         LevelB {
-            field: Field::new(m, data),
+            field: Grid::from_vec(m, data).expect("level size"),
             features: features
                 .iter()
-                .map(|&f| {
-                    Field::new(
-                        m,
-                        self.inject(&self.feature_distance[f], k)
-                            .into_iter()
-                            .map(|d| [d])
-                            .collect(),
-                    )
-                })
+                .map(|&f| Grid::from_vec(m, self.inject(&self.feature_distance[f], k)).expect("level size"))
                 .collect(),
         }
     }
 
-    /// Finest-level position field (mesh units, extended) and signed boundary distance,
-    /// for reading off matched points.
-    pub(crate) fn finest_position_and_distance(&self) -> Field<4> {
-        let top = self.smooth.levels.last().unwrap();
-        let unit = self.images.length_unit;
+    /// Finest-level position (mesh units, extended) and signed boundary distance, for
+    /// reading off matched points.
+    pub(crate) fn finest_position_and_distance(&self) -> Grid<[f64; 4]> {
+        let top = self.smooth.finest().as_slice();
+        let sd = self.images.boundary_distance.as_slice();
+        let unit = self.length_unit;
         let n = self.size();
-        Field::new(
-            n,
-            (0..n * n)
-                .map(|q| {
-                    [
-                        top.images[4][q] * unit,
-                        top.images[5][q] * unit,
-                        top.images[6][q] * unit,
-                        self.boundary_distance[q],
-                    ]
-                })
-                .collect(),
-        )
+        Grid::from_fn(n, |i, j| {
+            let q = i * n + j;
+            [
+                top[q][S_X] * unit,
+                top[q][S_X + 1] * unit,
+                top[q][S_X + 2] * unit,
+                sd[q],
+            ]
+        })
+        .expect("finest size")
     }
 
-    /// Area centroid and area (in ω) of the surface's inside nodes.
+    /// Centroid and area (in ω) of the surface's inside nodes.
     pub fn domain_centroid_and_area(&self) -> ([f64; 2], f64) {
         let n = self.size();
         let h = 1.0 / (n - 1) as f64;
