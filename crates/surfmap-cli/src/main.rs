@@ -18,7 +18,7 @@ use clap::{Parser, Subcommand};
 #[command(
     name = "surfmap",
     version,
-    about = "Variational surface maps: flip-free flattening, distortion reports, geometry images"
+    about = "Variational surface maps: flip-free flattening, distortion reports, geometry images, surface matching"
 )]
 struct Cli {
     #[command(subcommand)]
@@ -39,6 +39,8 @@ enum Command {
     Measure(cmd::measure::Args),
     /// Geometry images: flatten (balanced), rasterize h, g, distances, pyramid; PNG + .npy.
     Images(cmd::images::Args),
+    /// Match surface A onto surface B: a fold-free correspondence through their geometry images.
+    Match(cmd::matching::Args),
 }
 
 fn main() {
@@ -50,6 +52,7 @@ fn main() {
         Command::Demo(a) => cmd::demo::run(a),
         Command::Measure(a) => cmd::measure::run(a),
         Command::Images(a) => cmd::images::run(a),
+        Command::Match(a) => cmd::matching::run(a),
     };
     if let Err(e) = result {
         eprintln!("error: {}", error_message(&e));

@@ -32,13 +32,23 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 "maxit" => options.ncg.max_iterations = f() as usize,
                 "refit" => options.ncg.refit_every = f() as usize,
                 "rot" => options.align_rotations = f() as usize,
-                                "scale" => options.allow_scale = f() != 0.0,
+                "scale" => options.allow_scale = f() != 0.0,
                 "sob" => options.sobolev_cells = f(),
                 "band" => options.position_band = f(),
+                "tau" => options.position_scale = f(),
+                "hsig" => options.curvature_sigma = f(),
+                "snap" => options.snap_cells = f(),
+                "holes" => {
+                    options.hole_features = match v {
+                        "auto" => surfmap::matching::HoleFeatures::Auto,
+                        "on" => surfmap::matching::HoleFeatures::On,
+                        _ => surfmap::matching::HoleFeatures::Off,
+                    }
+                }
                 "align" => {
                     options.align = match v {
                         "auto" => Align::Auto,
-                        "search" => Align::Search,
+                        "shape" => Align::Shape,
                         "none" => Align::None,
                         "features" => Align::Features,
                         _ => panic!("align={v}"),
@@ -73,15 +83,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         );
     }
     println!(
-        "alignment: {} angle {:.1}° scale {:.3}; candidates {:?}",
+        "alignment: {} angle {:.1}° scale {:.3}; holes {:?}",
         m.alignment.method,
         m.alignment.similarity.angle().to_degrees(),
         m.alignment.similarity.scale(),
-        m.alignment
-            .candidates
-            .iter()
-            .map(|(a, s)| format!("{a:.0}:{s:.3e}"))
-            .collect::<Vec<_>>()
+        m.alignment.hole_pairs
     );
     let pts = m.vertex_points();
     let matched = pts.iter().filter(|p| p.is_some()).count();
@@ -101,7 +107,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let data: Vec<f64> = corr
         .iter()
         .flat_map(|p| match p {
-            Some(s) => [s.triangle as f64, s.barycentric[0], s.barycentric[1], s.barycentric[2]],
+            Some(s) => [
+                s.triangle as f64,
+                s.barycentric[0],
+                s.barycentric[1],
+                s.barycentric[2],
+            ],
             None => [-1.0, 0.0, 0.0, 0.0],
         })
         .collect();

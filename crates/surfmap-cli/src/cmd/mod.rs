@@ -3,6 +3,7 @@ pub mod demo;
 pub mod flatten;
 pub mod images;
 pub mod inspect;
+pub mod matching;
 pub mod measure;
 pub mod tradeoff;
 

@@ -12,7 +12,7 @@
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::energy::{B_SD, B_X, LevelA, LevelB};
+use super::energy::{B_SD, B_X, LevelA, LevelB, Similarity3};
 use super::similarity::{Similarity2, fit_similarity_3d};
 
 /// One scored candidate.
@@ -21,6 +21,8 @@ pub struct Candidate {
     pub similarity: Similarity2,
     pub score: f64,
     pub overlap: f64,
+    /// The rigid motion of ℝ³ fitted to the candidate's pairs (ℓ units).
+    pub motion: Similarity3,
 }
 
 /// Fraction of the best pairs kept by the trimmed score.
@@ -76,6 +78,7 @@ impl<'a> AlignmentScore<'a> {
             similarity: *s,
             score: f64::INFINITY,
             overlap,
+            motion: Similarity3::identity(),
         };
         if overlap < MIN_OVERLAP {
             return reject;
@@ -105,6 +108,7 @@ impl<'a> AlignmentScore<'a> {
             similarity: *s,
             score: sum / acc.max(f64::MIN_POSITIVE) / overlap,
             overlap,
+            motion: t,
         }
     }
 
@@ -119,7 +123,7 @@ impl<'a> AlignmentScore<'a> {
         scale: f64,
         rotations: usize,
         refine: usize,
-    ) -> (Candidate, Vec<(f64, f64)>) {
+    ) -> (Vec<Candidate>, Vec<(f64, f64)>) {
         let offsets = [-0.3, -0.225, -0.15, -0.075, 0.0, 0.075, 0.15, 0.225, 0.3];
         let scales = [0.9, 1.0, 1.1];
         // The best grid candidate of every rotation; the best `refine` rotations are
@@ -133,7 +137,8 @@ impl<'a> AlignmentScore<'a> {
                     for dy in offsets {
                         for f in scales {
                             let target = [centre_b[0] + dx, centre_b[1] + dy];
-                            let c = self.score(&Similarity2::about(centre_a, angle, scale * f, target));
+                            let c =
+                                self.score(&Similarity2::about(centre_a, angle, scale * f, target));
                             if best.as_ref().is_none_or(|b| c.score < b.0.score) {
                                 best = Some((c, angle, f, [dx, dy]));
                             }
@@ -149,7 +154,7 @@ impl<'a> AlignmentScore<'a> {
             .collect();
         best_of_rotation.sort_by(|x, y| x.0.score.total_cmp(&y.0.score));
         let all = best_of_rotation;
-        let mut winner = all[0].0;
+        let mut refined = vec![];
         for &(c, angle, f, d) in all.iter().take(refine) {
             if !c.score.is_finite() {
                 continue;
@@ -157,7 +162,12 @@ impl<'a> AlignmentScore<'a> {
             // Pattern search on (angle, log scale, dx, dy).
             let mut x = [angle, f.ln(), d[0], d[1]];
             let mut best = c;
-            let mut step = [std::f64::consts::TAU / rotations as f64 / 2.0, 0.05, 0.0375, 0.0375];
+            let mut step = [
+                std::f64::consts::TAU / rotations as f64 / 2.0,
+                0.05,
+                0.0375,
+                0.0375,
+            ];
             for _ in 0..40 {
                 let mut improved = false;
                 for axis in 0..4 {
@@ -185,10 +195,11 @@ impl<'a> AlignmentScore<'a> {
                     }
                 }
             }
-            if best.score < winner.score {
-                winner = best;
-            }
+            refined.push(best);
         }
-        (winner, per_rotation)
+        // The rotations that were not refined follow, as grid candidates.
+        refined.extend(all.iter().skip(refine).map(|x| x.0));
+        refined.sort_by(|x, y| x.score.total_cmp(&y.score));
+        (refined, per_rotation)
     }
 }

@@ -75,11 +75,7 @@ pub fn jacobian_adjoint(p: [[f64; 2]; 2], upper: bool, inv_h: f64) -> [[f64; 2];
             [-col1[0], -col1[1]],
         ]
     } else {
-        [
-            [-col0[0] - col1[0], -col0[1] - col1[1]],
-            col0,
-            col1,
-        ]
+        [[-col0[0] - col1[0], -col0[1] - col1[1]], col0, col1]
     }
 }
 
@@ -117,7 +113,10 @@ impl Deformation {
     #[inline]
     pub fn at(&self, k: usize) -> [f64; 2] {
         let x = node(self.size, k);
-        [x[0] + self.displacement[k][0], x[1] + self.displacement[k][1]]
+        [
+            x[0] + self.displacement[k][0],
+            x[1] + self.displacement[k][1],
+        ]
     }
 
     /// φ at every node.
@@ -210,8 +209,12 @@ impl Deformation {
                     let p01 = [x1 + u[k + 1][0], y0 + u[k + 1][1]];
                     let p10 = [x0 + u[k + n][0], y1 + u[k + n][1]];
                     let p11 = [x1 + u[k + n + 1][0], y1 + u[k + n + 1][1]];
-                    let (d00, d01, d10, d11) =
-                        (direction[k], direction[k + 1], direction[k + n], direction[k + n + 1]);
+                    let (d00, d01, d10, d11) = (
+                        direction[k],
+                        direction[k + 1],
+                        direction[k + n],
+                        direction[k + n + 1],
+                    );
                     // Node order [origin, ξ₀-side, ξ₁-side] is counter-clockwise for
                     // both triangles, as flip_free_step expects.
                     m = m
@@ -233,7 +236,8 @@ impl Deformation {
             for (j, o) in row.iter_mut().enumerate() {
                 let (i0, j0) = (i / 2, j / 2);
                 let k = i0 * n + j0;
-                let avg = |a: usize, b: usize| [0.5 * (u[a][0] + u[b][0]), 0.5 * (u[a][1] + u[b][1])];
+                let avg =
+                    |a: usize, b: usize| [0.5 * (u[a][0] + u[b][0]), 0.5 * (u[a][1] + u[b][1])];
                 *o = match (i % 2, j % 2) {
                     (0, 0) => u[k],
                     (0, _) => avg(k, k + 1),
@@ -291,9 +295,13 @@ mod tests {
         let p = [[0.4, -1.3], [2.0, 0.7]];
         for upper in [false, true] {
             let d = jacobian(phi, upper, 3.0);
-            let lhs: f64 = (0..2).map(|a| (0..2).map(|b| p[a][b] * d[a][b]).sum::<f64>()).sum();
+            let lhs: f64 = (0..2)
+                .map(|a| (0..2).map(|b| p[a][b] * d[a][b]).sum::<f64>())
+                .sum();
             let adj = jacobian_adjoint(p, upper, 3.0);
-            let rhs: f64 = (0..3).map(|k| adj[k][0] * phi[k][0] + adj[k][1] * phi[k][1]).sum();
+            let rhs: f64 = (0..3)
+                .map(|k| adj[k][0] * phi[k][0] + adj[k][1] * phi[k][1])
+                .sum();
             assert!((lhs - rhs).abs() < 1e-12, "{upper}: {lhs} vs {rhs}");
         }
     }
@@ -311,9 +319,7 @@ mod tests {
             assert!((a[0] - b[0]).abs() < 1e-12 && (a[1] - b[1]).abs() < 1e-12);
         }
         assert!(fine.min_jacobian_determinant() > 0.0);
-        assert!(
-            (fine.min_jacobian_determinant() - coarse.min_jacobian_determinant()).abs() < 1e-9
-        );
+        assert!((fine.min_jacobian_determinant() - coarse.min_jacobian_determinant()).abs() < 1e-9);
     }
 
     #[test]

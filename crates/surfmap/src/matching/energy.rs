@@ -50,6 +50,9 @@ pub struct Betas {
     pub bend: f64,
     pub reg: f64,
     pub features: f64,
+    /// Weight of the position term (ours, beyond the thesis): A's 3D positions,
+    /// moved by a jointly fitted similarity, against B's at φ — measured to lift every
+    /// track of the ICT pairs (BENCHMARKS.md, "Matching"). Default 1000.
     pub position: f64,
     /// Cost per unit area of A left without a counterpart (ours): makes the data
     /// terms truncated least squares, so that leaving ω_B is not free.
@@ -145,7 +148,9 @@ impl Similarity3 {
     #[inline]
     pub fn apply(&self, x: [f64; 3]) -> [f64; 3] {
         let m = &self.matrix;
-        std::array::from_fn(|r| m[r][0] * x[0] + m[r][1] * x[1] + m[r][2] * x[2] + self.translation[r])
+        std::array::from_fn(|r| {
+            m[r][0] * x[0] + m[r][1] * x[1] + m[r][2] * x[2] + self.translation[r]
+        })
     }
 }
 
@@ -161,6 +166,23 @@ pub(crate) struct LevelEnergy {
     pub similarity: Similarity3,
     /// Cut-off width of `χ_B` in the position term (at least ε).
     pub position_band: f64,
+    /// Scale `τ` (ℓ units) of the position term's robust penalty ([`robust`]); 0: plain
+    /// squares.
+    pub position_scale: f64,
+}
+
+/// The Geman–McClure penalty of a squared residual `s`: `ρ(s) = τ² s / (s + τ²)`, which
+/// is `s` for residuals well below `τ` and saturates at `τ²` for large ones (a region that
+/// moved, such as an opened jaw, stops pulling), with `ρ'(s) = τ⁴ / (s + τ²)²`. `τ = 0`
+/// gives plain squares.
+#[inline]
+pub(crate) fn robust(s: f64, tau: f64) -> (f64, f64) {
+    if tau <= 0.0 {
+        return (s, 1.0);
+    }
+    let t2 = tau * tau;
+    let d = s + t2;
+    (t2 * s / d, t2 * t2 / (d * d))
 }
 
 /// `χ^ε_S` from a signed distance (negative inside S) and its derivative in the distance.
@@ -189,7 +211,11 @@ pub(crate) fn eta(s: f64, eps: f64) -> (f64, f64) {
 #[inline]
 pub(crate) fn theta(s: f64, eps: f64) -> (f64, f64) {
     let v = s * s / eps;
-    if v < 1.0 { (v, 2.0 * s / eps) } else { (1.0, 0.0) }
+    if v < 1.0 {
+        (v, 2.0 * s / eps)
+    } else {
+        (1.0, 0.0)
+    }
 }
 
 impl LevelEnergy {
@@ -338,9 +364,10 @@ impl LevelEnergy {
                 let rdx = r[0] * sdx[B_X] + r[1] * sdx[B_X + 1] + r[2] * sdx[B_X + 2];
                 let rdy = r[0] * sdy[B_X] + r[1] * sdy[B_X + 1] + r[2] * sdy[B_X + 2];
                 let c = beta.position * w;
-                terms.position += c * chi_p * r2;
-                g[0] += c * (dchi_p[0] * r2 - 2.0 * chi_p * rdx);
-                g[1] += c * (dchi_p[1] * r2 - 2.0 * chi_p * rdy);
+                let (rho, drho) = robust(r2, self.position_scale);
+                terms.position += c * chi_p * rho;
+                g[0] += c * (dchi_p[0] * rho - 2.0 * chi_p * drho * rdx);
+                g[1] += c * (dchi_p[1] * rho - 2.0 * chi_p * drho * rdy);
             }
             if chi_v == 0.0 && dchi == [0.0, 0.0] {
                 continue;
@@ -429,8 +456,14 @@ impl LevelEnergy {
                     let det_gi = gi[0] * gi[2] - gi[1] * gi[1];
                     // K = Dφ g_A⁻¹ Dφᵀ; a = tr(g_A⁻¹ Dφᵀ B Dφ) = Σ B_ab K_ab.
                     let dg = [
-                        [d[0][0] * gi[0] + d[0][1] * gi[1], d[0][0] * gi[1] + d[0][1] * gi[2]],
-                        [d[1][0] * gi[0] + d[1][1] * gi[1], d[1][0] * gi[1] + d[1][1] * gi[2]],
+                        [
+                            d[0][0] * gi[0] + d[0][1] * gi[1],
+                            d[0][0] * gi[1] + d[0][1] * gi[2],
+                        ],
+                        [
+                            d[1][0] * gi[0] + d[1][1] * gi[1],
+                            d[1][0] * gi[1] + d[1][1] * gi[2],
+                        ],
                     ];
                     let k11 = dg[0][0] * d[0][0] + dg[0][1] * d[0][1];
                     let k12 = dg[0][0] * d[1][0] + dg[0][1] * d[1][1];
@@ -448,8 +481,14 @@ impl LevelEnergy {
                     terms.reg += c * wv;
                     // ∂a/∂Dφ = 2 B Dφ g_A⁻¹; ∂d/∂Dφ = 2 det(Dφ) det B det g_A⁻¹ cof(Dφ).
                     let bdg = [
-                        [bm[0] * dg[0][0] + bm[1] * dg[1][0], bm[0] * dg[0][1] + bm[1] * dg[1][1]],
-                        [bm[1] * dg[0][0] + bm[2] * dg[1][0], bm[1] * dg[0][1] + bm[2] * dg[1][1]],
+                        [
+                            bm[0] * dg[0][0] + bm[1] * dg[1][0],
+                            bm[0] * dg[0][1] + bm[1] * dg[1][1],
+                        ],
+                        [
+                            bm[1] * dg[0][0] + bm[2] * dg[1][0],
+                            bm[1] * dg[0][1] + bm[2] * dg[1][1],
+                        ],
                     ];
                     let f = 2.0 * det_d * det_b * det_gi;
                     for r in 0..2 {
@@ -481,7 +520,11 @@ impl LevelEnergy {
                         if th == 0.0 {
                             continue;
                         }
-                        let db = tri.iter().map(|&k| feature_samples[k * nf + f].d).sum::<f64>() / 3.0;
+                        let db = tri
+                            .iter()
+                            .map(|&k| feature_samples[k * nf + f].d)
+                            .sum::<f64>()
+                            / 3.0;
                         let (e, de) = eta(db, eps);
                         if e == 0.0 && de == 0.0 {
                             continue;
@@ -555,7 +598,8 @@ impl Workspace {
     fn resize(&mut self, nodes: usize, features: usize) {
         let f = features.max(1);
         self.samples.resize(nodes, NodeSample::default());
-        self.feature_samples.resize(nodes * f, FeatureSample::default());
+        self.feature_samples
+            .resize(nodes * f, FeatureSample::default());
         self.adjoint.resize(nodes, [0.0; 4]);
         self.feature_adjoint.resize(nodes * f, 0.0);
     }
@@ -604,7 +648,9 @@ mod tests {
         }
         let a = LevelA {
             size: n,
-            h: (0..n * n).map(|q| (3.0 * xy(q)[0]).sin() + xy(q)[1]).collect(),
+            h: (0..n * n)
+                .map(|q| (3.0 * xy(q)[0]).sin() + xy(q)[1])
+                .collect(),
             weight: (0..n * n)
                 .map(|q| {
                     let g = metric_a(xy(q));
@@ -659,6 +705,7 @@ mod tests {
             betas,
             alpha: (0.4, 0.6),
             position_band: 0.4,
+            position_scale: 0.3,
             similarity: Similarity3 {
                 matrix: [[0.9, -0.1, 0.0], [0.1, 0.9, 0.05], [0.0, -0.05, 0.95]],
                 translation: [0.02, -0.01, 0.03],
@@ -694,8 +741,11 @@ mod tests {
                 up[q][c] += step;
                 let mut down = u.clone();
                 down[q][c] -= step;
-                let fd = (e.evaluate(&up, &mut scratch, &mut Workspace::default()).total
-                    - e.evaluate(&down, &mut scratch, &mut Workspace::default()).total)
+                let fd = (e
+                    .evaluate(&up, &mut scratch, &mut Workspace::default())
+                    .total
+                    - e.evaluate(&down, &mut scratch, &mut Workspace::default())
+                        .total)
                     / (2.0 * step);
                 assert!(
                     (fd - grad[q][c]).abs() <= 1e-5 * scale + 1e-6 * fd.abs(),
@@ -821,7 +871,10 @@ mod tests {
         // The regularization is stationary at an isometry (∂W/∂Dφ = 0, and
         // αl·g_A⁻¹ − αl·adj(g_B)/det g_B = 0 through g_B); the data terms vanish with
         // their residuals.
-        let gmax = grad.iter().map(|g| g[0].abs().max(g[1].abs())).fold(0.0, f64::max);
+        let gmax = grad
+            .iter()
+            .map(|g| g[0].abs().max(g[1].abs()))
+            .fold(0.0, f64::max);
         assert!(gmax < 1e-10, "{gmax}");
     }
 
@@ -833,6 +886,10 @@ mod tests {
         // Push node (4, 4) past its right neighbour: its cells invert.
         u[4 * n + 4] = [0.2, 0.0];
         let mut grad = vec![[0.0; 2]; n * n];
-        assert!(e.evaluate(&u, &mut grad, &mut Workspace::default()).total.is_infinite());
+        assert!(
+            e.evaluate(&u, &mut grad, &mut Workspace::default())
+                .total
+                .is_infinite()
+        );
     }
 }

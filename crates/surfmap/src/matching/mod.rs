@@ -6,13 +6,17 @@
 //! ([`surface`]); the deformation lives on the grid ([`deformation`]); the energy
 //! terms and their gradients are in [`energy`]; [`ncg`] minimizes one level;
 //! [`solve`] runs the multiscale schedule with the initial alignment
-//! ([`similarity`]).
+//! ([`similarity`], [`rigid`], [`align`]); [`output`] checks the result for folds in
+//! space, maps points and writes the match folder; [`pictures`] draws it.
 
 pub mod align;
 pub mod deformation;
 pub mod energy;
 pub mod ncg;
+pub mod output;
+pub mod pictures;
 pub mod precondition;
+pub mod rigid;
 pub mod similarity;
 pub mod solve;
 pub mod surface;
@@ -20,8 +24,12 @@ pub mod surface;
 pub use deformation::Deformation;
 pub use energy::{Betas, EnergyTerms, Similarity3};
 pub use ncg::{LevelLog, NcgSettings, StopReason};
+pub use output::{FoldCheck, MatchReport, PointMap, check_folds, write_match_folder};
 pub use similarity::Similarity2;
-pub use solve::{Align, Guidance, Landmarks, MatchOptions, SurfaceMatch, match_surfaces};
+pub use solve::{
+    Align, AlignmentReport, Guidance, HoleFeatures, Landmarks, MatchOptions, SurfaceMatch,
+    match_surfaces,
+};
 pub use surface::MatchSurface;
 
 /// What went wrong while matching, and what to do about it.
@@ -37,4 +45,9 @@ pub enum MatchError {
     Guidance(String),
     #[error("invalid option: {0}")]
     Option(String),
+    #[error("{0}")]
+    Output(String),
 }
+
+#[cfg(test)]
+mod tests;

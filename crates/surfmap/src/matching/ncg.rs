@@ -106,7 +106,9 @@ pub(crate) fn minimize(
         }
         let mut slope = dot(&grad, &dir);
         if !(slope < 0.0) {
-            dir.iter_mut().zip(&z).for_each(|(d, g)| *d = [-g[0], -g[1]]);
+            dir.iter_mut()
+                .zip(&z)
+                .for_each(|(d, g)| *d = [-g[0], -g[1]]);
             slope = dot(&grad, &dir);
             prev_step = None;
             if !(slope < 0.0) {
@@ -182,7 +184,9 @@ pub(crate) fn minimize(
             e = energy.evaluate(&phi.displacement, &mut grad, &mut work);
             evaluations += 1;
             apply(&grad, &mut z);
-            dir.iter_mut().zip(&z).for_each(|(d, g)| *d = [-g[0], -g[1]]);
+            dir.iter_mut()
+                .zip(&z)
+                .for_each(|(d, g)| *d = [-g[0], -g[1]]);
             prev_step = None;
         }
     }
@@ -201,5 +205,8 @@ pub(crate) fn minimize(
 }
 
 fn dot(a: &[[f64; 2]], b: &[[f64; 2]]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x[0] * y[0] + x[1] * y[1]).sum()
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| x[0] * y[0] + x[1] * y[1])
+        .sum()
 }

@@ -102,13 +102,23 @@ mod tests {
     fn operator(n: usize, lambda: f64, v: &[f64]) -> Vec<f64> {
         let h2 = (1.0 / (n - 1) as f64).powi(2);
         let at = |i: i64, j: i64| {
-            let m = |t: i64| if t < 0 { -t } else if t >= n as i64 { 2 * (n as i64 - 1) - t } else { t };
+            let m = |t: i64| {
+                if t < 0 {
+                    -t
+                } else if t >= n as i64 {
+                    2 * (n as i64 - 1) - t
+                } else {
+                    t
+                }
+            };
             v[m(i) as usize * n + m(j) as usize]
         };
         (0..n * n)
             .map(|k| {
                 let (i, j) = ((k / n) as i64, (k % n) as i64);
-                let lap = (at(i - 1, j) + at(i + 1, j) + at(i, j - 1) + at(i, j + 1) - 4.0 * at(i, j)) / h2;
+                let lap = (at(i - 1, j) + at(i + 1, j) + at(i, j - 1) + at(i, j + 1)
+                    - 4.0 * at(i, j))
+                    / h2;
                 v[k] - lambda * lap
             })
             .collect()
@@ -120,19 +130,30 @@ mod tests {
         let lambda = 0.003;
         let p = SobolevPreconditioner::new(n, lambda);
         let mut rng = crate::testing::Rng(21);
-        let g: Vec<[f64; 2]> = (0..n * n).map(|_| [rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)]).collect();
+        let g: Vec<[f64; 2]> = (0..n * n)
+            .map(|_| [rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)])
+            .collect();
         let mut v = vec![[0.0; 2]; n * n];
         p.apply(&g, &mut v);
         for c in 0..2 {
             let vc: Vec<f64> = v.iter().map(|x| x[c]).collect();
             let back = operator(n, lambda, &vc);
             for k in 0..n * n {
-                assert!((back[k] - g[k][c]).abs() < 1e-10, "{k}: {} vs {}", back[k], g[k][c]);
+                assert!(
+                    (back[k] - g[k][c]).abs() < 1e-10,
+                    "{k}: {} vs {}",
+                    back[k],
+                    g[k][c]
+                );
             }
         }
         // λ = 0 is the identity.
         let id = SobolevPreconditioner::new(n, 0.0);
         id.apply(&g, &mut v);
-        assert!(v.iter().zip(&g).all(|(a, b)| (a[0] - b[0]).abs() < 1e-12 && (a[1] - b[1]).abs() < 1e-12));
+        assert!(
+            v.iter()
+                .zip(&g)
+                .all(|(a, b)| (a[0] - b[0]).abs() < 1e-12 && (a[1] - b[1]).abs() < 1e-12)
+        );
     }
 }

@@ -5,6 +5,7 @@
 
 use super::MatchError;
 use super::energy::{B_CHANNELS, LevelA, LevelB, TriangleA, chi, eta, theta};
+use crate::grid::pyramid::gaussian_filter;
 use crate::grid::{Grid, Pyramid, harmonic_extension};
 use crate::mesh::TriMesh;
 use crate::param::flatten::{FlattenOptions, flatten};
@@ -22,7 +23,9 @@ const S_X: usize = 4;
 pub struct MatchSurface {
     /// UV per vertex of the input mesh (mesh units).
     pub uvs: Vec<[f64; 2]>,
-    /// The input mesh's triangles (holes stay open: the fill is for the solve only).
+    /// The input mesh's positions and triangles (holes stay open: the fill is for the
+    /// solve only).
+    pub positions: Vec<[f64; 3]>,
     pub triangles: Vec<[u32; 3]>,
     /// Holes filled for the flattening.
     pub filled_holes: usize,
@@ -54,6 +57,7 @@ impl MatchSurface {
         size: usize,
         fill_holes: bool,
         length_unit: f64,
+        curvature_sigma: f64,
     ) -> Result<Self, MatchError> {
         let clock = std::time::Instant::now();
         let flat = flatten(mesh, &FlattenOptions::default().with_fill_holes(fill_holes))?;
@@ -74,7 +78,14 @@ impl MatchSurface {
         let unit = length_unit;
         let mut position = images.position.map(|p| p.map(|c| c / unit));
         harmonic_extension(&inside, &mut [&mut position])?;
-        let h = images.mean_curvature_extended.as_slice();
+        // Mean curvature of a scan is noisy at the finest scale (the cotangent formula on
+        // an irregular triangulation); it is filtered with `curvature_sigma` cells.
+        let h_smooth = if curvature_sigma > 0.0 {
+            gaussian_filter(&images.mean_curvature_extended, curvature_sigma)
+        } else {
+            images.mean_curvature_extended.clone()
+        };
+        let h = h_smooth.as_slice();
         let g = images.metric_extended.as_slice();
         let x = position.as_slice();
         let (hs, gs) = (unit, 1.0 / (unit * unit));
@@ -95,10 +106,14 @@ impl MatchSurface {
         let feature_distance = images
             .features
             .iter()
-            .map(|f| f.distance.map(|&d| if d.is_finite() { d / unit } else { 1e3 }))
+            .map(|f| {
+                f.distance
+                    .map(|&d| if d.is_finite() { d / unit } else { 1e3 })
+            })
             .collect();
         Ok(Self {
             uvs: flat.uvs,
+            positions: mesh.positions.clone(),
             triangles: mesh.triangles.clone(),
             filled_holes: flat.holes_filled,
             flatten_iterations: flat.iterations,
@@ -110,6 +125,35 @@ impl MatchSurface {
             feature_distance,
             time_images: clock.elapsed().as_secs_f64(),
         })
+    }
+
+    /// Adds the distance maps of more named vertex curves (e.g. hole rims paired with
+    /// the other surface's after the alignment).
+    pub fn add_curve_features(&mut self, file: &FeatureFile) -> Result<(), MatchError> {
+        let mesh = TriMesh::new(self.positions.clone(), self.triangles.clone());
+        let unit = self.length_unit;
+        for f in self.images.curve_distances(&mesh, &self.uvs, file)? {
+            self.feature_names.push(f.name);
+            self.feature_distance.push(
+                f.distance
+                    .map(|&d| if d.is_finite() { d / unit } else { 1e3 }),
+            );
+        }
+        Ok(())
+    }
+
+    /// The rims of the holes filled for the flattening: every boundary loop but the
+    /// longest, as closed vertex curves.
+    pub fn hole_rims(&self) -> Vec<Vec<u32>> {
+        let mesh = TriMesh::new(self.positions.clone(), self.triangles.clone());
+        let topo = crate::mesh::Topology::new(&mesh);
+        let mut loops: Vec<Vec<u32>> = topo
+            .boundary_loops
+            .iter()
+            .map(|l| l.vertices.clone())
+            .collect();
+        loops.sort_by_key(|l| std::cmp::Reverse(l.len()));
+        loops.into_iter().skip(1).collect()
     }
 
     /// Finest grid size.
@@ -225,7 +269,10 @@ impl MatchSurface {
             field: Grid::from_vec(m, data).expect("level size"),
             features: features
                 .iter()
-                .map(|&f| Grid::from_vec(m, self.inject(&self.feature_distance[f], k)).expect("level size"))
+                .map(|&f| {
+                    Grid::from_vec(m, self.inject(&self.feature_distance[f], k))
+                        .expect("level size")
+                })
                 .collect(),
         }
     }
