@@ -289,9 +289,9 @@ impl LevelEnergy {
             .zip(feature_samples.par_chunks(fstride))
             .zip(feature_adjoint.par_chunks(fstride))
             .for_each(|((((g, s), a), fs), fa)| {
-                for c in 0..3 {
-                    g[0] += a[c] * s.g_dx[c];
-                    g[1] += a[c] * s.g_dy[c];
+                for (c, ac) in a.iter().take(3).enumerate() {
+                    g[0] += ac * s.g_dx[c];
+                    g[1] += ac * s.g_dy[c];
                 }
                 g[0] += a[3] * s.sd_dx;
                 g[1] += a[3] * s.sd_dy;
@@ -813,7 +813,7 @@ mod tests {
         // and 1 at some nodes, and η, θ are active.
         let e = synthetic(9, ONLY(0));
         assert!(e.a.chi.iter().any(|&c| c > 0.0 && c < 1.0));
-        assert!(e.a.chi.iter().any(|&c| c == 0.0));
+        assert!(e.a.chi.contains(&0.0));
         let mut grad = vec![[0.0; 2]; 81];
         let u = random_displacement(9, 1, 0.02);
         let partial = (0..81).filter(|&q| {

@@ -105,13 +105,13 @@ pub(crate) fn minimize(
             break;
         }
         let mut slope = dot(&grad, &dir);
-        if !(slope < 0.0) {
+        if slope.is_nan() || slope >= 0.0 {
             dir.iter_mut()
                 .zip(&z)
                 .for_each(|(d, g)| *d = [-g[0], -g[1]]);
             slope = dot(&grad, &dir);
             prev_step = None;
-            if !(slope < 0.0) {
+            if slope.is_nan() || slope >= 0.0 {
                 stop = StopReason::Converged;
                 break;
             }

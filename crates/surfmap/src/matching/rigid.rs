@@ -274,7 +274,9 @@ fn icp(
         pairs.select_nth_unstable_by(keep - 1, |x, y| x.0.total_cmp(&y.0));
         let kept = &pairs[..keep];
         rms = (kept.iter().map(|x| x.0).sum::<f64>() / keep as f64).sqrt();
-        (p.clear(), q.clear(), n.clear());
+        p.clear();
+        q.clear();
+        n.clear();
         for &(_, i, j) in kept {
             p.push(motion.apply(a[i]));
             q.push(b[j]);

@@ -101,7 +101,7 @@ pub fn fit_similarity_3d(
     allow_scale: bool,
 ) -> Option<Similarity3> {
     let total: f64 = w.iter().sum();
-    if !(total > 0.0) {
+    if total.is_nan() || total <= 0.0 {
         return None;
     }
     let mut pm = [0.0; 3];
@@ -127,7 +127,7 @@ pub fn fit_similarity_3d(
             spp += w[k] * a[r] * a[r];
         }
     }
-    if !(spp > 0.0) {
+    if spp.is_nan() || spp <= 0.0 {
         return None;
     }
     let [[sxx, sxy, sxz], [syx, syy, syz], [szx, szy, szz]] = s;
@@ -245,8 +245,8 @@ mod tests {
         let base = cost(&fit);
         for dt in [[1e-3, 0.0, 0.0], [0.0, -1e-3, 0.0], [0.0, 0.0, 1e-3]] {
             let mut moved = fit;
-            for c in 0..3 {
-                moved.translation[c] += dt[c];
+            for (t, d) in moved.translation.iter_mut().zip(dt) {
+                *t += d;
             }
             assert!(cost(&moved) > base);
         }

@@ -616,10 +616,8 @@ impl Solver<'_> {
         let allow_scale = self.options.allow_scale;
         let position = self.options.betas.position != 0.0;
         let mut refit = |e: &mut LevelEnergy, phi: &Deformation| {
-            if position {
-                if let Some(s) = fit_position_similarity(e, phi, allow_scale) {
-                    e.similarity = s;
-                }
+            if position && let Some(s) = fit_position_similarity(e, phi, allow_scale) {
+                e.similarity = s;
             }
         };
         let n = phi.size;

@@ -58,10 +58,10 @@ fn errors(
     let mut e = vec![];
     let mut matched = 0;
     let mut expected = 0;
-    for v in 0..a.num_vertices() {
+    for (v, found) in corr.iter().enumerate().take(a.num_vertices()) {
         let Some(t) = truth(v) else { continue };
         expected += 1;
-        if let Some(p) = corr[v] {
+        if let Some(p) = found {
             matched += 1;
             let x = p.position(&b.positions, &b.triangles);
             e.push(((0..3).map(|c| (x[c] - t[c]).powi(2)).sum::<f64>()).sqrt());
