@@ -19,7 +19,9 @@ use image::RgbImage;
 
 use super::AppError;
 use super::pad::{PadReport, pad_colours};
-use super::texture::{LayoutImage, Texture, place_in_unit_square, render_layout, to_rgb_image};
+use super::texture::{
+    LayoutImage, Texture, place_in_unit_square, render_layout, rotate_to_fit, to_rgb_image,
+};
 use crate::render::Colormap;
 
 /// Size and filtering of a baked texture.
@@ -48,8 +50,9 @@ impl Default for BakeOptions {
 #[derive(Clone, Debug)]
 pub struct BakedTexture {
     pub image: RgbImage,
-    /// New texture coordinates, one per vertex: the flattening placed in `[0, 1]²` with
-    /// a margin of `padding + 1` texels (aspect kept).
+    /// New texture coordinates, one per vertex: the flattening turned to fit the
+    /// smallest square ([`rotate_to_fit`]) and placed in `[0, 1]²` with a margin of
+    /// `padding + 1` texels (aspect kept).
     pub uvs: Vec<[f64; 2]>,
     /// Texels covered by the surface (row-major, row 0 at the top).
     pub covered: Vec<bool>,
@@ -166,7 +169,7 @@ fn bake_with(
         )));
     }
     let margin = ((options.padding + 1) as f64 / size as f64).min(0.25);
-    let uvs = place_in_unit_square(new_uvs, margin);
+    let uvs = place_in_unit_square(&rotate_to_fit(new_uvs), margin);
     let corners: Vec<[[f64; 2]; 3]> = triangles
         .iter()
         .map(|t| t.map(|v| uvs[v as usize]))

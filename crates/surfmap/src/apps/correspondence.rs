@@ -327,52 +327,22 @@ pub(crate) fn summary(values: &mut [f64]) -> (f64, f64, f64) {
 pub(crate) mod tests {
     use super::*;
     use crate::mesh::TriMesh;
-    use crate::mesh::generate::grid_disc;
 
-    /// The correspondence of every vertex of `a` to the point of `b`'s planar domain at
-    /// `f(x, y)`, located in `b` through its positions' `(x, y)` (both meshes lie over
-    /// the plane as graphs): an analytic map between two different triangulations.
+    pub use crate::apps::inputs::planar_chart;
+
+    /// The correspondence of every vertex of `a` to the point of `b` over `f(x, y)`
+    /// (both graphs over the plane): an analytic map between two triangulations.
     pub fn analytic_map(
         a: &TriMesh,
         b: &TriMesh,
         f: impl Fn([f64; 2]) -> [f64; 2],
     ) -> Vec<Option<SurfacePoint>> {
-        let chart = planar_chart(b);
-        a.positions
-            .iter()
-            .map(|p| chart.locate(f([p[0], p[1]]), 0.0))
-            .collect()
+        crate::apps::inputs::planar_map(a, b, f, |_, _| true)
     }
 
-    /// The chart `(x, y)` of a mesh that is a graph over the plane.
-    pub fn planar_chart(m: &TriMesh) -> Chart {
-        Chart::new(
-            m.positions.iter().map(|p| [p[0], p[1]]).collect(),
-            m.triangles.clone(),
-        )
-        .unwrap()
-    }
-
-    /// A graph `z = h(x, y)` over the square `[−1, 1]²` triangulated `n × n`, with
-    /// interior vertices jittered (so two such meshes share no vertices).
+    /// A graph `z = h(x, y)` over `[−1, 1]²`, `n × n` squares, interior vertices jittered.
     pub fn graph_mesh(n: usize, jitter: f64, seed: u64, h: impl Fn(f64, f64) -> f64) -> TriMesh {
-        let mut m = grid_disc(n);
-        let mut rng = crate::testing::Rng(seed);
-        let boundary: std::collections::HashSet<u32> =
-            crate::mesh::generate::disc_boundary(&m.triangles)
-                .unwrap()
-                .into_iter()
-                .collect();
-        let spacing = 2.0 / n as f64;
-        for (i, p) in m.positions.iter_mut().enumerate() {
-            let (mut x, mut y) = (2.0 * p[0] - 1.0, 2.0 * p[1] - 1.0);
-            if !boundary.contains(&(i as u32)) {
-                x += jitter * spacing * rng.range(-0.5, 0.5);
-                y += jitter * spacing * rng.range(-0.5, 0.5);
-            }
-            *p = [x, y, h(x, y)];
-        }
-        m
+        crate::apps::inputs::graph(n, 1.0, jitter, seed, h)
     }
 
     fn bump(x: f64, y: f64) -> f64 {

@@ -30,6 +30,8 @@
 pub mod bake;
 pub mod correspondence;
 pub mod gltf;
+#[doc(hidden)]
+pub mod inputs;
 pub mod match_folder;
 pub mod morph;
 pub mod pad;

@@ -244,6 +244,34 @@ pub fn place_in_unit_square(uvs: &[[f64; 2]], margin: f64) -> Vec<[f64; 2]> {
         .collect()
 }
 
+/// The UVs rotated about the origin so that they fit the smallest square: the angle in
+/// `[0°, 90°)`, in steps of ½°, that minimizes the longer side of their bounding box
+/// (a flattening is defined up to a rotation; a chart standing on a corner would waste
+/// half the texture).
+pub fn rotate_to_fit(uvs: &[[f64; 2]]) -> Vec<[f64; 2]> {
+    let side = |angle: f64| -> f64 {
+        let (s, c) = angle.sin_cos();
+        let mut lo = [f64::INFINITY; 2];
+        let mut hi = [f64::NEG_INFINITY; 2];
+        for p in uvs.iter().filter(|p| p[0].is_finite() && p[1].is_finite()) {
+            let q = [c * p[0] - s * p[1], s * p[0] + c * p[1]];
+            for k in 0..2 {
+                lo[k] = lo[k].min(q[k]);
+                hi[k] = hi[k].max(q[k]);
+            }
+        }
+        (hi[0] - lo[0]).max(hi[1] - lo[1])
+    };
+    let best = (0..180)
+        .map(|k| (k as f64 * 0.5).to_radians())
+        .min_by(|&a, &b| side(a).total_cmp(&side(b)))
+        .unwrap_or(0.0);
+    let (s, c) = best.sin_cos();
+    uvs.iter()
+        .map(|p| [c * p[0] - s * p[1], s * p[0] + c * p[1]])
+        .collect()
+}
+
 /// An `RgbImage` from colours in `[0, 1]` (rounded, clamped).
 pub fn to_rgb_image(width: u32, height: u32, rgb: &[[f64; 3]]) -> image::RgbImage {
     let mut img = image::RgbImage::new(width, height);
@@ -326,6 +354,16 @@ mod tests {
             crate::testing::max_uv_difference(&p, &want) < 1e-15,
             "{p:?}"
         );
+    }
+
+    #[test]
+    fn a_square_on_its_corner_is_turned_upright() {
+        let diamond = [[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]];
+        let upright = rotate_to_fit(&diamond);
+        for p in &upright {
+            assert!((p[0].abs() - 0.5f64.sqrt()).abs() < 1e-12, "{p:?}");
+            assert!((p[1].abs() - 0.5f64.sqrt()).abs() < 1e-12, "{p:?}");
+        }
     }
 
     #[test]

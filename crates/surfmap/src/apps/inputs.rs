@@ -1,0 +1,282 @@
+//! Generated inputs for the application commands, with correspondences known in
+//! closed form (tests, the `apps_inputs` example, CI's glTF validation). Not part of the
+//! API.
+//!
+//! - `scan.obj` + `scan.mtl` + `photos.png`: a curved surface textured from two
+//!   "photographs" (orthographic views from the left and the right, side by side in one
+//!   image), so its texture coordinates jump along the line where the photographs meet,
+//!   as in a scan (thesis §5.1). The colour is a function of the 3D point (a grid of
+//!   lines over a smooth colour ramp), so a correct bake shows it continuous.
+//! - `a.obj`, `b.obj`, `match_ab/`: two different triangulations of two different
+//!   curved surfaces and the correspondence A → B of a smooth map of the plane; a band
+//!   along A's border has no counterpart (partial match). `b_height.npy`: B's heights.
+//! - `neutral.obj`, `key1.obj`, `key2.obj` with `match_n1/`, `match_12/` (a chain) and
+//!   `match_n2/` (direct): inputs for `rig --chain --direct`.
+
+use std::path::Path;
+
+use super::Chart;
+use super::match_folder::write_match_folder;
+use super::pad::pad_colours;
+use super::texture::{render_layout, to_rgb_image};
+use crate::mesh::io::ObjMaterial;
+use crate::mesh::{SurfacePoint, TriMesh, Uvs};
+
+/// A graph `z = h(x, y)` over `[−s, s]²`, `n × n` squares, interior vertices jittered
+/// deterministically by `jitter` of the spacing (so two such meshes share no vertex).
+pub fn graph(n: usize, s: f64, jitter: f64, seed: u64, h: impl Fn(f64, f64) -> f64) -> TriMesh {
+    let mut m = crate::mesh::generate::grid_disc(n);
+    let mut rng = crate::testing::Rng(seed);
+    for (i, p) in m.positions.iter_mut().enumerate() {
+        let (col, row) = (i % (n + 1), i / (n + 1));
+        let interior = col > 0 && col < n && row > 0 && row < n;
+        let (mut x, mut y) = (s * (2.0 * p[0] - 1.0), s * (2.0 * p[1] - 1.0));
+        if interior {
+            x += jitter * 2.0 * s / n as f64 * rng.range(-0.5, 0.5);
+            y += jitter * 2.0 * s / n as f64 * rng.range(-0.5, 0.5);
+        }
+        *p = [x, y, h(x, y)];
+    }
+    m
+}
+
+/// The correspondence of every vertex of `a` to the point of `b` over `f(x, y)` (both
+/// graphs over the plane), `None` where `keep(x, y)` is false or `f` leaves `b`.
+pub fn planar_map(
+    a: &TriMesh,
+    b: &TriMesh,
+    f: impl Fn([f64; 2]) -> [f64; 2],
+    keep: impl Fn(f64, f64) -> bool,
+) -> Vec<Option<SurfacePoint>> {
+    let chart = planar_chart(b);
+    a.positions
+        .iter()
+        .map(|p| {
+            if keep(p[0], p[1]) {
+                chart.locate(f([p[0], p[1]]), 0.0)
+            } else {
+                None
+            }
+        })
+        .collect()
+}
+
+/// Colour of a 3D point: a smooth ramp with dark grid lines every `cell` units.
+fn paint(p: [f64; 3], cell: f64) -> [f64; 3] {
+    let line = |x: f64| {
+        let f = (x / cell).rem_euclid(1.0);
+        (f.min(1.0 - f) * cell / (0.06 * cell)).min(1.0)
+    };
+    let l = line(p[0]).min(line(p[1])).min(line(p[2]));
+    let t = 0.5 + 0.5 * (p[0] / (4.0 * cell)).tanh();
+    let base = [
+        0.95 - 0.5 * t,
+        0.55 + 0.3 * (p[1] / (5.0 * cell)).sin(),
+        0.35 + 0.5 * t,
+    ];
+    base.map(|c| 0.15 + (c - 0.15) * l)
+}
+
+/// Textures `mesh` from two orthographic photographs (from the left and from the
+/// right, each `side × side`, side by side in one image): per-corner UVs into the
+/// photograph that faces each triangle better.
+pub fn two_photographs(
+    mesh: &TriMesh,
+    side: u32,
+) -> (Vec<[u32; 3]>, Vec<[f64; 2]>, image::RgbImage) {
+    let (lo, hi) = mesh.bounding_box().expect("a mesh with positions");
+    let centre = [0, 1, 2].map(|k| 0.5 * (lo[k] + hi[k]));
+    let radius = (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
+    // Cameras look along the mesh's mean normal, turned ±35° about the y axis.
+    let mut normal = [0.0; 3];
+    for t in 0..mesh.num_triangles() {
+        let [a, b, c] = mesh.triangle_positions(t);
+        let (u, v) = (
+            [0, 1, 2].map(|k| b[k] - a[k]),
+            [0, 1, 2].map(|k| c[k] - a[k]),
+        );
+        let n = [
+            u[1] * v[2] - u[2] * v[1],
+            u[2] * v[0] - u[0] * v[2],
+            u[0] * v[1] - u[1] * v[0],
+        ];
+        for k in 0..3 {
+            normal[k] += n[k];
+        }
+    }
+    let view = |angle: f64| -> ([f64; 3], [f64; 3], [f64; 3]) {
+        let (c, s) = (angle.cos(), angle.sin());
+        let nz = normal[2].signum();
+        let d = [s, 0.0, c * nz];
+        let up = [0.0, 1.0, 0.0];
+        let right = [
+            up[1] * d[2] - up[2] * d[1],
+            up[2] * d[0] - up[0] * d[2],
+            up[0] * d[1] - up[1] * d[0],
+        ];
+        (right, up, d)
+    };
+    let cameras = [view(-0.6), view(0.6)];
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    // Photo coordinates of a point in camera k, in [0, 1]² of the whole image.
+    let photo = |k: usize, p: [f64; 3]| -> [f64; 2] {
+        let (r, u, _) = cameras[k];
+        let q = [0, 1, 2].map(|i| p[i] - centre[i]);
+        let (x, y) = (
+            0.5 + 0.55 * dot(q, r) / radius,
+            0.5 + 0.55 * dot(q, u) / radius,
+        );
+        [(x + k as f64) / 2.0, y]
+    };
+    let mut coords = vec![];
+    let mut indices = vec![];
+    for t in 0..mesh.num_triangles() {
+        let p = mesh.triangle_positions(t);
+        let (u, v) = (
+            [0, 1, 2].map(|k| p[1][k] - p[0][k]),
+            [0, 1, 2].map(|k| p[2][k] - p[0][k]),
+        );
+        let n = [
+            u[1] * v[2] - u[2] * v[1],
+            u[2] * v[0] - u[0] * v[2],
+            u[0] * v[1] - u[1] * v[0],
+        ];
+        let k = if dot(n, cameras[0].2) >= dot(n, cameras[1].2) {
+            0
+        } else {
+            1
+        };
+        let base = coords.len() as u32;
+        coords.extend(p.map(|q| photo(k, q)));
+        indices.push([base, base + 1, base + 2]);
+    }
+    // The photographs: every triangle drawn into both, seen from its camera; the
+    // nearer surface wins (a triangle facing away from a camera is drawn last there).
+    let cell = radius / 12.0;
+    let mut order: Vec<usize> = (0..mesh.num_triangles()).collect();
+    let mut image = image::RgbImage::from_pixel(2 * side, side, image::Rgb([40, 40, 48]));
+    for k in 0..2 {
+        let depth = |t: usize| -> f64 {
+            let p = mesh.triangle_positions(t);
+            -p.iter().map(|q| dot(*q, cameras[k].2)).sum::<f64>()
+        };
+        order.sort_by(|&a, &b| depth(a).total_cmp(&depth(b)));
+        let corners: Vec<[[f64; 2]; 3]> = order
+            .iter()
+            .map(|&t| {
+                mesh.triangle_positions(t).map(|q| {
+                    let c = photo(k, q);
+                    [2.0 * c[0] - k as f64, c[1]]
+                })
+            })
+            .collect();
+        let layout = render_layout(&corners, side, side, 2, |sp| {
+            let t = order[sp.triangle as usize];
+            let p = mesh.triangle_positions(t);
+            let b = sp.barycentric;
+            Some(paint(
+                [0, 1, 2].map(|i| b[0] * p[0][i] + b[1] * p[1][i] + b[2] * p[2][i]),
+                cell,
+            ))
+        })
+        .expect("a photograph");
+        // Photographs of a scan extend beyond the surface's silhouette: pad them, so a
+        // lookup at the silhouette does not blend in the background.
+        let mut rgb = layout.rgb;
+        let mut filled: Vec<bool> = layout.coverage.iter().map(|&c| c > 0).collect();
+        pad_colours(&mut rgb, &mut filled, side as usize, side as usize, 4);
+        let img = to_rgb_image(side, side, &rgb);
+        for (x, y, px) in img.enumerate_pixels() {
+            if filled[(y * side + x) as usize] {
+                image.put_pixel(x + k as u32 * side, y, *px);
+            }
+        }
+    }
+    (indices, coords, image)
+}
+
+/// The chart `(x, y)` of a mesh that is a graph over the plane.
+pub fn planar_chart(m: &TriMesh) -> Chart {
+    Chart::new(
+        m.positions.iter().map(|p| [p[0], p[1]]).collect(),
+        m.triangles.clone(),
+    )
+    .expect("a planar chart")
+}
+
+fn save(path: &Path, mesh: &TriMesh) {
+    crate::write_mesh(path, mesh).unwrap_or_else(|e| panic!("{e}"));
+}
+
+/// Writes every input into `out` (created if missing); `scan` replaces the generated
+/// scan surface. Returns a one-line summary. Panics on any failure (a test helper).
+pub fn write_inputs(out: &Path, scan: Option<TriMesh>, photo_side: u32) -> String {
+    std::fs::create_dir_all(out).unwrap();
+
+    // The scan with two photographs.
+    let scan = scan.unwrap_or_else(|| {
+        graph(60, 1.0, 0.5, 11, |x, y| {
+            0.5 * (-(x * x + y * y)).exp() + 0.1 * (3.0 * x).sin() * y
+        })
+    });
+    let (indices, coords, photos) = two_photographs(&scan, photo_side);
+    photos.save(out.join("photos.png")).unwrap();
+    let textured = TriMesh {
+        uvs: Some(Uvs::PerCorner { coords, indices }),
+        ..scan
+    };
+    crate::write_obj(
+        &out.join("scan.obj"),
+        &textured,
+        Some(&ObjMaterial {
+            texture: "photos.png".into(),
+        }),
+    )
+    .unwrap();
+
+    // A morph pair with a partial match.
+    let a = graph(40, 1.0, 0.5, 1, |x, y| 0.3 * (-(2.0 * x * x + y * y)).exp());
+    let b = graph(47, 1.1, 0.5, 2, |x, y| {
+        0.45 * (-(x * x + 2.0 * y * y)).exp() + 0.1 * x
+    });
+    let f = |p: [f64; 2]| [0.9 * p[0] + 0.08 * p[1] * p[1], 0.95 * p[1] + 0.05 * p[0]];
+    let ab = planar_map(&a, &b, f, |x, y| {
+        x.abs().max(y.abs()) < 0.85 + 0.05 * (4.0 * y).sin()
+    });
+    save(&out.join("a.obj"), &a);
+    save(&out.join("b.obj"), &b);
+    let info = |from: &str, to: &str| serde_json::json!({"a": from, "b": to, "source": "apps_inputs: a closed-form map of the plane"});
+    write_match_folder(&out.join("match_ab"), &ab, &info("a.obj", "b.obj")).unwrap();
+
+    // A rig: neutral → key1 → key2 (a chain) and neutral → key2 (direct).
+    let neutral = graph(36, 1.0, 0.4, 3, |x, y| 0.3 * (-(x * x + y * y)).exp());
+    let key1 = graph(41, 1.0, 0.4, 4, |x, y| {
+        0.3 * (-(x * x + y * y)).exp() + 0.15 * x * x
+    });
+    let key2 = graph(39, 1.0, 0.4, 5, |x, y| {
+        0.3 * (-(x * x + y * y)).exp() + 0.15 * x * x - 0.1 * y
+    });
+    let g1 = |p: [f64; 2]| [0.97 * p[0], 0.97 * p[1] + 0.02 * p[0]];
+    let g2 = |p: [f64; 2]| [0.97 * p[0] + 0.02 * p[1], 0.97 * p[1]];
+    let everywhere = |_: f64, _: f64| true;
+    save(&out.join("neutral.obj"), &neutral);
+    save(&out.join("key1.obj"), &key1);
+    save(&out.join("key2.obj"), &key2);
+    let n1 = planar_map(&neutral, &key1, g1, everywhere);
+    let k12 = planar_map(&key1, &key2, g2, everywhere);
+    let n2 = planar_map(&neutral, &key2, |p| g2(g1(p)), everywhere);
+    write_match_folder(&out.join("match_n1"), &n1, &info("neutral.obj", "key1.obj")).unwrap();
+    write_match_folder(&out.join("match_12"), &k12, &info("key1.obj", "key2.obj")).unwrap();
+    write_match_folder(&out.join("match_n2"), &n2, &info("neutral.obj", "key2.obj")).unwrap();
+
+    // Per-vertex values of B for `transfer --values`: its height.
+    let heights: Vec<f64> = b.positions.iter().map(|p| p[2]).collect();
+    crate::raster::npy::save_npy(&out.join("b_height.npy"), &[heights.len()], &heights).unwrap();
+    format!(
+        "wrote {}: scan.obj (+ photos.png, {} triangles), a.obj/b.obj/match_ab ({} of {} vertices matched), neutral/key1/key2 with match_n1, match_12, match_n2, b_height.npy",
+        out.display(),
+        textured.num_triangles(),
+        ab.iter().filter(|p| p.is_some()).count(),
+        a.num_vertices()
+    )
+}
