@@ -161,8 +161,8 @@ fn morph_writes_a_playable_gltf_and_frames_that_end_on_b() {
     for (i, p) in ab.iter().enumerate() {
         if let Some(p) = p {
             let want = p.position(&b.positions, &b.triangles);
-            for k in 0..3 {
-                assert!((last.positions[i][k] - want[k]).abs() < 1e-12);
+            for (got, want) in last.positions[i].iter().zip(want) {
+                assert!((got - want).abs() < 1e-12);
             }
         }
     }

@@ -10,6 +10,7 @@
 //! - `a.obj`, `b.obj`, `match_ab/`: two different triangulations of two different
 //!   curved surfaces and the correspondence A → B of a smooth map of the plane; a band
 //!   along A's border has no counterpart (partial match). `b_height.npy`: B's heights.
+//!   `match_scan_b/`: the generated scan → B (a textured morph with texture seams).
 //! - `neutral.obj`, `key1.obj`, `key2.obj` with `match_n1/`, `match_12/` (a chain) and
 //!   `match_n2/` (direct): inputs for `rig --chain --direct`.
 
@@ -155,10 +156,10 @@ pub fn two_photographs(
     let cell = radius / 12.0;
     let mut order: Vec<usize> = (0..mesh.num_triangles()).collect();
     let mut image = image::RgbImage::from_pixel(2 * side, side, image::Rgb([40, 40, 48]));
-    for k in 0..2 {
+    for (k, camera) in cameras.iter().enumerate() {
         let depth = |t: usize| -> f64 {
             let p = mesh.triangle_positions(t);
-            -p.iter().map(|q| dot(*q, cameras[k].2)).sum::<f64>()
+            -p.iter().map(|q| dot(*q, camera.2)).sum::<f64>()
         };
         order.sort_by(|&a, &b| depth(a).total_cmp(&depth(b)));
         let corners: Vec<[[f64; 2]; 3]> = order
@@ -214,6 +215,7 @@ pub fn write_inputs(out: &Path, scan: Option<TriMesh>, photo_side: u32) -> Strin
     std::fs::create_dir_all(out).unwrap();
 
     // The scan with two photographs.
+    let generated = scan.is_none();
     let scan = scan.unwrap_or_else(|| {
         graph(60, 1.0, 0.5, 11, |x, y| {
             0.5 * (-(x * x + y * y)).exp() + 0.1 * (3.0 * x).sin() * y
@@ -247,6 +249,10 @@ pub fn write_inputs(out: &Path, scan: Option<TriMesh>, photo_side: u32) -> Strin
     save(&out.join("b.obj"), &b);
     let info = |from: &str, to: &str| serde_json::json!({"a": from, "b": to, "source": "apps_inputs: a closed-form map of the plane"});
     write_match_folder(&out.join("match_ab"), &ab, &info("a.obj", "b.obj")).unwrap();
+    if generated {
+        let sb = planar_map(&textured, &b, f, |_, _| true);
+        write_match_folder(&out.join("match_scan_b"), &sb, &info("scan.obj", "b.obj")).unwrap();
+    }
 
     // A rig: neutral → key1 → key2 (a chain) and neutral → key2 (direct).
     let neutral = graph(36, 1.0, 0.4, 3, |x, y| 0.3 * (-(x * x + y * y)).exp());
