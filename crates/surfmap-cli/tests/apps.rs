@@ -50,9 +50,24 @@ fn bake_renders_the_photographs_into_one_seamless_texture() {
     let dir = inputs("bake");
     let line = run(
         &dir,
-        &["bake", "scan.obj", "-o", "baked.obj", "--size", "512"],
+        &[
+            "bake",
+            "scan.obj",
+            "-o",
+            "baked.obj",
+            "--size",
+            "512",
+            "--sheet",
+            "sheet.png",
+        ],
     );
     assert!(line.contains("baked photos.png"), "{line}");
+    // The before/after sheet: four 480-pixel tiles in a row (pad 8, label 30).
+    let sheet = Texture::read(&dir.join("sheet.png")).unwrap();
+    assert_eq!(
+        (sheet.width, sheet.height),
+        (4 * (480 + 8) + 8, 480 + 8 + 30 + 8)
+    );
     let mtl = std::fs::read_to_string(dir.join("baked.mtl")).unwrap();
     assert!(mtl.contains("map_Kd baked.png"), "{mtl}");
     let old = surfmap::read_mesh(&dir.join("scan.obj")).unwrap();

@@ -10,6 +10,7 @@ use anyhow::{Context, bail};
 use surfmap::apps::bake::{
     BakeOptions, BakedTexture, bake_scalar_field, bake_texture, bake_vertex_colors,
 };
+use surfmap::apps::stills::bake_sheet;
 use surfmap::apps::texture::{corner_uvs, read_texture};
 use surfmap::mesh::io::ObjMaterial;
 use surfmap::render::{Colormap, save_png};
@@ -51,6 +52,10 @@ pub struct Args {
     pub range: Option<(f64, f64)>,
     #[command(flatten)]
     pub solver: SolverArgs,
+    /// Also write a before/after sheet (old texture, baked texture, the surface with
+    /// each; thesis fig. 5.2).
+    #[arg(long, value_name = "SHEET.png")]
+    pub sheet: Option<PathBuf>,
     /// Print nothing but errors.
     #[arg(short, long)]
     pub quiet: bool,
@@ -170,6 +175,26 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         texture: PathBuf::from(png.file_name().expect("a file name")),
     };
     write_obj(&args.output, &out, Some(&material))?;
+    if let Some(path) = &args.sheet {
+        let old = match &source {
+            Source::Texture(corners, texture, _) => Some((texture, corners.as_slice())),
+            _ => None,
+        };
+        let baked_texture = surfmap::apps::Texture {
+            width: baked.image.width(),
+            height: baked.image.height(),
+            rgb: baked.image.pixels().map(|p| p.0).collect(),
+        };
+        let sheet = bake_sheet(
+            &mesh.positions,
+            &mesh.triangles,
+            old,
+            &baked_texture,
+            &baked.uvs,
+            480,
+        );
+        save_png(path, &sheet).with_context(|| format!("cannot write {}", path.display()))?;
+    }
     if !args.quiet {
         let what = match &source {
             Source::Texture(_, t, p) => format!("{} ({}×{})", p.display(), t.width, t.height),

@@ -78,9 +78,31 @@ fn paint(p: [f64; 3], cell: f64) -> [f64; 3] {
     base.map(|c| 0.15 + (c - 0.15) * l)
 }
 
+fn cross(u: [f64; 3], v: [f64; 3]) -> [f64; 3] {
+    [
+        u[1] * v[2] - u[2] * v[1],
+        u[2] * v[0] - u[0] * v[2],
+        u[0] * v[1] - u[1] * v[0],
+    ]
+}
+
+/// The (unnormalized) normal of a triangle.
+fn triangle_normal(p: [[f64; 3]; 3]) -> [f64; 3] {
+    cross(
+        [0, 1, 2].map(|k| p[1][k] - p[0][k]),
+        [0, 1, 2].map(|k| p[2][k] - p[0][k]),
+    )
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
 /// Textures `mesh` from two orthographic photographs (from the left and from the
 /// right, each `side × side`, side by side in one image): per-corner UVs into the
-/// photograph that faces each triangle better.
+/// photograph that faces each triangle better among those that see it (a depth test:
+/// a triangle hidden behind another part of the surface in one photograph takes the
+/// other).
 pub fn two_photographs(
     mesh: &TriMesh,
     side: u32,
@@ -88,92 +110,106 @@ pub fn two_photographs(
     let (lo, hi) = mesh.bounding_box().expect("a mesh with positions");
     let centre = [0, 1, 2].map(|k| 0.5 * (lo[k] + hi[k]));
     let radius = (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
-    // Cameras look along the mesh's mean normal, turned ±35° about the y axis.
-    let mut normal = [0.0; 3];
-    for t in 0..mesh.num_triangles() {
-        let [a, b, c] = mesh.triangle_positions(t);
-        let (u, v) = (
-            [0, 1, 2].map(|k| b[k] - a[k]),
-            [0, 1, 2].map(|k| c[k] - a[k]),
-        );
-        let n = [
-            u[1] * v[2] - u[2] * v[1],
-            u[2] * v[0] - u[0] * v[2],
-            u[0] * v[1] - u[1] * v[0],
-        ];
-        for k in 0..3 {
-            normal[k] += n[k];
-        }
-    }
+    let nt = mesh.num_triangles();
+    // Cameras look at the surface along its mean normal `n`, turned ±35° about the y
+    // axis made orthogonal to `n`; `d` points from the surface towards the camera.
+    let normal = (0..nt).fold([0.0; 3], |acc, t| {
+        let n = triangle_normal(mesh.triangle_positions(t));
+        [0, 1, 2].map(|k| acc[k] + n[k])
+    });
+    let unit = |v: [f64; 3]| {
+        let l = dot(v, v).sqrt();
+        v.map(|x| x / l)
+    };
+    let n = unit(normal);
+    let up = unit([-n[1] * n[0], 1.0 - n[1] * n[1], -n[1] * n[2]]);
+    let side_axis = cross(up, n);
     let view = |angle: f64| -> ([f64; 3], [f64; 3], [f64; 3]) {
         let (c, s) = (angle.cos(), angle.sin());
-        let nz = normal[2].signum();
-        let d = [s, 0.0, c * nz];
-        let up = [0.0, 1.0, 0.0];
-        let right = [
-            up[1] * d[2] - up[2] * d[1],
-            up[2] * d[0] - up[0] * d[2],
-            up[0] * d[1] - up[1] * d[0],
-        ];
-        (right, up, d)
+        let d = [0, 1, 2].map(|i| c * n[i] + s * side_axis[i]);
+        (cross(up, d), up, d)
     };
     let cameras = [view(-0.6), view(0.6)];
-    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    // Photo coordinates of a point in camera k, in [0, 1]² of the whole image.
+    // Coordinates of a point in photograph k, in [0, 1]² of that photograph.
     let photo = |k: usize, p: [f64; 3]| -> [f64; 2] {
         let (r, u, _) = cameras[k];
         let q = [0, 1, 2].map(|i| p[i] - centre[i]);
-        let (x, y) = (
+        [
             0.5 + 0.55 * dot(q, r) / radius,
             0.5 + 0.55 * dot(q, u) / radius,
-        );
-        [(x + k as f64) / 2.0, y]
+        ]
+    };
+    // Per camera: triangles nearest first (the first triangle covering a texel wins in
+    // `render_layout`), their photograph corners, and the height towards the camera of
+    // the visible surface at each texel.
+    let views: Vec<(Vec<usize>, Vec<[[f64; 2]; 3]>, Vec<f64>)> = (0..2)
+        .map(|k| {
+            let d = cameras[k].2;
+            let height = |t: usize| {
+                mesh.triangle_positions(t)
+                    .iter()
+                    .map(|q| dot(*q, d))
+                    .sum::<f64>()
+            };
+            let mut order: Vec<usize> = (0..nt).collect();
+            order.sort_by(|&a, &b| height(b).total_cmp(&height(a)));
+            let corners: Vec<[[f64; 2]; 3]> = order
+                .iter()
+                .map(|&t| mesh.triangle_positions(t).map(|q| photo(k, q)))
+                .collect();
+            let point = |sp: &SurfacePoint| -> [f64; 3] {
+                let p = mesh.triangle_positions(order[sp.triangle as usize]);
+                let b = sp.barycentric;
+                [0, 1, 2].map(|i| b[0] * p[0][i] + b[1] * p[1][i] + b[2] * p[2][i])
+            };
+            let depth = render_layout(&corners, side, side, 1, |sp| {
+                Some([dot(point(&sp), d), 0.0, 0.0])
+            })
+            .expect("a depth buffer");
+            let buffer = depth
+                .rgb
+                .iter()
+                .zip(&depth.coverage)
+                .map(|(c, &n)| if n > 0 { c[0] } else { f64::NEG_INFINITY })
+                .collect();
+            (order, corners, buffer)
+        })
+        .collect();
+    let visible = |k: usize, t: usize| -> bool {
+        let p = mesh.triangle_positions(t);
+        let c = [0, 1, 2].map(|i| (p[0][i] + p[1][i] + p[2][i]) / 3.0);
+        let uv = photo(k, c);
+        let (x, y) = (uv[0] * side as f64, (1.0 - uv[1]) * side as f64);
+        if !(0.0..side as f64).contains(&x) || !(0.0..side as f64).contains(&y) {
+            return false;
+        }
+        dot(c, cameras[k].2) >= views[k].2[y as usize * side as usize + x as usize] - 0.01 * radius
     };
     let mut coords = vec![];
     let mut indices = vec![];
-    for t in 0..mesh.num_triangles() {
+    for t in 0..nt {
         let p = mesh.triangle_positions(t);
-        let (u, v) = (
-            [0, 1, 2].map(|k| p[1][k] - p[0][k]),
-            [0, 1, 2].map(|k| p[2][k] - p[0][k]),
-        );
-        let n = [
-            u[1] * v[2] - u[2] * v[1],
-            u[2] * v[0] - u[0] * v[2],
-            u[0] * v[1] - u[1] * v[0],
-        ];
-        let k = if dot(n, cameras[0].2) >= dot(n, cameras[1].2) {
-            0
+        let n = triangle_normal(p);
+        let facing = |k: usize| dot(n, cameras[k].2);
+        let better = if facing(0) >= facing(1) { 0 } else { 1 };
+        let k = if visible(better, t) || !visible(1 - better, t) {
+            better
         } else {
-            1
+            1 - better
         };
         let base = coords.len() as u32;
-        coords.extend(p.map(|q| photo(k, q)));
+        coords.extend(p.map(|q| {
+            let c = photo(k, q);
+            [(c[0] + k as f64) / 2.0, c[1]]
+        }));
         indices.push([base, base + 1, base + 2]);
     }
-    // The photographs: every triangle drawn into both, seen from its camera; the
-    // nearer surface wins (a triangle facing away from a camera is drawn last there).
+    // The photographs: the visible surface seen from each camera.
     let cell = radius / 12.0;
-    let mut order: Vec<usize> = (0..mesh.num_triangles()).collect();
     let mut image = image::RgbImage::from_pixel(2 * side, side, image::Rgb([40, 40, 48]));
-    for (k, camera) in cameras.iter().enumerate() {
-        let depth = |t: usize| -> f64 {
-            let p = mesh.triangle_positions(t);
-            -p.iter().map(|q| dot(*q, camera.2)).sum::<f64>()
-        };
-        order.sort_by(|&a, &b| depth(a).total_cmp(&depth(b)));
-        let corners: Vec<[[f64; 2]; 3]> = order
-            .iter()
-            .map(|&t| {
-                mesh.triangle_positions(t).map(|q| {
-                    let c = photo(k, q);
-                    [2.0 * c[0] - k as f64, c[1]]
-                })
-            })
-            .collect();
-        let layout = render_layout(&corners, side, side, 2, |sp| {
-            let t = order[sp.triangle as usize];
-            let p = mesh.triangle_positions(t);
+    for (k, (order, corners, _)) in views.iter().enumerate() {
+        let layout = render_layout(corners, side, side, 2, |sp| {
+            let p = mesh.triangle_positions(order[sp.triangle as usize]);
             let b = sp.barycentric;
             Some(paint(
                 [0, 1, 2].map(|i| b[0] * p[0][i] + b[1] * p[1][i] + b[2] * p[2][i]),

@@ -134,7 +134,24 @@ impl View {
     /// frame (each frame one position per vertex, all on `triangles`). `None` when no
     /// triangle is valid.
     pub fn framing(frames: &[&[[f64; 3]]], triangles: &[[u32; 3]]) -> Option<View> {
-        let axes = automatic_view(frames.first()?, triangles);
+        Self::framing_tilted(frames, triangles, 0.0)
+    }
+
+    /// [`Self::framing`] with the camera tilted by `tilt` radians about its `right`
+    /// axis (towards the bottom of the picture: the surface is seen obliquely from
+    /// above, so heights show in the outline and shading).
+    pub fn framing_tilted(
+        frames: &[&[[f64; 3]]],
+        triangles: &[[u32; 3]],
+        tilt: f64,
+    ) -> Option<View> {
+        let [right, up, d] = automatic_view(frames.first()?, triangles);
+        let (s, c) = tilt.sin_cos();
+        let axes = [
+            right,
+            [0, 1, 2].map(|k| c * up[k] + s * d[k]),
+            [0, 1, 2].map(|k| c * d[k] - s * up[k]),
+        ];
         let mut lo = [f64::INFINITY; 2];
         let mut hi = [f64::NEG_INFINITY; 2];
         for positions in frames {
