@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Validates the glTF files surfmap writes with the Khronos glTF validator (npm package
-# gltf-validator): zero errors required.
+# gltf-validator): zero errors required; then loads them with three.js's GLTFLoader (npm
+# package three), which must find the named morph targets and their animation.
 #
 #   scripts/validate_gltf.sh            # generate inputs, write every kind of .glb, validate them
 #   scripts/validate_gltf.sh FILE.glb…  # validate the given files
@@ -11,23 +12,32 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 VERSION=2.0.0-dev.3.10
+THREE_VERSION=0.181.0
 export GLTF_VALIDATOR_DIR="${GLTF_VALIDATOR_DIR:-$PWD/target/gltf-validator}"
 
 if ! command -v node >/dev/null 2>&1 || ! command -v npm >/dev/null 2>&1; then
   echo "validate_gltf: node and npm are needed (apt-get install nodejs npm)" >&2
   exit 1
 fi
-if [ ! -f "$GLTF_VALIDATOR_DIR/node_modules/gltf-validator/package.json" ]; then
+if [ ! -f "$GLTF_VALIDATOR_DIR/node_modules/gltf-validator/package.json" ] ||
+  [ ! -f "$GLTF_VALIDATOR_DIR/node_modules/three/package.json" ]; then
   mkdir -p "$GLTF_VALIDATOR_DIR"
   [ -f "$GLTF_VALIDATOR_DIR/package.json" ] || echo '{"private": true}' > "$GLTF_VALIDATOR_DIR/package.json"
-  if ! npm install --prefix "$GLTF_VALIDATOR_DIR" --no-audit --no-fund --silent "gltf-validator@$VERSION"; then
-    echo "validate_gltf: could not install gltf-validator@$VERSION with npm" >&2
+  if ! npm install --prefix "$GLTF_VALIDATOR_DIR" --no-audit --no-fund --silent \
+    "gltf-validator@$VERSION" "three@$THREE_VERSION"; then
+    echo "validate_gltf: could not install gltf-validator@$VERSION and three@$THREE_VERSION with npm" >&2
     exit 1
   fi
 fi
 
+check() {
+  node scripts/validate_gltf.mjs "$@"
+  node scripts/three_load.mjs "$@"
+}
+
 if [ $# -gt 0 ]; then
-  exec node scripts/validate_gltf.mjs "$@"
+  check "$@"
+  exit 0
 fi
 
 work="$(mktemp -d)"
@@ -45,4 +55,4 @@ surfmap="$(realpath "${CARGO_TARGET_DIR:-target}/release/surfmap")"
   "$surfmap" rig neutral.obj key1.obj key2.obj --match match_n1 --match match_12 \
     --chain --names wide,wider -o rig.glb -q
 )
-node scripts/validate_gltf.mjs "$work/morph.glb" "$work/morph_textured.glb" "$work/rig.glb"
+check "$work/morph.glb" "$work/morph_textured.glb" "$work/rig.glb"
