@@ -206,11 +206,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             args.input.display(),
             flat.start_description(),
             flat.iterations,
-            if flat.converged {
-                "converged"
-            } else {
-                "NOT converged"
-            },
+            super::flatten::convergence(flat.converged),
             flat.flipped_triangles,
             flat.time_total,
             args.size,

@@ -314,11 +314,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 n => format!(" + {n} ARAP steps"),
             },
             result.iterations,
-            if result.converged {
-                "converged"
-            } else {
-                "NOT converged"
-            },
+            convergence(result.converged),
             result.energy,
             result.flipped_triangles,
             result.time_total,
@@ -445,4 +441,13 @@ pub fn write_pictures(dir: &Path, mesh: &TriMesh, r: &Flattening) -> anyhow::Res
         render::convergence_plot_labeled(&history, "E - E_FINAL (PER UNIT AREA)", (900, 600)),
     )?;
     Ok(written)
+}
+
+/// "converged" or "NOT converged", for the one-line summaries.
+pub fn convergence(converged: bool) -> &'static str {
+    if converged {
+        "converged"
+    } else {
+        "NOT converged"
+    }
 }

@@ -215,9 +215,10 @@ mod tests {
         // The surface is the square [−1, 1]² (irregular triangulation). Old texture
         // coordinates: two "photographs" — the left half maps into the left part of the
         // image, the right half (x ≥ 0) into the right part *mirrored*, with a gap
-        // between them, so the old map is discontinuous along x = 0 (per-corner UVs). The old image holds the
-        // pattern through that map. New UVs: a smooth, non-affine warp of the square.
-        // Then the baked image at the new UV of any point must be the pattern there.
+        // between them, so the old map is discontinuous along x = 0 (per-corner UVs).
+        // The old image holds the pattern through that map. New UVs: a smooth,
+        // non-affine warp of the square. Then the baked image at the new UV of any
+        // point must be the pattern there.
         let n = 24;
         let mut mesh = graph_mesh(n, 0.5, 3, |_, _| 0.0);
         // Snap the vertices nearest x = 0 onto it, so no triangle straddles the seam.
@@ -238,39 +239,20 @@ mod tests {
         };
         // The old texture image: texel centres carry the pattern at the surface point
         // that maps there (left photo for u < 0.5, right photo beyond).
-        let texture = {
-            let mut rgb = vec![[0u8; 3]; (side * side) as usize];
-            for yy in 0..side {
-                for xx in 0..side {
-                    let (u, v) = (
-                        (xx as f64 + 0.5) / side as f64,
-                        1.0 - (yy as f64 + 0.5) / side as f64,
-                    );
-                    let y = (v - 0.05) / 0.9 * 2.0 - 1.0;
-                    let x = if u < 0.5 {
-                        (u - 0.05) / 0.4 - 1.0
-                    } else {
-                        (0.95 - u) / 0.4
-                    };
-                    rgb[(yy * side + xx) as usize] =
-                        pattern(x, y).map(|c| (c * 255.0).round() as u8);
-                }
-            }
-            Texture {
-                width: side,
-                height: side,
-                rgb,
-            }
-        };
-        let corner_uvs: Vec<[[f64; 2]; 3]> = mesh
-            .triangles
-            .iter()
-            .map(|t| {
-                let p = t.map(|v| mesh.positions[v as usize]);
-                let right = p.iter().map(|q| q[0]).sum::<f64>() > 0.0;
-                p.map(|q| old_uv(q[0], q[1], right))
-            })
-            .collect();
+        let texture = crate::apps::inputs::texture_from(side, |u, v| {
+            let y = (v - 0.05) / 0.9 * 2.0 - 1.0;
+            let x = if u < 0.5 {
+                (u - 0.05) / 0.4 - 1.0
+            } else {
+                (0.95 - u) / 0.4
+            };
+            pattern(x, y)
+        });
+        let corner_uvs = crate::apps::texture::corner_uvs(
+            &crate::apps::inputs::seamed_uvs(&mesh, old_uv),
+            &mesh.triangles,
+        )
+        .unwrap();
         let warp = |x: f64, y: f64| [x + 0.15 * (1.5 * y).sin(), y + 0.1 * x * x];
         let new_uvs: Vec<[f64; 2]> = mesh.positions.iter().map(|p| warp(p[0], p[1])).collect();
         let options = BakeOptions {
@@ -290,7 +272,7 @@ mod tests {
         // (|∇| ≤ 1.4 per unit, texel ≈ 2/230 and 2/230 units) plus 8-bit rounding twice
         // and the piecewise-linear approximation of the warp: < 0.03.
         let mut worst = 0.0f64;
-        for (t, tri) in mesh.triangles.iter().enumerate().step_by(3) {
+        for tri in mesh.triangles.iter().step_by(3) {
             let p = tri.map(|v| mesh.positions[v as usize]);
             let c = [0, 1].map(|k| (p[0][k] + p[1][k] + p[2][k]) / 3.0);
             if c[0].abs().max(c[1].abs()) > 0.9 {
@@ -303,7 +285,6 @@ mod tests {
             for k in 0..3 {
                 worst = worst.max((got[k] - want[k]).abs());
             }
-            let _ = t;
         }
         assert!(worst < 0.03, "colour error {worst}");
     }

@@ -232,6 +232,37 @@ pub fn two_photographs(
     (indices, coords, image)
 }
 
+/// Per-corner texture coordinates of a graph over the plane, from two "photographs":
+/// each triangle's corners at `uv_of(x, y, right)`, `right` = its centroid has `x > 0`
+/// (so the coordinates jump along `x = 0`, a texture seam).
+pub fn seamed_uvs(mesh: &TriMesh, uv_of: impl Fn(f64, f64, bool) -> [f64; 2]) -> Uvs {
+    let mut coords = vec![];
+    let mut indices = vec![];
+    for tri in &mesh.triangles {
+        let p = tri.map(|v| mesh.positions[v as usize]);
+        let right = p.iter().map(|q| q[0]).sum::<f64>() > 0.0;
+        let base = coords.len() as u32;
+        coords.extend(p.map(|q| uv_of(q[0], q[1], right)));
+        indices.push([base, base + 1, base + 2]);
+    }
+    Uvs::PerCorner { coords, indices }
+}
+
+/// A `side × side` texture whose texel centres `(u, v)` (`v` up) hold `colour(u, v)`
+/// (channels in `[0, 1]`).
+pub fn texture_from(side: u32, colour: impl Fn(f64, f64) -> [f64; 3]) -> super::Texture {
+    let texel = |i: u32| (i as f64 + 0.5) / side as f64;
+    super::Texture {
+        width: side,
+        height: side,
+        rgb: (0..side * side)
+            .map(|i| {
+                colour(texel(i % side), 1.0 - texel(i / side)).map(|c| (c * 255.0).round() as u8)
+            })
+            .collect(),
+    }
+}
+
 /// The chart `(x, y)` of a mesh that is a graph over the plane.
 pub fn planar_chart(m: &TriMesh) -> Chart {
     Chart::new(

@@ -393,16 +393,7 @@ mod tests {
                 0.5 * (y + 1.0),
             ]
         };
-        let mut coords = vec![];
-        let mut indices = vec![];
-        for tri in &b.triangles {
-            let p = tri.map(|v| b.positions[v as usize]);
-            let right = p.iter().map(|q| q[0]).sum::<f64>() > 0.0;
-            let base = coords.len() as u32;
-            coords.extend(p.map(|q| uv_of(q[0], q[1], right)));
-            indices.push([base, base + 1, base + 2]);
-        }
-        let uvs_b = Uvs::PerCorner { coords, indices };
+        let uvs_b = crate::apps::inputs::seamed_uvs(&b, uv_of);
         let out = transfer_uvs(&ab, &a.triangles, &b.triangles, &uvs_b).unwrap();
         // Away from the seam, A's UV is the analytic one.
         for (p, uv) in a.positions.iter().zip(&out.uvs) {
@@ -460,37 +451,16 @@ mod tests {
                 [0.05 + 0.2 * (x + 1.0), v]
             }
         };
-        let mut coords = vec![];
-        let mut indices = vec![];
-        for tri in &b.triangles {
-            let p = tri.map(|v| b.positions[v as usize]);
-            let right = p.iter().map(|q| q[0]).sum::<f64>() > 0.0;
-            let base = coords.len() as u32;
-            coords.extend(p.map(|q| b_uv(q[0], q[1], right)));
-            indices.push([base, base + 1, base + 2]);
-        }
-        let uvs_b = Uvs::PerCorner { coords, indices };
-        let mut rgb = vec![[0u8; 3]; (side * side) as usize];
-        for yy in 0..side {
-            for xx in 0..side {
-                let (u, v) = (
-                    (xx as f64 + 0.5) / side as f64,
-                    1.0 - (yy as f64 + 0.5) / side as f64,
-                );
-                let y = 2.0 * v - 1.0;
-                let x = if u < 0.5 {
-                    (u - 0.05) / 0.2 - 1.0
-                } else {
-                    (0.95 - u) / 0.4
-                };
-                rgb[(yy * side + xx) as usize] = pattern(x, y).map(|c| (c * 255.0).round() as u8);
-            }
-        }
-        let texture_b = Texture {
-            width: side,
-            height: side,
-            rgb,
-        };
+        let uvs_b = crate::apps::inputs::seamed_uvs(&b, b_uv);
+        let texture_b = crate::apps::inputs::texture_from(side, |u, v| {
+            let y = 2.0 * v - 1.0;
+            let x = if u < 0.5 {
+                (u - 0.05) / 0.2 - 1.0
+            } else {
+                (0.95 - u) / 0.4
+            };
+            pattern(x, y)
+        });
         let uvs_a = Uvs::PerVertex(
             a.positions
                 .iter()
