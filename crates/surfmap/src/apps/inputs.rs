@@ -98,6 +98,14 @@ fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
+/// One photograph's camera pass: triangles nearest first, their corners in the
+/// photograph, and the height towards the camera of the visible surface per texel.
+struct PhotoView {
+    order: Vec<usize>,
+    corners: Vec<[[f64; 2]; 3]>,
+    depth: Vec<f64>,
+}
+
 /// Textures `mesh` from two orthographic photographs (from the left and from the
 /// right, each `side × side`, side by side in one image): per-corner UVs into the
 /// photograph that faces each triangle better among those that see it (a depth test:
@@ -142,7 +150,7 @@ pub fn two_photographs(
     // Per camera: triangles nearest first (the first triangle covering a texel wins in
     // `render_layout`), their photograph corners, and the height towards the camera of
     // the visible surface at each texel.
-    let views: Vec<(Vec<usize>, Vec<[[f64; 2]; 3]>, Vec<f64>)> = (0..2)
+    let views: Vec<PhotoView> = (0..2)
         .map(|k| {
             let d = cameras[k].2;
             let height = |t: usize| {
@@ -172,7 +180,11 @@ pub fn two_photographs(
                 .zip(&depth.coverage)
                 .map(|(c, &n)| if n > 0 { c[0] } else { f64::NEG_INFINITY })
                 .collect();
-            (order, corners, buffer)
+            PhotoView {
+                order,
+                corners,
+                depth: buffer,
+            }
         })
         .collect();
     let visible = |k: usize, t: usize| -> bool {
@@ -183,7 +195,8 @@ pub fn two_photographs(
         if !(0.0..side as f64).contains(&x) || !(0.0..side as f64).contains(&y) {
             return false;
         }
-        dot(c, cameras[k].2) >= views[k].2[y as usize * side as usize + x as usize] - 0.01 * radius
+        dot(c, cameras[k].2)
+            >= views[k].depth[y as usize * side as usize + x as usize] - 0.01 * radius
     };
     let mut coords = vec![];
     let mut indices = vec![];
@@ -207,9 +220,9 @@ pub fn two_photographs(
     // The photographs: the visible surface seen from each camera.
     let cell = radius / 12.0;
     let mut image = image::RgbImage::from_pixel(2 * side, side, image::Rgb([40, 40, 48]));
-    for (k, (order, corners, _)) in views.iter().enumerate() {
-        let layout = render_layout(corners, side, side, 2, |sp| {
-            let p = mesh.triangle_positions(order[sp.triangle as usize]);
+    for (k, view) in views.iter().enumerate() {
+        let layout = render_layout(&view.corners, side, side, 2, |sp| {
+            let p = mesh.triangle_positions(view.order[sp.triangle as usize]);
             let b = sp.barycentric;
             Some(paint(
                 [0, 1, 2].map(|i| b[0] * p[0][i] + b[1] * p[1][i] + b[2] * p[2][i]),
