@@ -79,6 +79,7 @@
 //! `param::element`), the ARAP warm start (`param::arap`), file-system helpers
 //! (`fsutil`) and test helpers (`testing`).
 
+pub mod apps;
 pub mod energy;
 #[doc(hidden)]
 pub mod fsutil;

@@ -81,11 +81,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "{name:>9}: start {}, {} iterations, {}, energy {:.5}, flipped triangles {}, angle distortion mean {:.4} max {:.4}, {:.3} s",
             r.start_description(),
             r.iterations,
-            if r.converged {
-                "converged"
-            } else {
-                "NOT converged"
-            },
+            super::flatten::convergence(r.converged),
             r.energy,
             measures.flipped_triangles,
             measures.measures.angle.mean,

@@ -69,6 +69,38 @@ pub struct Args {
     /// Output OBJ with texture coordinates (`vt`).
     #[arg(short, long)]
     pub output: PathBuf,
+    #[command(flatten)]
+    pub solver: SolverArgs,
+    /// Scale and translate the UVs into [0,1]² (aspect ratio kept).
+    #[arg(long)]
+    pub normalize: bool,
+    /// Write the flat mesh itself: positions (u, v, 0), for viewing the layout.
+    #[arg(long)]
+    pub uv_as_positions: bool,
+    /// Reference a texture image from the OBJ (writes OUT.mtl with map_Kd).
+    #[arg(long)]
+    pub texture: Option<PathBuf>,
+    /// Write a JSON report (measures, solver log, timings) here.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Write pictures into this folder: UV layout coloured by distortion, checkerboard
+    /// render, energy/gradient decay plot.
+    #[arg(long)]
+    pub pictures: Option<PathBuf>,
+    /// Do not print the summary line or progress.
+    #[arg(short, long)]
+    pub quiet: bool,
+    /// Fill every boundary loop but the longest (eyes, mouth, scan holes) with a fan for
+    /// the flattening; the output keeps the original faces, holes stay open in the UVs.
+    #[arg(long)]
+    pub fill_holes: bool,
+    #[command(flatten)]
+    pub repair: RepairArgs,
+}
+
+/// The flattening's options, shared by every command that flattens (`flatten`, `bake`).
+#[derive(clap::Args)]
+pub struct SolverArgs {
     /// Distortion trade-off preset.
     #[arg(long, value_enum, default_value = "balanced")]
     pub preset: Preset,
@@ -93,12 +125,6 @@ pub struct Args {
     /// between 500 and 20000).
     #[arg(long)]
     pub coarse_vertices: Option<usize>,
-    /// Scale and translate the UVs into [0,1]² (aspect ratio kept).
-    #[arg(long)]
-    pub normalize: bool,
-    /// Write the flat mesh itself: positions (u, v, 0), for viewing the layout.
-    #[arg(long)]
-    pub uv_as_positions: bool,
     /// Newton iteration cap (per continuation stage).
     #[arg(long, default_value_t = 200)]
     pub max_iters: usize,
@@ -108,25 +134,6 @@ pub struct Args {
     /// Armijo sufficient-decrease constant c (thesis: 0.5).
     #[arg(long, default_value_t = 0.5)]
     pub armijo_c: f64,
-    /// Reference a texture image from the OBJ (writes OUT.mtl with map_Kd).
-    #[arg(long)]
-    pub texture: Option<PathBuf>,
-    /// Write a JSON report (measures, solver log, timings) here.
-    #[arg(long)]
-    pub report: Option<PathBuf>,
-    /// Write pictures into this folder: UV layout coloured by distortion, checkerboard
-    /// render, energy/gradient decay plot.
-    #[arg(long)]
-    pub pictures: Option<PathBuf>,
-    /// Do not print the summary line or progress.
-    #[arg(short, long)]
-    pub quiet: bool,
-    /// Fill every boundary loop but the longest (eyes, mouth, scan holes) with a fan for
-    /// the flattening; the output keeps the original faces, holes stay open in the UVs.
-    #[arg(long)]
-    pub fill_holes: bool,
-    #[command(flatten)]
-    pub repair: RepairArgs,
 }
 
 pub fn parse_alpha(s: &str) -> Result<[f64; 3], String> {
@@ -150,7 +157,7 @@ pub fn alpha(a: [f64; 3]) -> anyhow::Result<Alpha> {
 }
 
 /// The library options the command line asks for (parsing only: the library checks them).
-pub fn options(args: &Args) -> anyhow::Result<FlattenOptions> {
+pub fn options(args: &SolverArgs, fill_holes: bool) -> anyhow::Result<FlattenOptions> {
     let target = match (args.alpha, args.preset) {
         (Some(a), _) => alpha(a)?,
         (None, Preset::Conformal) => Alpha::conformal(),
@@ -191,7 +198,7 @@ pub fn options(args: &Args) -> anyhow::Result<FlattenOptions> {
     };
     let mut opts = FlattenOptions::new(energy)
         .with_start(start)
-        .with_fill_holes(args.fill_holes);
+        .with_fill_holes(fill_holes);
     opts.newton.max_iterations = args.max_iters;
     opts.newton.tolerance = args.tolerance;
     opts.newton.armijo_c = args.armijo_c;
@@ -252,7 +259,7 @@ pub fn output_mesh(mesh: &TriMesh, uvs: &[[f64; 2]], uv_as_positions: bool) -> T
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     let file = load_mesh(&args.input)?;
-    let opts = options(&args)?;
+    let opts = options(&args.solver, args.fill_holes)?;
     let mesh = args.repair.apply(file.mesh, args.quiet)?;
     let result = flatten_mesh(&mesh, &opts, args.quiet)
         .with_context(|| format!("cannot flatten {}", args.input.display()))?;
@@ -307,11 +314,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 n => format!(" + {n} ARAP steps"),
             },
             result.iterations,
-            if result.converged {
-                "converged"
-            } else {
-                "NOT converged"
-            },
+            convergence(result.converged),
             result.energy,
             result.flipped_triangles,
             result.time_total,
@@ -438,4 +441,13 @@ pub fn write_pictures(dir: &Path, mesh: &TriMesh, r: &Flattening) -> anyhow::Res
         render::convergence_plot_labeled(&history, "E - E_FINAL (PER UNIT AREA)", (900, 600)),
     )?;
     Ok(written)
+}
+
+/// "converged" or "NOT converged", for the one-line summaries.
+pub fn convergence(converged: bool) -> &'static str {
+    if converged {
+        "converged"
+    } else {
+        "NOT converged"
+    }
 }

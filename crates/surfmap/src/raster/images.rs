@@ -81,6 +81,12 @@ impl TextureImage {
 
     /// Bilinear lookup at texture coordinates `(u, v)`, `v` up, clamped to the edge.
     pub fn sample(&self, uv: [f64; 2]) -> [u8; 3] {
+        self.sample_linear(uv).map(|c| c.round() as u8)
+    }
+
+    /// [`Self::sample`] before rounding: channels in `[0, 255]` as `f64`.
+    #[inline]
+    pub fn sample_linear(&self, uv: [f64; 2]) -> [f64; 3] {
         let (w, h) = (self.width as usize, self.height as usize);
         let x = (uv[0] * w as f64 - 0.5).clamp(0.0, (w - 1) as f64);
         let y = ((1.0 - uv[1]) * h as f64 - 0.5).clamp(0.0, (h - 1) as f64);
@@ -91,7 +97,7 @@ impl TextureImage {
         std::array::from_fn(|c| {
             let top = p(x0, y0)[c] as f64 * (1.0 - fx) + p(x1, y0)[c] as f64 * fx;
             let bot = p(x0, y1)[c] as f64 * (1.0 - fx) + p(x1, y1)[c] as f64 * fx;
-            (top * (1.0 - fy) + bot * fy).round() as u8
+            top * (1.0 - fy) + bot * fy
         })
     }
 }
