@@ -2,7 +2,6 @@
 //! own options and `mesh::repair` functions ("set `FlattenOptions::fill_holes`"); here
 //! each becomes the flag that does the same ("use --fill-holes").
 
-use serde::Serialize;
 use surfmap::FlattenError;
 use surfmap::mesh::validate::{Defect, DefectKind};
 use surfmap::param::flatten::OptionError;
@@ -45,29 +44,6 @@ pub fn defect_message(d: &Defect) -> String {
     }
 }
 
-/// A defect as the command line reports it (JSON of `inspect --json` and
-/// `flatten --report`).
-#[derive(Serialize)]
-pub struct CliDefect {
-    pub kind: DefectKind,
-    pub count: usize,
-    pub examples: Vec<Vec<u64>>,
-    pub message: String,
-    pub blocks_flattening: bool,
-}
-
-impl From<&Defect> for CliDefect {
-    fn from(d: &Defect) -> Self {
-        Self {
-            kind: d.kind,
-            count: d.count,
-            examples: d.examples.clone(),
-            message: defect_message(d),
-            blocks_flattening: d.blocks_flattening,
-        }
-    }
-}
-
 /// A numeric option out of range, as the flag that set it.
 pub fn option_message(e: &OptionError) -> String {
     match e {
@@ -82,7 +58,16 @@ pub fn option_message(e: &OptionError) -> String {
 
 /// A flattening error with its remedy as flags.
 pub fn flatten_error(e: FlattenError) -> anyhow::Error {
-    let message = match &e {
+    match flatten_error_message(&e) {
+        Some(message) => anyhow::anyhow!(message),
+        None => e.into(),
+    }
+}
+
+/// The message of a flattening error whose remedy has a flag (`None`: the library's
+/// message says it all).
+pub fn flatten_error_message(e: &FlattenError) -> Option<String> {
+    Some(match e {
         FlattenError::NotADisc(defects) => format!(
             "the mesh cannot be flattened as a disc:\n{}",
             defects
@@ -99,9 +84,8 @@ pub fn flatten_error(e: FlattenError) -> anyhow::Error {
              to mean-value coordinates, injective by construction)"
         ),
         FlattenError::Option(o) => option_message(o),
-        _ => return e.into(),
-    };
-    anyhow::anyhow!(message)
+        _ => return None,
+    })
 }
 
 #[cfg(test)]

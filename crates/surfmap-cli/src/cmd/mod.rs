@@ -1,4 +1,5 @@
 pub mod advice;
+pub mod batch;
 pub mod demo;
 pub mod flatten;
 pub mod images;
