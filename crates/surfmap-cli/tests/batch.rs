@@ -171,7 +171,11 @@ fn one_thread_and_two_give_the_same_maps() {
     let (good, _) = inputs(&dir);
     for jobs in ["1", "2"] {
         let run = batch(&good, &format!("{}/j{jobs}/", dir.display()), &["-j", jobs]);
-        assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
     }
     for name in ["disc", "disc-2", "flat"] {
         let one = vertex_uvs(&dir.join("j1").join(format!("{name}.obj")));
@@ -196,11 +200,16 @@ fn an_existing_folder_makes_one_input_a_batch_and_flags_apply() {
         &out.display().to_string(),
         &["--normalize", "--preset", "conformal"],
     );
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
     let uv = vertex_uvs(&out.join("disc.obj"));
-    let (lo, hi) = uv.iter().flatten().fold((f64::MAX, f64::MIN), |(lo, hi), &x| {
-        (lo.min(x), hi.max(x))
-    });
+    let (lo, hi) = uv
+        .iter()
+        .flatten()
+        .fold((f64::MAX, f64::MIN), |(lo, hi), &x| (lo.min(x), hi.max(x)));
     assert!(lo >= 0.0 && (hi - 1.0).abs() < 1e-12, "{lo} {hi}");
     let (_, rows) = read_csv(&out.join("summary.csv"));
     assert_eq!(rows.len(), 1);
