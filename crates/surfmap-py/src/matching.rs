@@ -13,8 +13,10 @@
 //!
 //! To add it: a `#[pyclass] SurfaceMatch` holding the library's match, a `#[pyfunction]
 //! r#match` (Python's `match` is a soft keyword, a valid function name), both added in
-//! [`register`]; then their stubs in `python/surfmap/_surfmap.pyi` (the placeholder
-//! there) and a test in `tests/`.
+//! [`register`]; then their stubs in `python/surfmap/_surfmap.pyi` and the re-export in
+//! `python/surfmap/__init__.py` (a placeholder comment in each), and a test in `tests/`
+//! (`tests/test_docs.py` already requires a stub and a docstring example for every
+//! function the module registers).
 
 use pyo3::prelude::*;
 

@@ -43,7 +43,7 @@ def test_the_readme_python_example_runs_as_written(tmp_path, monkeypatch, capsys
     readme = (REPO / "README.md").read_text()
     section = readme[readme.index("## Python") :]
     code = re.search(r"```python\n(.*?)```", section, re.S).group(1)
-    assert len([line for line in code.splitlines() if line.strip()]) <= 12
+    assert len([line for line in code.splitlines() if line.strip()]) <= 10
     monkeypatch.chdir(tmp_path)
     exec(compile(code, "README.md", "exec"), {})
     printed = capsys.readouterr().out.split()

@@ -271,15 +271,7 @@ mod tests {
     /// octahedron), and defects worded by the front end's function.
     #[test]
     fn inspect_report_counts_and_words_defects() {
-        let square = TriMesh::new(
-            vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [1.0, 1.0, 0.0],
-                [0.0, 1.0, 0.0],
-            ],
-            vec![[0, 1, 2], [0, 2, 3]],
-        );
+        let square = generate::unit_square();
         let r = InspectReport::new(MeshSource::ARRAYS, &square, Defect::message);
         assert_eq!((r.vertices, r.faces, r.triangles, r.edges), (4, 2, 2, 5));
         assert_eq!((r.boundary_loops, r.components), (1, 1));

@@ -42,6 +42,10 @@ from ._surfmap import (
     write_obj,
 )
 
+# Matching goes here when it is bound (src/matching.rs says how): import `match` and
+# `SurfaceMatch` from ._surfmap above and list them in __all__ (the docstring-example and
+# stub tests then cover them).
+
 __all__ = [
     "BATCH_COLUMNS",
     "MeshError",
