@@ -6,6 +6,7 @@
 use surfmap::FlattenError;
 use surfmap::mesh::validate::{Defect, DefectKind};
 use surfmap::param::flatten::OptionError;
+use surfmap::report::{not_a_disc_message, with_remedy};
 
 /// The remedy of a defect kind as the Python call that applies it, where one does.
 fn python_remedy(kind: DefectKind) -> Option<&'static str> {
@@ -49,10 +50,7 @@ fn python_remedy(kind: DefectKind) -> Option<&'static str> {
 
 /// A defect's problem and remedy, the remedy as a Python call.
 pub fn defect_message(d: &Defect) -> String {
-    match python_remedy(d.kind) {
-        Some(remedy) => format!("{} {remedy}", d.problem),
-        None => d.message(),
-    }
+    with_remedy(d, python_remedy(d.kind))
 }
 
 /// A numeric option out of range, as the keyword that set it.
@@ -68,14 +66,7 @@ pub fn option_message(e: &OptionError) -> String {
 /// A flattening error's message with its remedy as Python calls.
 pub fn flatten_error_message(e: &FlattenError) -> String {
     match e {
-        FlattenError::NotADisc(defects) => format!(
-            "the mesh cannot be flattened as a disc:\n{}",
-            defects
-                .iter()
-                .map(|d| format!("  - {}", defect_message(d)))
-                .collect::<Vec<_>>()
-                .join("\n")
-        ),
+        FlattenError::NotADisc(defects) => not_a_disc_message(defects, defect_message),
         FlattenError::Degenerate(inner) => {
             format!("{inner}; surfmap.repair(V, F, drop_degenerate=True) removes them")
         }

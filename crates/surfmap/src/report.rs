@@ -21,6 +21,28 @@ use crate::{Flattening, IterationLog, StopReason, Topology, TriMesh};
 /// wording is [`Defect::message`].
 pub type DefectWording = fn(&Defect) -> String;
 
+/// `d`'s problem followed by a front end's own `remedy` (its flag or call), or by the
+/// library's remedy when the front end has none for this kind (`None`).
+pub fn with_remedy(d: &Defect, remedy: Option<&str>) -> String {
+    match remedy {
+        Some(remedy) => format!("{} {remedy}", d.problem),
+        None => d.message(),
+    }
+}
+
+/// The message of [`crate::FlattenError::NotADisc`], each defect on its own line
+/// worded by `wording`.
+pub fn not_a_disc_message(defects: &[Defect], wording: DefectWording) -> String {
+    let lines: Vec<String> = defects
+        .iter()
+        .map(|d| format!("  - {}", wording(d)))
+        .collect();
+    format!(
+        "the mesh cannot be flattened as a disc:\n{}",
+        lines.join("\n")
+    )
+}
+
 /// A defect as reports list it: the library's [`Defect`] with its problem and remedy
 /// worded by the front end.
 #[derive(Clone, Debug, Serialize)]
@@ -237,6 +259,30 @@ mod tests {
     use super::*;
     use crate::mesh::generate;
     use crate::{FlattenOptions, flatten};
+
+    /// The front ends' wording of a non-disc mesh is the library's message when they
+    /// word each defect as the library does, and their remedy replaces the library's.
+    #[test]
+    fn not_a_disc_messages_reword_only_the_remedies() {
+        let two = crate::mesh::generate::unit_square();
+        let mut both = two.clone();
+        both.positions
+            .extend(two.positions.iter().map(|p| [p[0] + 3.0, p[1], p[2]]));
+        both.triangles
+            .extend(two.triangles.iter().map(|t| t.map(|i| i + 4)));
+        let Err(crate::FlattenError::NotADisc(defects)) =
+            flatten(&both, &FlattenOptions::default())
+        else {
+            panic!("two squares are not a disc");
+        };
+        let library = crate::FlattenError::NotADisc(defects.clone()).to_string();
+        assert_eq!(not_a_disc_message(&defects, Defect::message), library);
+        let worded = |d: &Defect| with_remedy(d, Some("Use --flag."));
+        let message = not_a_disc_message(&defects, worded);
+        assert_eq!(message.matches("Use --flag.").count(), defects.len());
+        assert!(!message.contains(&defects[0].remedy));
+        assert_eq!(with_remedy(&defects[0], None), defects[0].message());
+    }
 
     /// The report repeats the flattening's own numbers and measures the map it
     /// describes: an independent measurement of the same UVs gives the same values.

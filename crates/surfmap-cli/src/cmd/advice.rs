@@ -5,6 +5,7 @@
 use surfmap::FlattenError;
 use surfmap::mesh::validate::{Defect, DefectKind};
 use surfmap::param::flatten::OptionError;
+use surfmap::report::{not_a_disc_message, with_remedy};
 
 /// The remedy of a defect kind as the flags that apply it, where a flag does.
 fn flag_remedy(kind: DefectKind) -> Option<&'static str> {
@@ -38,10 +39,7 @@ fn flag_remedy(kind: DefectKind) -> Option<&'static str> {
 
 /// A defect's problem and remedy, the remedy as flags.
 pub fn defect_message(d: &Defect) -> String {
-    match flag_remedy(d.kind) {
-        Some(remedy) => format!("{} {remedy}", d.problem),
-        None => d.message(),
-    }
+    with_remedy(d, flag_remedy(d.kind))
 }
 
 /// A numeric option out of range, as the flag that set it.
@@ -68,14 +66,7 @@ pub fn flatten_error(e: FlattenError) -> anyhow::Error {
 /// message says it all).
 pub fn flatten_error_message(e: &FlattenError) -> Option<String> {
     Some(match e {
-        FlattenError::NotADisc(defects) => format!(
-            "the mesh cannot be flattened as a disc:\n{}",
-            defects
-                .iter()
-                .map(|d| format!("  - {}", defect_message(d)))
-                .collect::<Vec<_>>()
-                .join("\n")
-        ),
+        FlattenError::NotADisc(defects) => not_a_disc_message(defects, defect_message),
         FlattenError::Degenerate(inner) => {
             format!("{inner}; run with --drop-degenerate or fix the mesh")
         }
