@@ -1,24 +1,19 @@
-//! `surfmap flatten IN -o OUT.obj`: flip-free flattening of a disc-topology mesh.
+//! `surfmap flatten IN -o OUT.obj`: flip-free flattening of a disc-topology mesh;
+//! `surfmap flatten A B … -o DIR/`: many meshes in parallel ([`super::batch`]).
 
-use super::advice::{CliDefect, flatten_error, option_message};
+use super::advice::{defect_message, flatten_error, option_message};
 use super::{RepairArgs, load_mesh};
 use anyhow::{Context, bail};
 use indicatif::{ProgressBar, ProgressStyle};
-use serde::Serialize;
 use std::io::IsTerminal;
 use std::path::Path;
 use std::path::PathBuf;
 use surfmap::fsutil::write_atomically;
-use surfmap::measure::{
-    DistortionReport, Measure, MeasureOptions, corner_uvs_from_vertex_uvs,
-    distortion_report_per_vertex, per_triangle_measure,
-};
-use surfmap::mesh::validate::validate;
-use surfmap::param::flatten::{MultilevelReport, StartMap};
+use surfmap::measure::{Measure, corner_uvs_from_vertex_uvs, per_triangle_measure};
 use surfmap::render;
 use surfmap::{
-    Alpha, CoarseLevel, Energy, FlattenOptions, Flattening, IterationLog, Multilevel, Start,
-    StopReason, Topology, TriMesh, Uvs, flatten_with_progress, write_obj,
+    Alpha, CoarseLevel, Energy, FlattenOptions, FlattenReport, Flattening, Multilevel, Start,
+    TriMesh, Uvs, flatten_with_progress, write_obj,
 };
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
@@ -64,11 +59,19 @@ pub enum MultilevelChoice {
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Input mesh (OBJ, OFF or PLY) with disc topology.
-    pub input: PathBuf,
-    /// Output OBJ with texture coordinates (`vt`).
+    /// Input meshes (OBJ, OFF or PLY) with disc topology. Several inputs are flattened
+    /// in parallel into the folder -o (a batch: a bad mesh is reported and skipped).
+    #[arg(required = true, num_args = 1..)]
+    pub inputs: Vec<PathBuf>,
+    /// Output OBJ with texture coordinates (`vt`); for a batch a folder (ending in `/`,
+    /// or existing), which receives NAME.obj and the report NAME.json per mesh and
+    /// summary.csv.
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Batch: meshes flattened at the same time; 0 = one per core. The batch runs on
+    /// this many threads in total.
+    #[arg(short, long, default_value_t = 0)]
+    pub jobs: usize,
     #[command(flatten)]
     pub solver: SolverArgs,
     /// Scale and translate the UVs into [0,1]² (aspect ratio kept).
@@ -257,37 +260,43 @@ pub fn output_mesh(mesh: &TriMesh, uvs: &[[f64; 2]], uv_as_positions: bool) -> T
     }
 }
 
-pub fn run(args: Args) -> anyhow::Result<()> {
-    let file = load_mesh(&args.input)?;
-    let opts = options(&args.solver, args.fill_holes)?;
-    let mesh = args.repair.apply(file.mesh, args.quiet)?;
-    let result = flatten_mesh(&mesh, &opts, args.quiet)
-        .with_context(|| format!("cannot flatten {}", args.input.display()))?;
+/// The map written: the UVs (in `[0, 1]²` with `--normalize`) on the mesh, or the flat
+/// mesh itself with `--uv-as-positions`; with the `--texture` material.
+pub fn write_output(
+    args: &Args,
+    path: &Path,
+    mesh: &TriMesh,
+    r: &Flattening,
+) -> anyhow::Result<()> {
     let uvs = if args.normalize {
-        result.normalized_uvs()
+        r.normalized_uvs()
     } else {
-        result.uvs.clone()
+        r.uvs.clone()
     };
-    let out = output_mesh(&mesh, &uvs, args.uv_as_positions);
+    let out = output_mesh(mesh, &uvs, args.uv_as_positions);
     let material = args
         .texture
         .as_ref()
         .map(|t| surfmap::mesh::io::ObjMaterial { texture: t.clone() });
     // The writer's error names the file already.
-    write_obj(&args.output, &out, material.as_ref())?;
+    Ok(write_obj(path, &out, material.as_ref())?)
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    if super::batch::is_batch(&args) {
+        return super::batch::run(&args);
+    }
+    let input = &args.inputs[0];
+    let file = load_mesh(input)?;
+    let opts = options(&args.solver, args.fill_holes)?;
+    let mesh = args.repair.apply(file.mesh, args.quiet)?;
+    let result = flatten_mesh(&mesh, &opts, args.quiet)
+        .with_context(|| format!("cannot flatten {}", input.display()))?;
+    write_output(&args, &args.output, &mesh, &result)?;
     if let Some(path) = &args.report {
         // Measured on the written map (its own scale; the measures normalize area).
-        let measures = distortion_report_per_vertex(
-            &mesh.positions,
-            &mesh.triangles,
-            &result.uvs,
-            &MeasureOptions::default(),
-        )?;
-        let defects = validate(&mesh, &Topology::new(&mesh));
-        let report = FlattenReport::new(&args.input, &mesh, &result, measures, &defects);
-        let json = serde_json::to_vec_pretty(&report)?;
-        write_atomically(path, |w| w.write_all(&json))
-            .with_context(|| format!("cannot write {}", path.display()))?;
+        let report = FlattenReport::measure(Some(input), &mesh, &result, defect_message)?;
+        write_json(path, &report)?;
     }
     if let Some(dir) = &args.pictures {
         let written = write_pictures(dir, &mesh, &result)?;
@@ -307,7 +316,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         outln!(
             "{}: start {}{}, {} iterations, {}, energy {:.6}, flipped triangles {}, {:.3} s → {}",
-            args.input.display(),
+            input.display(),
             result.start_description(),
             match result.warm_start_iterations {
                 0 => String::new(),
@@ -324,73 +333,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The JSON report of `surfmap flatten --report`.
-#[derive(Serialize)]
-pub struct FlattenReport<'a> {
-    pub input: String,
-    pub vertices: usize,
-    pub triangles: usize,
-    /// Initial map used: `lscm`, `mean_value`, `given` or `multilevel`.
-    pub start: StartMap,
-    /// The multilevel start's coarse level, re-insertion and timings (when tried).
-    pub multilevel: Option<&'a MultilevelReport>,
-    pub lscm_flipped_triangles: usize,
-    /// ARAP warm-start steps accepted before Newton.
-    pub warm_start_iterations: usize,
-    pub iterations: usize,
-    pub converged: bool,
-    pub stop_reason: StopReason,
-    /// Final energy per unit 3D area.
-    pub energy: f64,
-    pub continuation: &'a [[f64; 3]],
-    /// Flipped triangles of the output, counted on the output (always 0).
-    pub flipped_triangles: usize,
-    /// Holes filled for the solve (`--fill-holes`).
-    pub holes_filled: usize,
-    /// Symmetric Dirichlet energy, area-weighted mean (isometry = 4).
-    pub symmetric_dirichlet: f64,
-    pub boundary_overlap: serde_json::Value,
-    pub measures: DistortionReport,
-    pub input_defects: Vec<CliDefect>,
-    pub time_start_s: f64,
-    pub time_newton_s: f64,
-    pub time_total_s: f64,
-    pub log: &'a [IterationLog],
-}
-
-impl<'a> FlattenReport<'a> {
-    pub fn new(
-        input: &Path,
-        mesh: &TriMesh,
-        r: &'a Flattening,
-        measures: DistortionReport,
-        defects: &[surfmap::mesh::validate::Defect],
-    ) -> Self {
-        Self {
-            input: input.display().to_string(),
-            vertices: mesh.positions.len(),
-            triangles: mesh.triangles.len(),
-            start: r.start,
-            multilevel: r.multilevel.as_ref(),
-            lscm_flipped_triangles: r.lscm_flipped,
-            warm_start_iterations: r.warm_start_iterations,
-            iterations: r.iterations,
-            converged: r.converged,
-            stop_reason: r.stop_reason,
-            energy: r.energy,
-            continuation: &r.continuation,
-            flipped_triangles: measures.flipped_triangles,
-            holes_filled: r.holes_filled,
-            symmetric_dirichlet: measures.symmetric_dirichlet,
-            boundary_overlap: serde_json::to_value(&measures.boundary_overlap).unwrap_or_default(),
-            measures,
-            input_defects: defects.iter().map(CliDefect::from).collect(),
-            time_start_s: r.time_start,
-            time_newton_s: r.time_newton,
-            time_total_s: r.time_total,
-            log: &r.log,
-        }
-    }
+/// Writes `value` as pretty JSON (atomically).
+pub fn write_json(path: &Path, value: &impl serde::Serialize) -> anyhow::Result<()> {
+    let json = serde_json::to_vec_pretty(value)?;
+    write_atomically(path, |w| w.write_all(&json))
+        .with_context(|| format!("cannot write {}", path.display()))
 }
 
 /// Writes the UV layout (coloured by angle distortion), the checkerboard render and

@@ -1,5 +1,6 @@
 pub mod advice;
 pub mod bake;
+pub mod batch;
 pub mod demo;
 pub mod flatten;
 pub mod images;
