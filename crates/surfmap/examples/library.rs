@@ -2,7 +2,8 @@
 //! from plain arrays in code (a bumpy patch with two "eyes" and a "mouth" cut out), refused
 //! as it is (not a disc: four boundary loops), flattened with its holes filled for the
 //! solve, its report read (iterations, energy, flips, distortion), its UVs normalized into
-//! [0, 1]² and written as an OBJ into a temporary folder.
+//! [0, 1]² and written as an OBJ into a temporary folder; then points of the parameter
+//! domain located on the surface, and the patch matched onto a moved copy of itself.
 //!
 //! `cargo run --release -p surfmap --example library`
 
@@ -133,5 +134,65 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let back = surfmap::read_mesh(&path)?.mesh;
     assert_eq!(back.vertex_uvs().map(<[_]>::len), Some(out.num_vertices()));
     println!("wrote {}", path.display());
+
+    // Any point of the parameter domain back on the surface: a triangle and barycentric
+    // coordinates, or None outside the map (here: in a hole, or beyond the border).
+    let locator = surfmap::PointLocator::new(&map.uvs, &out.triangles)?;
+    let centre = map
+        .uvs
+        .iter()
+        .fold([0.0; 2], |c, p| [c[0] + p[0], c[1] + p[1]]);
+    let centre = centre.map(|c| c / map.uvs.len() as f64);
+    let hit = locator
+        .locate(centre)
+        .expect("the centre of the map lies on the patch");
+    let p = hit.position(&out.positions, &out.triangles);
+    println!(
+        "uv ({:.3}, {:.3}) lies in triangle {} at ({:.3}, {:.3}, {:.3}); uv (1e3, 1e3) is {:?}",
+        centre[0],
+        centre[1],
+        hit.triangle,
+        p[0],
+        p[1],
+        p[2],
+        locator.locate([1e3, 1e3])
+    );
+
+    // Matching: the patch onto a rotated, shifted copy of itself; every vertex should
+    // land where the motion puts it.
+    let (s, c) = 0.5f64.sin_cos();
+    let moved = TriMesh::new(
+        out.positions
+            .iter()
+            .map(|p| [c * p[0] - s * p[2] + 1.0, p[1] - 2.0, s * p[0] + c * p[2]])
+            .collect(),
+        out.triangles.clone(),
+    );
+    let options = surfmap::matching::MatchOptions {
+        size: 129,
+        ..Default::default()
+    };
+    let m = surfmap::matching::match_surfaces(&out, &moved, &Default::default(), &options)?;
+    let (correspondence, folds, dropped) = m.checked_correspondence(&out, &moved, true)?;
+    let errors: Vec<f64> = correspondence
+        .iter()
+        .enumerate()
+        .filter_map(|(v, q)| {
+            let q = (*q)?.position(&moved.positions, &moved.triangles);
+            let t = moved.positions[v];
+            Some(((0..3).map(|k| (q[k] - t[k]).powi(2)).sum::<f64>()).sqrt())
+        })
+        .collect();
+    let mean = errors.iter().sum::<f64>() / errors.len().max(1) as f64;
+    println!(
+        "matched {} of {} vertices (min det Dφ {:.3}, {} folded image triangles, {} vertices dropped), mean error {:.4} (patch width 1)",
+        errors.len(),
+        correspondence.len(),
+        m.min_det,
+        folds.flipped.len() + folds.collapsed.len(),
+        dropped,
+        mean
+    );
+    assert!(m.min_det > 0.0 && mean < 0.02);
     Ok(())
 }

@@ -98,21 +98,48 @@ pub fn check_folds(a: &TriMesh, b: &TriMesh, correspondence: &[Option<SurfacePoi
     }
 }
 
-/// Marks the vertices of the flipped and collapsed triangles unmatched; returns how
-/// many vertices were dropped. No fully matched triangle is then flipped or collapsed:
-/// the remaining ones keep their images.
+/// Marks vertices of the flipped and collapsed triangles unmatched, as few as it
+/// takes: one vertex per folded triangle, greedily the one shared by the most folded
+/// triangles not yet cleared (a vertex cover of the folded triangles). Returns how many
+/// vertices were dropped. No fully matched triangle is then flipped or collapsed: the
+/// remaining ones keep their images.
 pub fn drop_folds(
     a: &TriMesh,
     folds: &FoldCheck,
     correspondence: &mut [Option<SurfacePoint>],
 ) -> usize {
-    let mut dropped = 0;
-    for &t in folds.flipped.iter().chain(&folds.collapsed) {
+    let folded: Vec<u32> = folds
+        .flipped
+        .iter()
+        .chain(&folds.collapsed)
+        .copied()
+        .collect();
+    let mut count = std::collections::HashMap::<u32, usize>::new();
+    for &t in &folded {
         for v in a.triangles[t as usize] {
-            if correspondence[v as usize].take().is_some() {
-                dropped += 1;
-            }
+            *count.entry(v).or_default() += 1;
         }
+    }
+    let mut dropped = 0;
+    // Triangles whose vertices are shared most go first, so that one drop clears many.
+    let mut order = folded;
+    order.sort_by_key(|&t| {
+        std::cmp::Reverse(
+            a.triangles[t as usize]
+                .iter()
+                .map(|v| count[v])
+                .max()
+                .unwrap_or(0),
+        )
+    });
+    for t in order {
+        let tri = a.triangles[t as usize];
+        if tri.iter().any(|&v| correspondence[v as usize].is_none()) {
+            continue;
+        }
+        let v = *tri.iter().max_by_key(|v| count[v]).expect("three vertices");
+        correspondence[v as usize] = None;
+        dropped += 1;
     }
     dropped
 }
