@@ -69,9 +69,9 @@ pub struct MatchOptions {
     pub size: usize,
     /// Coarsest level `k₀` (grid `2^k₀ + 1`). Default 6 (65²): once the surfaces are
     /// aligned in space ([`Align::Shape`]), the coarser levels (σ ≥ 1/16 of the domain)
-    /// only let the blurred energy drag φ away from a good start — measured on the
-    /// ICT pairs, starting at level 3 lost 10–25 points of the fraction within 0.05
-    /// on every track but the partial one (BENCHMARKS.md, "Matching").
+    /// mostly let the blurred energy drag φ away from a good start — measured on the
+    /// ICT pairs, starting at level 3 lost 8–37 points of the fraction within 0.05 on
+    /// whole faces, while a partial pair gained 8 (BENCHMARKS.md, "Matching").
     pub coarsest_level: usize,
     pub betas: Betas,
     /// `(αl, αa)` of the regularization density (2.8).
