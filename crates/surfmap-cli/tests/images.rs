@@ -32,45 +32,6 @@ fn stderr(out: &Output) -> String {
     String::from_utf8_lossy(&out.stderr).into_owned()
 }
 
-/// Shape and element size of an `.npy` v1 file, checked against its length.
-fn npy_shape(path: &Path) -> (Vec<usize>, usize) {
-    let bytes = std::fs::read(path).unwrap();
-    assert_eq!(&bytes[..6], b"\x93NUMPY", "{}", path.display());
-    assert_eq!(bytes[6], 1, "version 1");
-    let hlen = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
-    assert_eq!((10 + hlen) % 64, 0, "header padded to 64 bytes");
-    let header = std::str::from_utf8(&bytes[10..10 + hlen]).unwrap();
-    assert!(header.contains("'fortran_order': False"), "{header}");
-    let descr = header
-        .split("'descr': '")
-        .nth(1)
-        .unwrap()
-        .split('\'')
-        .next()
-        .unwrap();
-    let elem: usize = descr[2..].parse().unwrap();
-    let dims = header
-        .split("'shape': (")
-        .nth(1)
-        .unwrap()
-        .split(')')
-        .next()
-        .unwrap();
-    let shape: Vec<usize> = dims
-        .split(',')
-        .map(str::trim)
-        .filter(|s| !s.is_empty())
-        .map(|s| s.parse().unwrap())
-        .collect();
-    assert_eq!(
-        bytes.len() - 10 - hlen,
-        shape.iter().product::<usize>() * elem,
-        "{}: data length vs shape {shape:?}",
-        path.display()
-    );
-    (shape, elem)
-}
-
 #[test]
 fn writes_every_image_listed_in_images_json() {
     let dir = temp_dir("images-basic");

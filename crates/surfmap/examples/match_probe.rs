@@ -103,19 +103,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         matched,
         pts.len()
     );
-    let corr = m.correspondence()?;
-    let data: Vec<f64> = corr
-        .iter()
-        .flat_map(|p| match p {
-            Some(s) => [
-                s.triangle as f64,
-                s.barycentric[0],
-                s.barycentric[1],
-                s.barycentric[2],
-            ],
-            None => [-1.0, 0.0, 0.0, 0.0],
-        })
-        .collect();
+    let (corr, _, _) = m.checked_correspondence(&a, &b, options.drop_folds)?;
+    let data = surfmap::matching::output::correspondence_rows(&corr);
     save_npy(Path::new(out), &[corr.len(), 4], &data)?;
     if let Ok(dir) = std::env::var("PROBE_DUMP") {
         let dir = Path::new(&dir);

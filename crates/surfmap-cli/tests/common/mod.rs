@@ -57,3 +57,55 @@ pub fn run_demo(dir: &std::path::Path, rings: usize) -> String {
     );
     String::from_utf8_lossy(&out.stdout).into_owned()
 }
+
+/// Shape and element size of an `.npy` v1 file, checked against its length.
+pub fn npy_shape(path: &std::path::Path) -> (Vec<usize>, usize) {
+    let bytes = std::fs::read(path).unwrap();
+    assert_eq!(&bytes[..6], b"\x93NUMPY", "{}", path.display());
+    assert_eq!(bytes[6], 1, "version 1");
+    let hlen = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
+    assert_eq!((10 + hlen) % 64, 0, "header padded to 64 bytes");
+    let header = std::str::from_utf8(&bytes[10..10 + hlen]).unwrap();
+    assert!(header.contains("'fortran_order': False"), "{header}");
+    let descr = header
+        .split("'descr': '")
+        .nth(1)
+        .unwrap()
+        .split('\'')
+        .next()
+        .unwrap();
+    let elem: usize = descr[2..].parse().unwrap();
+    let dims = header
+        .split("'shape': (")
+        .nth(1)
+        .unwrap()
+        .split(')')
+        .next()
+        .unwrap();
+    let shape: Vec<usize> = dims
+        .split(',')
+        .map(str::trim)
+        .filter(|s| !s.is_empty())
+        .map(|s| s.parse().unwrap())
+        .collect();
+    assert_eq!(
+        bytes.len() - 10 - hlen,
+        shape.iter().product::<usize>() * elem,
+        "{}: data length vs shape {shape:?}",
+        path.display()
+    );
+    (shape, elem)
+}
+
+/// Shape and data of a little-endian float64 `.npy` v1 file (C order).
+pub fn read_npy_f64(path: &std::path::Path) -> (Vec<usize>, Vec<f64>) {
+    let (shape, elem) = npy_shape(path);
+    assert_eq!(elem, 8, "{}: float64 expected", path.display());
+    let bytes = std::fs::read(path).unwrap();
+    let header_len = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
+    let data = bytes[10 + header_len..]
+        .chunks_exact(8)
+        .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
+        .collect();
+    (shape, data)
+}

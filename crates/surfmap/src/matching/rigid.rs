@@ -189,6 +189,23 @@ fn cross(u: [f64; 3], v: [f64; 3]) -> [f64; 3] {
     ]
 }
 
+/// The rotation by `angle` (radians, right-handed) about `axis` (any length; the
+/// identity for a zero axis): Rodrigues' formula `R = cos θ I + sin θ [a]× + (1 − cos θ) a aᵀ`.
+pub(crate) fn axis_angle_rotation(axis: [f64; 3], angle: f64) -> [[f64; 3]; 3] {
+    let n = dot(axis, axis).sqrt();
+    if n == 0.0 {
+        return [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    }
+    let a = axis.map(|v| v / n);
+    let (s, c) = angle.sin_cos();
+    let k = |i: usize, j: usize| a[i] * a[j] * (1.0 - c);
+    [
+        [c + k(0, 0), k(0, 1) - a[2] * s, k(0, 2) + a[1] * s],
+        [k(1, 0) + a[2] * s, c + k(1, 1), k(1, 2) - a[0] * s],
+        [k(2, 0) - a[1] * s, k(2, 1) + a[0] * s, c + k(2, 2)],
+    ]
+}
+
 /// One linearized point-to-plane step (Chen & Medioni 1991, Low 2004): with the
 /// pairs' current images `p`, targets `q` and target normals `n`, the small motion
 /// `p ↦ p + ω × (p − c) + t` (c the centroid of the images) minimizing
@@ -228,18 +245,7 @@ fn point_to_plane_step(p: &[[f64; 3]], q: &[[f64; 3]], n: &[[f64; 3]]) -> Option
     }
     let omega = [x[0], x[1], x[2]];
     let angle = dot(omega, omega).sqrt();
-    let r = if angle > 0.0 {
-        let axis = omega.map(|v| v / angle);
-        let (s, co) = angle.sin_cos();
-        let k = |i: usize, j: usize| axis[i] * axis[j] * (1.0 - co);
-        [
-            [co + k(0, 0), k(0, 1) - axis[2] * s, k(0, 2) + axis[1] * s],
-            [k(1, 0) + axis[2] * s, co + k(1, 1), k(1, 2) - axis[0] * s],
-            [k(2, 0) - axis[1] * s, k(2, 1) + axis[0] * s, co + k(2, 2)],
-        ]
-    } else {
-        [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
-    };
+    let r = axis_angle_rotation(omega, angle);
     // p ↦ R (p − c) + c + t.
     let rc: [f64; 3] = std::array::from_fn(|i| dot(r[i], c));
     Some(Similarity3 {
@@ -354,17 +360,7 @@ mod tests {
     use super::*;
     use crate::mesh::generate::bumpy_disc;
 
-    fn rotation(axis: [f64; 3], angle: f64) -> [[f64; 3]; 3] {
-        let n = (axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]).sqrt();
-        let a = axis.map(|v| v / n);
-        let (s, c) = angle.sin_cos();
-        let k = |i: usize, j: usize| a[i] * a[j] * (1.0 - c);
-        [
-            [c + k(0, 0), k(0, 1) - a[2] * s, k(0, 2) + a[1] * s],
-            [k(1, 0) + a[2] * s, c + k(1, 1), k(1, 2) - a[0] * s],
-            [k(2, 0) - a[1] * s, k(2, 1) + a[0] * s, c + k(2, 2)],
-        ]
-    }
+    use super::axis_angle_rotation as rotation;
 
     /// An asymmetric height field over a disc with one bump (a "nose").
     fn surface() -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {

@@ -3,6 +3,7 @@
 //! misaligned start, and a crop found inside the whole. Every result must have
 //! min det Dφ > 0.
 
+use super::rigid::axis_angle_rotation as rotation;
 use super::*;
 use crate::mesh::generate::bumpy_disc;
 use crate::mesh::{SurfacePoint, TriMesh};
@@ -22,18 +23,6 @@ fn surface(rings: usize, motion: impl Fn([f64; 3]) -> [f64; 3]) -> TriMesh {
         *p = motion([p[0], p[1], height(p[0], p[1])]);
     }
     mesh
-}
-
-fn rotation(axis: [f64; 3], angle: f64) -> [[f64; 3]; 3] {
-    let n = (axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]).sqrt();
-    let a = axis.map(|v| v / n);
-    let (s, c) = angle.sin_cos();
-    let k = |i: usize, j: usize| a[i] * a[j] * (1.0 - c);
-    [
-        [c + k(0, 0), k(0, 1) - a[2] * s, k(0, 2) + a[1] * s],
-        [k(1, 0) + a[2] * s, c + k(1, 1), k(1, 2) - a[0] * s],
-        [k(2, 0) - a[1] * s, k(2, 1) + a[0] * s, c + k(2, 2)],
-    ]
 }
 
 fn rigid(r: [[f64; 3]; 3], t: [f64; 3]) -> impl Fn([f64; 3]) -> [f64; 3] {
