@@ -2,8 +2,8 @@
 //!
 //! Flip-free flattening of disc-like triangle meshes by Newton minimization of an
 //! elastic energy (N. Litke, *Variational Methods in Surface Parameterization*, 2005,
-//! §2.1/§3.1), distortion measures and pictures, and geometry images for matching
-//! (§3.2).
+//! §2.1/§3.1), distortion measures and pictures, geometry images (§3.2), fold-free
+//! matching of two surfaces through them (§2.2, §3.2) and its applications (ch. 5).
 //!
 //! ## A complete run: read → flatten → measure → write
 //!
@@ -48,6 +48,14 @@
 //! let flat = TriMesh { uvs: Some(Uvs::PerVertex(map.normalized_uvs())), ..mesh };
 //! surfmap::write_mesh(&output, &flat)?;
 //! assert_eq!(surfmap::read_mesh(&output)?.mesh.vertex_uvs().map(<[_]>::len), Some(flat.num_vertices()));
+//!
+//! // Locate any point of the parameter domain on the surface: a triangle and
+//! // barycentric coordinates, or None outside the map.
+//! let locator = surfmap::PointLocator::new(&map.uvs, &flat.triangles)?;
+//! let hit = locator.locate(map.uvs[0]).expect("a vertex's own UV lies on the map");
+//! let p = hit.position(&flat.positions, &flat.triangles);
+//! assert!((0..3).all(|k| (p[k] - flat.positions[0][k]).abs() < 1e-9)); // back at vertex 0
+//! assert!(locator.locate([1e9, 1e9]).is_none());
 //! std::fs::remove_dir_all(&dir)?;
 //! # Ok(())
 //! # }
@@ -56,7 +64,8 @@
 //! A mesh that is not a disc gets an error listing every defect with the repair that
 //! fixes it ([`FlattenError::NotADisc`], [`mesh::repair`]); holes (eyes, mouth) can be
 //! filled for the solve with [`FlattenOptions::fill_holes`]. `examples/library.rs`
-//! builds a mesh from arrays, fills its holes and reads the whole report.
+//! builds a mesh from arrays, fills its holes, reads the whole report, locates points
+//! and matches the surface onto a moved copy ([`matching::match_surfaces`]).
 //!
 //! ## Modules
 //!
@@ -72,6 +81,8 @@
 //! | [`render`] | PNG pictures: UV layouts, checkerboard renders, plots |
 //! | [`grid`] | regular `2^k + 1` grids over ω = `[0,1]²`: [`grid::Grid`], bilinear sampling with gradient, finite differences, restriction/prolongation, the typed Gaussian pyramid, Eikonal distances, harmonic extension |
 //! | [`raster`] | geometry images: a flattened surface rasterized onto a grid (§3.2) |
+//! | [`matching`] | surface matching: alignment in space, the matching energy (2.16) over deformations of the grid, the multiscale solve, fold checks, point maps, the match folder |
+//! | [`apps`] | thesis ch. 5 on matches and maps: transfer, baking, morphs, rigs, glTF |
 //! | [`report`] | the documents of a run: [`InspectReport`], [`FlattenReport`] (the CLI's JSON, the Python package's dictionaries) |
 //! | [`batch`] | many mesh files on a thread pool, one bad mesh never stopping the rest, and their summary table |
 //!
