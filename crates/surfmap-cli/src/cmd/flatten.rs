@@ -1,4 +1,7 @@
-//! `surfmap flatten IN -o OUT.obj`: flip-free flattening of a disc-topology mesh.
+//! `surfmap flatten IN -o OUT.obj`: flip-free flattening of any connected, orientable,
+//! manifold mesh: a disc as it is, holes filled for the solve (or cut open with
+//! `--cut-holes`), closed and higher-genus surfaces cut open along seams (per-corner
+//! `vt` in the OBJ).
 
 use super::advice::{CliDefect, flatten_error, option_message};
 use super::{RepairArgs, load_mesh};
@@ -10,15 +13,14 @@ use std::path::Path;
 use std::path::PathBuf;
 use surfmap::fsutil::write_atomically;
 use surfmap::measure::{
-    DistortionReport, Measure, MeasureOptions, corner_uvs_from_vertex_uvs,
-    distortion_report_per_vertex, per_triangle_measure,
+    DistortionReport, Measure, MeasureOptions, distortion_report, per_triangle_measure,
 };
 use surfmap::mesh::validate::validate;
 use surfmap::param::flatten::{MultilevelReport, StartMap};
 use surfmap::render;
 use surfmap::{
-    Alpha, CoarseLevel, Energy, FlattenOptions, Flattening, IterationLog, Multilevel, Start,
-    StopReason, Topology, TriMesh, Uvs, flatten_with_progress, write_obj,
+    Alpha, CoarseLevel, Cut, Energy, FlattenOptions, Flattening, IterationLog, Multilevel, Seams,
+    Start, StopReason, Topology, TriMesh, Uvs, flatten_with_progress, write_obj,
 };
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
@@ -64,9 +66,11 @@ pub enum MultilevelChoice {
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Input mesh (OBJ, OFF or PLY) with disc topology.
+    /// Input mesh (OBJ, OFF or PLY): connected, orientable, manifold (a disc, a disc
+    /// with holes, a closed surface, handles).
     pub input: PathBuf,
-    /// Output OBJ with texture coordinates (`vt`).
+    /// Output OBJ with texture coordinates (`vt`; per corner, split along the seams,
+    /// when the surface was cut).
     #[arg(short, long)]
     pub output: PathBuf,
     /// Distortion trade-off preset.
@@ -123,8 +127,21 @@ pub struct Args {
     pub quiet: bool,
     /// Fill every boundary loop but the longest (eyes, mouth, scan holes) with a fan for
     /// the flattening; the output keeps the original faces, holes stay open in the UVs.
-    #[arg(long)]
+    /// This is the default; the flag is kept for scripts.
+    #[arg(long, conflicts_with = "cut_holes")]
     pub fill_holes: bool,
+    /// Open the holes with seams to the outer boundary instead of filling them.
+    #[arg(long)]
+    pub cut_holes: bool,
+    /// Cut along these seams instead of the automatic cut graph: an OBJ with `l` lines
+    /// (as `--seams` writes; 1-based vertex indices), or a text file with one edge per
+    /// line, two 0-based vertex indices (`#` starts a comment).
+    #[arg(long, value_name = "EDGES")]
+    pub cut_along: Option<PathBuf>,
+    /// Write the seams (the cut edges) as an OBJ: the input's vertices and one `l` line
+    /// per seam edge (nothing is written when the surface was not cut).
+    #[arg(long, value_name = "SEAMS.obj")]
+    pub seams: Option<PathBuf>,
     #[command(flatten)]
     pub repair: RepairArgs,
 }
@@ -189,9 +206,14 @@ pub fn options(args: &Args) -> anyhow::Result<FlattenOptions> {
         (StartChoice::Lscm, _) => Start::Lscm,
         (StartChoice::MeanValue, _) => Start::MeanValue,
     };
+    let cut = match &args.cut_along {
+        Some(path) => Cut::Along(read_seams(path)?),
+        None => Cut::Auto,
+    };
     let mut opts = FlattenOptions::new(energy)
         .with_start(start)
-        .with_fill_holes(args.fill_holes);
+        .with_fill_holes(!args.cut_holes)
+        .with_cut(cut);
     opts.newton.max_iterations = args.max_iters;
     opts.newton.tolerance = args.tolerance;
     opts.newton.armijo_c = args.armijo_c;
@@ -237,17 +259,97 @@ pub fn flatten_mesh(
     Ok(result)
 }
 
-/// The mesh to write: the input with per-vertex UVs, or the flat mesh itself.
-pub fn output_mesh(mesh: &TriMesh, uvs: &[[f64; 2]], uv_as_positions: bool) -> TriMesh {
-    TriMesh {
-        positions: if uv_as_positions {
-            uvs.iter().map(|p| [p[0], p[1], 0.0]).collect()
-        } else {
-            mesh.positions.clone()
-        },
-        triangles: mesh.triangles.clone(),
-        uvs: Some(Uvs::PerVertex(uvs.to_vec())),
+/// The mesh to write: the input with its texture coordinates (per vertex, or per corner
+/// when it was cut), or the flat mesh itself (cut open along the seams).
+pub fn output_mesh(
+    mesh: &TriMesh,
+    result: &Flattening,
+    normalize: bool,
+    uv_as_positions: bool,
+) -> TriMesh {
+    let uvs = result.texture_coordinates(normalize);
+    if !uv_as_positions {
+        return TriMesh {
+            uvs: Some(uvs),
+            ..TriMesh::new(mesh.positions.clone(), mesh.triangles.clone())
+        };
     }
+    let (coords, triangles) = match uvs {
+        Uvs::PerVertex(coords) => (coords, mesh.triangles.clone()),
+        Uvs::PerCorner { coords, indices } => (coords, indices),
+    };
+    TriMesh {
+        positions: coords.iter().map(|p| [p[0], p[1], 0.0]).collect(),
+        triangles,
+        uvs: Some(Uvs::PerVertex(coords)),
+    }
+}
+
+/// Reads seams for `--cut-along`: OBJ `l` lines (1-based, consecutive pairs of a
+/// polyline), or lines of two 0-based vertex indices.
+pub fn read_seams(path: &Path) -> anyhow::Result<Vec<[u32; 2]>> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("cannot read seams from {}", path.display()))?;
+    let obj = text.lines().any(|l| l.trim_start().starts_with("l "));
+    let mut seams = Vec::new();
+    for (number, line) in text.lines().enumerate() {
+        let line = line.split('#').next().unwrap_or("").trim();
+        let bad = || {
+            anyhow::anyhow!(
+                "{}:{}: expected {}, got {line:?}",
+                path.display(),
+                number + 1,
+                if obj {
+                    "`l A B …` with 1-based vertex indices"
+                } else {
+                    "two 0-based vertex indices"
+                }
+            )
+        };
+        let fields: Vec<&str> = line.split_whitespace().collect();
+        if obj {
+            if fields.first() != Some(&"l") {
+                continue;
+            }
+            let vertices: Vec<u32> = fields[1..]
+                .iter()
+                .map(|f| f.split('/').next().unwrap_or("").parse::<u32>())
+                .collect::<Result<_, _>>()
+                .map_err(|_| bad())?;
+            if vertices.len() < 2 || vertices.contains(&0) {
+                return Err(bad());
+            }
+            seams.extend(vertices.windows(2).map(|w| [w[0] - 1, w[1] - 1]));
+        } else if !fields.is_empty() {
+            match fields[..] {
+                [a, b] => {
+                    seams.push([a.parse().map_err(|_| bad())?, b.parse().map_err(|_| bad())?])
+                }
+                _ => return Err(bad()),
+            }
+        }
+    }
+    Ok(seams)
+}
+
+/// Writes the seams as an OBJ: every vertex of the input, one `l` line per seam edge.
+pub fn write_seams(path: &Path, mesh: &TriMesh, seams: &Seams) -> anyhow::Result<()> {
+    write_atomically(path, |w| {
+        writeln!(
+            w,
+            "# seams of surfmap flatten: {} edges, length {}",
+            seams.edges.len(),
+            seams.length
+        )?;
+        for p in &mesh.positions {
+            writeln!(w, "v {} {} {}", p[0], p[1], p[2])?;
+        }
+        for [a, b] in &seams.edges {
+            writeln!(w, "l {} {}", a + 1, b + 1)?;
+        }
+        Ok(())
+    })
+    .with_context(|| format!("cannot write {}", path.display()))
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
@@ -256,12 +358,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mesh = args.repair.apply(file.mesh, args.quiet)?;
     let result = flatten_mesh(&mesh, &opts, args.quiet)
         .with_context(|| format!("cannot flatten {}", args.input.display()))?;
-    let uvs = if args.normalize {
-        result.normalized_uvs()
-    } else {
-        result.uvs.clone()
-    };
-    let out = output_mesh(&mesh, &uvs, args.uv_as_positions);
+    let out = output_mesh(&mesh, &result, args.normalize, args.uv_as_positions);
     let material = args
         .texture
         .as_ref()
@@ -270,10 +367,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     write_obj(&args.output, &out, material.as_ref())?;
     if let Some(path) = &args.report {
         // Measured on the written map (its own scale; the measures normalize area).
-        let measures = distortion_report_per_vertex(
+        let measures = distortion_report(
             &mesh.positions,
             &mesh.triangles,
-            &result.uvs,
+            &result.corner_uvs(&mesh.triangles),
             &MeasureOptions::default(),
         )?;
         let defects = validate(&mesh, &Topology::new(&mesh));
@@ -281,6 +378,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let json = serde_json::to_vec_pretty(&report)?;
         write_atomically(path, |w| w.write_all(&json))
             .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    if let (Some(path), Some(seams)) = (&args.seams, &result.seams) {
+        write_seams(path, &mesh, seams)?;
     }
     if let Some(dir) = &args.pictures {
         let written = write_pictures(dir, &mesh, &result)?;
@@ -299,8 +399,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             eprintln!("note: multilevel start abandoned ({reason}); used the single-level start");
         }
         outln!(
-            "{}: start {}{}, {} iterations, {}, energy {:.6}, flipped triangles {}, {:.3} s → {}",
+            "{}: {}start {}{}, {} iterations, {}, energy {:.6}, flipped triangles {}, {:.3} s → {}",
             args.input.display(),
+            match &result.seams {
+                None => String::new(),
+                Some(s) => format!(
+                    "{} ({} seam edges, length {:.4}), ",
+                    result.plan.describe(),
+                    s.edges.len(),
+                    s.length
+                ),
+            },
             result.start_description(),
             match result.warm_start_iterations {
                 0 => String::new(),
@@ -327,6 +436,11 @@ pub struct FlattenReport<'a> {
     pub input: String,
     pub vertices: usize,
     pub triangles: usize,
+    /// What was done before the solve: `disc as is`, `fill N holes`, `cut open along
+    /// seams (…)`.
+    pub plan: String,
+    /// The seams when the surface was cut: why, the edges (vertex pairs), their length.
+    pub seams: Option<&'a Seams>,
     /// Initial map used: `lscm`, `mean_value`, `given` or `multilevel`.
     pub start: StartMap,
     /// The multilevel start's coarse level, re-insertion and timings (when tried).
@@ -349,6 +463,7 @@ pub struct FlattenReport<'a> {
     pub boundary_overlap: serde_json::Value,
     pub measures: DistortionReport,
     pub input_defects: Vec<CliDefect>,
+    pub time_prepare_s: f64,
     pub time_start_s: f64,
     pub time_newton_s: f64,
     pub time_total_s: f64,
@@ -367,6 +482,8 @@ impl<'a> FlattenReport<'a> {
             input: input.display().to_string(),
             vertices: mesh.positions.len(),
             triangles: mesh.triangles.len(),
+            plan: r.plan.describe(),
+            seams: r.seams.as_ref(),
             start: r.start,
             multilevel: r.multilevel.as_ref(),
             lscm_flipped_triangles: r.lscm_flipped,
@@ -382,6 +499,7 @@ impl<'a> FlattenReport<'a> {
             boundary_overlap: serde_json::to_value(&measures.boundary_overlap).unwrap_or_default(),
             measures,
             input_defects: defects.iter().map(CliDefect::from).collect(),
+            time_prepare_s: r.time_prepare,
             time_start_s: r.time_start,
             time_newton_s: r.time_newton,
             time_total_s: r.time_total,
@@ -394,7 +512,7 @@ impl<'a> FlattenReport<'a> {
 /// the convergence plot into `dir`; returns the paths written.
 pub fn write_pictures(dir: &Path, mesh: &TriMesh, r: &Flattening) -> anyhow::Result<Vec<PathBuf>> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    let corners = corner_uvs_from_vertex_uvs(&mesh.triangles, &r.uvs)?;
+    let corners = r.corner_uvs(&mesh.triangles);
     let angle = per_triangle_measure(&mesh.positions, &mesh.triangles, &corners, Measure::Angle)?;
     let mut written = Vec::new();
     let mut save = |name: &str, img: render::RgbImage| -> anyhow::Result<()> {

@@ -1,10 +1,12 @@
-//! `surfmap inspect MESH [--json]`: counts, bounding box, area, topology and defects.
+//! `surfmap inspect MESH [--json]`: counts, bounding box, area, topology, defects, and
+//! what `flatten` will do with the mesh (as it is, fill holes, cut open, or refuse) and
+//! why.
 
 use super::advice::CliDefect;
 use super::load_mesh;
 use serde::Serialize;
 use surfmap::mesh::validate::validate;
-use surfmap::{Topology, TriMesh};
+use surfmap::{FlattenOptions, Topology, TriMesh};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -36,6 +38,12 @@ pub struct InspectReport {
     pub manifold: bool,
     pub orientable: bool,
     pub disc: bool,
+    /// What `surfmap flatten` does with the mesh by default: `disc as is`, `fill N
+    /// holes`, `cut open along seams (why)`, or `refused` (see the defects).
+    pub flatten: String,
+    /// Holes `flatten` fills, and whether it cuts the surface open (default options).
+    pub flatten_fills_holes: usize,
+    pub flatten_cuts: bool,
     pub has_uvs: bool,
     pub bbox_min: Option<[f64; 3]>,
     pub bbox_max: Option<[f64; 3]>,
@@ -58,6 +66,7 @@ pub fn report(
         .collect();
     loop_lengths.sort_unstable_by(|a, b| b.cmp(a));
     let bbox = mesh.bounding_box();
+    let plan = surfmap::plan(mesh, &FlattenOptions::default()).ok();
     InspectReport {
         file: path.display().to_string(),
         format,
@@ -73,6 +82,11 @@ pub fn report(
         manifold: topo.is_manifold(),
         orientable: topo.orientable,
         disc: topo.is_disc(),
+        flatten: plan
+            .as_ref()
+            .map_or_else(|| "refused".to_string(), |p| p.describe()),
+        flatten_fills_holes: plan.as_ref().map_or(0, |p| p.holes_to_fill),
+        flatten_cuts: plan.as_ref().is_some_and(|p| p.cut.is_some()),
         has_uvs: mesh.uvs.is_some(),
         bbox_min: bbox.map(|b| b.0),
         bbox_max: bbox.map(|b| b.1),
@@ -129,12 +143,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "NOT orientable"
         },
     );
+    outln!("  disc       {}", if r.disc { "yes" } else { "no" });
     outln!(
-        "  disc       {}",
-        if r.disc {
-            "yes: ready to flatten"
-        } else {
-            "no: see the defects below"
+        "  flatten    {}",
+        match r.flatten.as_str() {
+            "refused" => "refused: repair the defects marked below first".to_string(),
+            "disc as is" => "the disc as it is".to_string(),
+            plan if r.flatten_cuts && r.flatten_fills_holes == 0 && r.boundary_loops > 1 => {
+                format!("{plan}: the holes are joined to the outer boundary")
+            }
+            plan if r.flatten_cuts =>
+                format!("{plan}: a disc map needs one boundary loop and no handle"),
+            plan => format!(
+                "{plan} for the solve (they stay open in the map; --cut-holes opens them with seams instead)"
+            ),
         }
     );
     if r.defects.is_empty() {

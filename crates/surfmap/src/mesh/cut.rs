@@ -96,8 +96,34 @@ pub enum CutError {
 /// edges, as `[low, high]` vertex pairs, sorted, that open the surface into a disc. Empty
 /// for a disc.
 pub fn cut_graph(mesh: &TriMesh, topology: &Topology) -> Result<Vec<[u32; 2]>, CutError> {
+    cut_graph_avoiding(mesh, topology, |_| false)
+}
+
+/// [`cut_graph`] with no seam along or through the faces where `avoid` is true (for
+/// example the fans that fill holes, [`super::repair::fill_holes`], which are dropped
+/// from the map afterwards: a seam that met a filled hole twice would cut off the
+/// surface between). Every edge with an endpoint on such a face weighs
+/// [`AVOID_FACTOR`] times the whole surface, so no shortest path touches those faces
+/// while another way exists.
+pub fn cut_graph_avoiding(
+    mesh: &TriMesh,
+    topology: &Topology,
+    avoid: impl Fn(u32) -> bool,
+) -> Result<Vec<[u32; 2]>, CutError> {
     check_cuttable(mesh, topology)?;
-    let graph = CutProblem::new(mesh, topology);
+    let mut graph = CutProblem::new(mesh, topology);
+    let heavy = AVOID_FACTOR * graph.weight.iter().sum::<f64>().max(f64::MIN_POSITIVE);
+    let mut touched = vec![false; mesh.positions.len()];
+    for (f, tri) in mesh.triangles.iter().enumerate() {
+        if avoid(f as u32) {
+            tri.iter().for_each(|&v| touched[v as usize] = true);
+        }
+    }
+    for (w, &[a, b]) in graph.weight.iter_mut().zip(&topology.edges) {
+        if touched[a as usize] || touched[b as usize] {
+            *w = heavy;
+        }
+    }
     let genus = topology.genus().unwrap_or(0) as usize;
     let edges = if !graph.loops.is_empty() {
         graph.cut_from(graph.loop_node(graph.longest_loop()), None, genus)
@@ -235,6 +261,9 @@ pub fn open_along(
 /// Root candidates tried for a closed surface with handles: as many as fit in about
 /// [`ROOT_BUDGET`] face visits, between 4 and 32.
 const ROOT_BUDGET: usize = 2_000_000;
+
+/// Weight of an edge to avoid, in units of the whole surface's edge weights.
+pub const AVOID_FACTOR: f64 = 1e3;
 
 /// How much cheaper a fully folded edge is than a flat one (see the module docs).
 const CREASE_DISCOUNT: f64 = 0.5;

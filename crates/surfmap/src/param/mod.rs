@@ -12,6 +12,7 @@ pub mod lscm;
 pub mod multilevel;
 #[doc(hidden)]
 pub mod newton;
+pub mod plan;
 pub mod tutte;
 
 use crate::linsolve::SolveError;
