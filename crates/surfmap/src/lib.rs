@@ -103,8 +103,8 @@ pub use mesh::{
     BoundaryLoop, Disc, IndexError, NotADisc, PointLocator, SurfacePoint, Topology, TriMesh, Uvs,
 };
 pub use param::flatten::{
-    CoarseLevel, Cut, FlattenError, FlattenOptions, Flattening, IterationLog, Multilevel,
-    NewtonSettings, Seams, Start, StartMap, StopReason, flatten, flatten_with_progress,
+    Bijective, CoarseLevel, Cut, FlattenError, FlattenOptions, Flattening, Guarantee, IterationLog,
+    Multilevel, NewtonSettings, Seams, Start, StartMap, StopReason, flatten, flatten_with_progress,
 };
 pub use param::normalize_uvs;
 pub use param::plan::{Plan, plan};

@@ -19,8 +19,9 @@ use surfmap::mesh::validate::validate;
 use surfmap::param::flatten::{MultilevelReport, StartMap};
 use surfmap::render;
 use surfmap::{
-    Alpha, CoarseLevel, Cut, Energy, FlattenOptions, Flattening, IterationLog, Multilevel, Seams,
-    Start, StopReason, Topology, TriMesh, Uvs, flatten_with_progress, write_obj,
+    Alpha, Bijective, CoarseLevel, Cut, Energy, FlattenOptions, Flattening, Guarantee,
+    IterationLog, Multilevel, Seams, Start, StopReason, Topology, TriMesh, Uvs,
+    flatten_with_progress, write_obj,
 };
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
@@ -54,6 +55,16 @@ pub enum StartChoice {
     Auto,
     Lscm,
     MeanValue,
+}
+
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum BijectiveChoice {
+    /// Solve again with the boundary barrier when the result's boundary overlaps itself.
+    Auto,
+    /// Always solve with the boundary barrier.
+    Always,
+    /// Never: flip-free only; the boundary may overlap itself.
+    Off,
 }
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
@@ -133,6 +144,10 @@ pub struct Args {
     /// Open the holes with seams to the outer boundary instead of filling them.
     #[arg(long)]
     pub cut_holes: bool,
+    /// Keep the boundary from overlapping itself (a bijective map) with a boundary
+    /// barrier: when the unconstrained result overlaps (auto), always, or never.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub bijective: BijectiveChoice,
     /// Cut along these seams instead of the automatic cut graph: an OBJ with `l` lines
     /// (as `--seams` writes; 1-based vertex indices), or a text file with one edge per
     /// line, two 0-based vertex indices (`#` starts a comment).
@@ -213,7 +228,12 @@ pub fn options(args: &Args) -> anyhow::Result<FlattenOptions> {
     let mut opts = FlattenOptions::new(energy)
         .with_start(start)
         .with_fill_holes(!args.cut_holes)
-        .with_cut(cut);
+        .with_cut(cut)
+        .with_bijective(match args.bijective {
+            BijectiveChoice::Auto => Bijective::WhenOverlapping,
+            BijectiveChoice::Always => Bijective::Always,
+            BijectiveChoice::Off => Bijective::Off,
+        });
     opts.newton.max_iterations = args.max_iters;
     opts.newton.tolerance = args.tolerance;
     opts.newton.armijo_c = args.armijo_c;
@@ -399,7 +419,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             eprintln!("note: multilevel start abandoned ({reason}); used the single-level start");
         }
         outln!(
-            "{}: {}start {}{}, {} iterations, {}, energy {:.6}, flipped triangles {}, {:.3} s → {}",
+            "{}: {}start {}{}, {} iterations, {}, energy {:.6}, flipped triangles {}{}, {:.3} s → {}",
             args.input.display(),
             match &result.seams {
                 None => String::new(),
@@ -423,6 +443,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             },
             result.energy,
             result.flipped_triangles,
+            match (result.guarantee, result.barrier) {
+                (Guarantee::LocallyInjective, _) => format!(
+                    ", boundary overlaps itself ({} crossings; see --bijective)",
+                    result.boundary_crossings
+                ),
+                (Guarantee::Bijective, true) => ", no overlap (boundary barrier)".to_string(),
+                (Guarantee::Bijective, false) => String::new(),
+            },
             result.time_total,
             args.output.display()
         );
@@ -456,6 +484,11 @@ pub struct FlattenReport<'a> {
     pub continuation: &'a [[f64; 3]],
     /// Flipped triangles of the output, counted on the output (always 0).
     pub flipped_triangles: usize,
+    /// `bijective` (flip-free, boundary crossing-free: injective) or
+    /// `locally_injective` (flip-free only), checked on the result.
+    pub guarantee: Guarantee,
+    /// Whether the boundary barrier was used (see `--bijective`).
+    pub barrier: bool,
     /// Holes filled for the solve (`--fill-holes`).
     pub holes_filled: usize,
     /// Symmetric Dirichlet energy, area-weighted mean (isometry = 4).
@@ -494,6 +527,8 @@ impl<'a> FlattenReport<'a> {
             energy: r.energy,
             continuation: &r.continuation,
             flipped_triangles: measures.flipped_triangles,
+            guarantee: r.guarantee,
+            barrier: r.barrier,
             holes_filled: r.holes_filled,
             symmetric_dirichlet: measures.symmetric_dirichlet,
             boundary_overlap: serde_json::to_value(&measures.boundary_overlap).unwrap_or_default(),

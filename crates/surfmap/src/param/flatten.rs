@@ -9,6 +9,7 @@
 //! α, automatic start, ARAP warm start) suit most meshes.
 
 use super::arap::ArapStep;
+use super::barrier::BoundaryBarrier;
 use super::element::{RestTriangleError, rest_triangles};
 use super::flip_free::max_flip_free_step;
 use super::newton::NewtonSolver;
@@ -171,6 +172,35 @@ pub struct MultilevelReport {
     pub abandoned: Option<String>,
 }
 
+/// When the flattening keeps the boundary from overlapping itself with the boundary
+/// barrier ([`super::barrier`]; Smith & Schaefer 2015): a flip-free map of a disc is
+/// injective exactly when its boundary does not cross itself.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Bijective {
+    /// Never: the result is flip-free (locally injective); its boundary may overlap
+    /// itself ([`Flattening::boundary_crossings`] says whether it does).
+    Off,
+    /// Solve as with `Off`; if the boundary of the result crosses itself, solve again
+    /// with the barrier from a crossing-free start. Costs nothing where there is no
+    /// overlap, and the result is the same as with `Off` there.
+    #[default]
+    WhenOverlapping,
+    /// Always solve with the barrier, from a crossing-free start (LSCM if it is
+    /// flip-free and crossing-free, else mean-value coordinates onto a circle).
+    Always,
+}
+
+/// What the result is guaranteed to be (checked on the result, not assumed).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Guarantee {
+    /// Flip-free, and the boundary does not cross itself: the map is injective.
+    Bijective,
+    /// Flip-free, but the boundary crosses itself ([`Flattening::boundary_crossings`]):
+    /// locally injective only.
+    LocallyInjective,
+}
+
 /// Options of [`flatten`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct FlattenOptions {
@@ -193,6 +223,9 @@ pub struct FlattenOptions {
     /// How a surface that is not a disc (closed, with handles, or with holes not
     /// filled) is cut open along seams ([`super::plan`]; default: [`Cut::Auto`]).
     pub cut: Cut,
+    /// Whether the boundary is kept from overlapping itself (default:
+    /// [`Bijective::WhenOverlapping`]).
+    pub bijective: Bijective,
 }
 
 impl Default for FlattenOptions {
@@ -204,6 +237,7 @@ impl Default for FlattenOptions {
             newton: NewtonSettings::default(),
             fill_holes: true,
             cut: Cut::Auto,
+            bijective: Bijective::default(),
         }
     }
 }
@@ -230,6 +264,11 @@ impl FlattenOptions {
     /// These options with the cut `cut`.
     pub fn with_cut(self, cut: Cut) -> Self {
         Self { cut, ..self }
+    }
+
+    /// These options with the bijective mode `bijective`.
+    pub fn with_bijective(self, bijective: Bijective) -> Self {
+        Self { bijective, ..self }
     }
 
     /// Checks the numeric settings (called by [`flatten`]).
@@ -294,6 +333,16 @@ pub struct Flattening {
     /// Flipped or degenerate triangles in the output, counted on the output: always 0
     /// for a returned flattening (a non-zero count is an error instead).
     pub flipped_triangles: usize,
+    /// Pairs of boundary edges of the solved disc (after filling and cutting) that
+    /// cross or touch, checked on the result: 0 means the map is injective.
+    pub boundary_crossings: usize,
+    /// What the result is guaranteed to be (from the check above).
+    pub guarantee: Guarantee,
+    /// Whether the boundary barrier was used: with [`Bijective::Always`], or because
+    /// the unconstrained result overlapped ([`Bijective::WhenOverlapping`]; then
+    /// [`Self::iterations`] and the log are those of the barrier solve, and the times
+    /// include both).
+    pub barrier: bool,
     /// Holes filled for the solve ([`FlattenOptions::fill_holes`]).
     pub holes_filled: usize,
     /// α values of the continuation stages actually solved (empty without continuation).
@@ -504,6 +553,44 @@ fn flatten_disc(
         Some(topology) => Disc::with_topology(mesh, topology)?,
         None => Disc::new(mesh)?,
     };
+    let first = solve_disc(
+        mesh,
+        &disc,
+        options,
+        progress,
+        options.bijective == Bijective::Always,
+    )?;
+    if first.boundary_crossings == 0 || options.bijective != Bijective::WhenOverlapping {
+        return Ok(first);
+    }
+    // The unconstrained map overlaps itself: solve again with the boundary barrier.
+    let mut second = solve_disc(mesh, &disc, options, progress, true)?;
+    second.time_start += first.time_start + first.time_newton;
+    second.time_total = clock.elapsed().as_secs_f64();
+    Ok(second)
+}
+
+/// Number of pairs of boundary edges of the map `uv` without a common endpoint that
+/// cross or touch (`boundary`: the loop in order).
+fn boundary_crossings(uv: &[[f64; 2]], boundary: &[u32]) -> usize {
+    let n = boundary.len();
+    let segments: Vec<[[f64; 2]; 2]> = (0..n)
+        .map(|i| [uv[boundary[i] as usize], uv[boundary[(i + 1) % n] as usize]])
+        .collect();
+    crate::measure::overlap::count_segment_crossings(&segments).0
+}
+
+/// One solve of [`flatten_disc`]: with the boundary barrier when `barrier` (from a
+/// crossing-free start, without the multilevel start and the ARAP warm start, which do
+/// not keep the boundary from crossing).
+fn solve_disc(
+    mesh: &TriMesh,
+    disc: &Disc,
+    options: &FlattenOptions,
+    progress: &mut dyn FnMut(&IterationLog),
+    barrier: bool,
+) -> Result<Flattening, FlattenError> {
+    let clock = Instant::now();
     // Scale normalization: work on the surface scaled to unit area, so energies and
     // tolerances are scale-free; the UVs are scaled back at the end.
     let area = mesh.area();
@@ -535,26 +622,34 @@ fn flatten_disc(
     let mut multilevel = None;
     // LSCM, with the mean-value fallback when `fallback` (else LSCM as it is).
     let mut lscm_start = |fallback: bool| -> Result<(Vec<[f64; 2]>, StartMap), FlattenError> {
-        let mut uv = lscm::lscm(&positions, &disc)?.uv;
+        let mut uv = lscm::lscm(&positions, disc)?.uv;
         lscm_flipped = admissible(&mut uv);
-        if lscm_flipped == 0 || !fallback {
+        // With the barrier, the start must not overlap itself either.
+        let usable = lscm_flipped == 0 && (!barrier || boundary_crossings(&uv, boundary) == 0);
+        if usable || !fallback {
             Ok((uv, StartMap::Lscm))
         } else {
-            Ok((tutte::mean_value(&positions, &disc)?, StartMap::MeanValue))
+            Ok((tutte::mean_value(&positions, disc)?, StartMap::MeanValue))
         }
     };
     let (mut uv, start) = match &options.start {
         Start::Given(given) => {
             check_given_length(given, mesh)?;
-            (given.clone(), StartMap::Given)
+            let mut uv = given.clone();
+            if barrier && (admissible(&mut uv) > 0 || boundary_crossings(&uv, boundary) > 0) {
+                (tutte::mean_value(&positions, disc)?, StartMap::MeanValue)
+            } else {
+                (given.clone(), StartMap::Given)
+            }
         }
-        Start::MeanValue => (tutte::mean_value(&positions, &disc)?, StartMap::MeanValue),
-        Start::Lscm => lscm_start(false)?,
+        Start::MeanValue => (tutte::mean_value(&positions, disc)?, StartMap::MeanValue),
+        Start::Lscm => lscm_start(barrier)?,
+        Start::Auto { .. } if barrier => lscm_start(true)?,
         Start::Auto { multilevel: choice } => {
             let coarse = choice.coarse_level(mesh.triangles.len());
             let (uv, report) = match coarse {
                 Some(coarse) => {
-                    let (uv, report) = multilevel_start(mesh, &disc, options, coarse);
+                    let (uv, report) = multilevel_start(mesh, disc, options, coarse);
                     (uv, Some(report))
                 }
                 None => (None, None),
@@ -611,7 +706,7 @@ fn flatten_disc(
     } else {
         options.energy
     };
-    if options.warm_start && start != StartMap::Multilevel {
+    if options.warm_start && start != StartMap::Multilevel && !barrier {
         let first_energy = match objective.continuation_start() {
             Some(from) => Energy::litke(from),
             None => objective,
@@ -665,6 +760,9 @@ fn flatten_disc(
         &[(p0, 0), (p0, 1), (p1, 1)],
         Some(&vertex_ordering),
     )?;
+    if barrier {
+        solver.set_barrier(BoundaryBarrier::new(boundary, &uv));
+    }
     let mut log = Vec::new();
     let mut record = |entry: IterationLog| {
         progress(&entry);
@@ -725,6 +823,7 @@ fn flatten_disc(
     if flipped > 0 {
         return Err(FlattenError::FlippedResult(flipped));
     }
+    let crossings = boundary_crossings(&uv, boundary);
     let uvs = uv.iter().map(|p| [p[0] * scale, p[1] * scale]).collect();
     Ok(Flattening {
         uvs,
@@ -741,6 +840,13 @@ fn flatten_disc(
         stop_reason: stop,
         energy,
         flipped_triangles: flipped,
+        boundary_crossings: crossings,
+        guarantee: if crossings == 0 {
+            Guarantee::Bijective
+        } else {
+            Guarantee::LocallyInjective
+        },
+        barrier,
         holes_filled: 0,
         continuation,
         log,
@@ -789,6 +895,8 @@ fn multilevel_start(
             start: Start::Auto {
                 multilevel: Multilevel::Never,
             },
+            // Only a start: the full mesh's solve checks (and prevents) overlap.
+            bijective: Bijective::Off,
             ..options.clone()
         };
         let flat = flatten(&coarse, &coarse_options).map_err(|e| format!("coarse mesh: {e}"))?;

@@ -4,6 +4,7 @@
 
 #[doc(hidden)]
 pub mod arap;
+pub mod barrier;
 #[doc(hidden)]
 pub mod element;
 pub mod flatten;

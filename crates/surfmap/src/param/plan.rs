@@ -282,6 +282,7 @@ pub(crate) fn map_back(
 mod tests {
     use super::*;
     use crate::mesh::generate::{grid_disc, octahedron, torus};
+    use crate::param::flatten::{Bijective, Guarantee};
 
     fn with_two_holes() -> TriMesh {
         let mut mesh = grid_disc(8);
@@ -446,9 +447,12 @@ mod tests {
         let holes = [2 * 9 + 2, 5 * 9 + 5, 6 * 9 + 2];
         mesh.triangles
             .retain(|t| !holes.iter().any(|h| t.contains(h)));
+        let cut_holes = FlattenOptions::default().with_fill_holes(false);
+        // Without the barrier, a plane cut open is still a plane: the map is an
+        // isometry, every UV edge as long as in 3D, the two sides of every seam touch.
         let map = flatten_and_check(
             &mesh,
-            &FlattenOptions::default().with_fill_holes(false),
+            &cut_holes.clone().with_bijective(Bijective::Off),
             true,
         );
         let seams = map.seams.as_ref().unwrap();
@@ -460,8 +464,6 @@ mod tests {
             }
         );
         seams_split_exactly(&mesh, seams);
-        // A plane cut open is still a plane: the map is an isometry, every UV edge as
-        // long as in 3D.
         for (t, tri) in mesh.triangles.iter().enumerate() {
             let uv = seams.uv_triangles[t];
             for k in 0..3 {
@@ -473,6 +475,21 @@ mod tests {
                 assert!((l2 - l3).abs() < 1e-6 * l3, "{l2} vs {l3}");
             }
         }
+        // By default the touching seam sides are kept apart by the boundary barrier:
+        // the boundary does not even touch itself, the energy stays near the isometry's.
+        let apart = flatten_and_check(&mesh, &cut_holes, false);
+        assert_eq!(
+            (apart.guarantee, apart.boundary_crossings),
+            (Guarantee::Bijective, 0)
+        );
+        assert!(apart.barrier && !map.barrier);
+        assert!(
+            apart.energy < map.energy * 1.05,
+            "{} vs {}",
+            apart.energy,
+            map.energy
+        );
+        seams_split_exactly(&mesh, apart.seams.as_ref().unwrap());
     }
 
     #[test]
