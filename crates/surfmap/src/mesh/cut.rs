@@ -104,7 +104,8 @@ pub fn cut_graph(mesh: &TriMesh, topology: &Topology) -> Result<Vec<[u32; 2]>, C
 /// from the map afterwards: a seam that met a filled hole twice would cut off the
 /// surface between). Every edge with an endpoint on such a face weighs
 /// [`AVOID_FACTOR`] times the whole surface, so no shortest path touches those faces
-/// while another way exists.
+/// while another way exists, and an edge between two such faces `AVOID_FACTOR` times
+/// more, so a path that must touch them runs along their rim, not through them.
 pub fn cut_graph_avoiding(
     mesh: &TriMesh,
     topology: &Topology,
@@ -119,8 +120,12 @@ pub fn cut_graph_avoiding(
             tri.iter().for_each(|&v| touched[v as usize] = true);
         }
     }
-    for (w, &[a, b]) in graph.weight.iter_mut().zip(&topology.edges) {
-        if touched[a as usize] || touched[b as usize] {
+    for (e, (w, &[a, b])) in graph.weight.iter_mut().zip(&topology.edges).enumerate() {
+        if topology.faces_of_edge(e).iter().all(|&f| avoid(f)) {
+            // Inside an avoided region (a fill's spokes): a seam through it would enter
+            // and leave the region at two places; going along its rim is cheaper.
+            *w = heavy * AVOID_FACTOR;
+        } else if touched[a as usize] || touched[b as usize] {
             *w = heavy;
         }
     }

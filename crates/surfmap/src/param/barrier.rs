@@ -8,9 +8,12 @@
 //! E_B(u) = λ · Σ_{v, e} max(0, ε / d(u_v, u_e) − 1)²
 //! ```
 //!
-//! over boundary vertices `v` and boundary edges `e` not incident to `v` nor to its two
-//! boundary neighbours (`d`: point–segment distance in the plane). It is zero while
-//! every vertex stays `ε` away from every other boundary edge and `+∞` at contact. The
+//! over boundary vertices `v` and boundary edges `e` not incident to `v` (`d`:
+//! point–segment distance in the plane). It is zero while every vertex stays `ε` away
+//! from every other boundary edge and `+∞` at contact. For an edge that shares a vertex
+//! `w` with a boundary neighbour of `v`, `ε` is at most [`NEAR_FACTOR`] times the start
+//! length of the boundary edge `vw`: such a pair is only that close when the boundary
+//! folds back at `w` (a seam's tip closing, or opening past a full turn). The
 //! line search never steps past the first contact of any boundary vertex with any
 //! boundary edge (including the neighbouring ones), a *continuous collision*
 //! bound computed like the flip-free bound (a quadratic in the step per pair,
@@ -29,6 +32,10 @@ use std::sync::Mutex;
 /// barrier acts.
 pub const EPSILON_FACTOR: f64 = 0.25;
 
+/// Cap of `ε`, relative to the start length of the edge between them, for a vertex and
+/// an edge incident to its boundary neighbour (see the module docs).
+pub const NEAR_FACTOR: f64 = 0.5;
+
 /// The barrier of one disc boundary (see the module docs).
 pub struct BoundaryBarrier {
     /// The boundary loop, in order: edge `i` runs from `loop_[i]` to `loop_[i + 1]`.
@@ -37,6 +44,8 @@ pub struct BoundaryBarrier {
     /// length `h`, so a pair at `d = ε/2` weighs about one boundary triangle).
     epsilon: f64,
     weight: f64,
+    /// Start length of every boundary edge.
+    start_lengths: Vec<f64>,
     grid: Mutex<Grid>,
 }
 
@@ -45,14 +54,15 @@ impl BoundaryBarrier {
     /// does not cross itself; `ε` and `λ` are set from its boundary edge lengths.
     pub fn new(loop_: &[u32], uv: &[[f64; 2]]) -> Self {
         let n = loop_.len().max(1);
-        let h = (0..loop_.len())
+        let start_lengths: Vec<f64> = (0..loop_.len())
             .map(|i| dist(uv[loop_[i] as usize], uv[loop_[(i + 1) % n] as usize]))
-            .sum::<f64>()
-            / n as f64;
+            .collect();
+        let h = start_lengths.iter().sum::<f64>() / n as f64;
         Self {
             loop_: loop_.to_vec(),
             epsilon: EPSILON_FACTOR * h,
             weight: h * h,
+            start_lengths,
             grid: Mutex::new(Grid::default()),
         }
     }
@@ -61,24 +71,32 @@ impl BoundaryBarrier {
         (self.loop_[i], self.loop_[(i + 1) % self.loop_.len()])
     }
 
-    /// Whether vertex `k` of the loop and edge `i` are too close in the loop to be
-    /// penalized (the edge is incident to `k` or to one of its neighbours).
-    fn near_in_loop(&self, k: usize, i: usize) -> bool {
+    /// The activation distance of loop vertex `k` and edge `i` (edge `i` joins loop
+    /// vertices `i` and `i + 1`), or `None` when the edge is incident to `k`.
+    fn pair_epsilon(&self, k: usize, i: usize) -> Option<f64> {
         let n = self.loop_.len();
-        // Edge i touches loop vertices i and i+1: skip when either is k−1, k or k+1.
-        let dk = |j: usize| (j + n - k) % n;
-        [dk(i), dk((i + 1) % n)]
-            .iter()
-            .any(|&d| d <= 1 || d == n - 1)
+        if i == k || (i + 1) % n == k {
+            return None;
+        }
+        let cap = if i == (k + 1) % n {
+            // Edge (k+1, k+2): joined to k by edge k.
+            NEAR_FACTOR * self.start_lengths[k]
+        } else if (i + 2) % n == k {
+            // Edge (k−2, k−1): joined to k by edge k−1.
+            NEAR_FACTOR * self.start_lengths[(i + 1) % n]
+        } else {
+            f64::INFINITY
+        };
+        Some(self.epsilon.min(cap))
     }
 
-    /// Calls `f(k, i, d, s, n)` for every penalized pair with `d < ε`: loop vertex
-    /// `k`, edge `i`, distance `d`, closest point parameter `s` on the edge and the
-    /// unit direction `n` from that point to the vertex.
+    /// Calls `f(k, i, ε, d, s, n)` for every penalized pair with `d < ε` (its own
+    /// `ε`): loop vertex `k`, edge `i`, distance `d`, closest point parameter `s` on the
+    /// edge and the unit direction `n` from that point to the vertex.
     fn for_each_active_pair(
         &self,
         uv: &[[f64; 2]],
-        mut f: impl FnMut(usize, usize, f64, f64, [f64; 2]),
+        mut f: impl FnMut(usize, usize, f64, f64, f64, [f64; 2]),
     ) {
         let eps = self.epsilon;
         let mut grid = self.grid.lock().unwrap_or_else(|e| e.into_inner());
@@ -95,14 +113,14 @@ impl BoundaryBarrier {
         for (k, &v) in self.loop_.iter().enumerate() {
             let p = uv[v as usize];
             grid.query([p[0], p[1], p[0], p[1]], |i| {
-                if self.near_in_loop(k, i) {
+                let Some(eps) = self.pair_epsilon(k, i) else {
                     return;
-                }
+                };
                 let (a, b) = self.edge(i);
                 let (a, b) = (uv[a as usize], uv[b as usize]);
                 let (d, s, n) = point_segment(p, a, b);
                 if d < eps {
-                    f(k, i, d, s, n);
+                    f(k, i, eps, d, s, n);
                 }
             });
         }
@@ -111,9 +129,9 @@ impl BoundaryBarrier {
     /// `E_B(uv)`; `+∞` at contact.
     pub fn energy(&self, uv: &[[f64; 2]]) -> f64 {
         let mut e = 0.0;
-        self.for_each_active_pair(uv, |_, _, d, _, _| {
+        self.for_each_active_pair(uv, |_, _, eps, d, _, _| {
             e += if d > 0.0 {
-                (self.epsilon / d - 1.0).powi(2)
+                (eps / d - 1.0).powi(2)
             } else {
                 f64::INFINITY
             };
@@ -129,8 +147,8 @@ impl BoundaryBarrier {
         gradient: &mut dyn FnMut(u32, [f64; 2]),
         blocks: &mut dyn FnMut(u32, [f64; 3]),
     ) {
-        let (eps, w) = (self.epsilon, self.weight);
-        self.for_each_active_pair(uv, |k, i, d, s, n| {
+        let w = self.weight;
+        self.for_each_active_pair(uv, |k, i, eps, d, s, n| {
             if d <= 0.0 {
                 return;
             }
