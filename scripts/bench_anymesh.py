@@ -5,6 +5,7 @@ holed and higher-genus meshes, all scored in the same run by the peers' referee
 
 * ours:      `surfmap flatten MESH -o OUT.obj --report R.json` (default options: holes
              filled, closed and higher-genus surfaces cut; `--cut-holes` per mesh below).
+* ours_sd:   the same with `--energy sd` (symmetric Dirichlet, the energy SLIM minimizes).
 * xatlas:    the harness's `xatlas` worker (default chart and pack options) on the mesh
              scaled to area 1e4 (xatlas's float32 epsilons; the metrics are scale-free).
 * igl_cut_slim: `igl.cut_to_disk` (plus, for a closed genus-0 surface, which it leaves
@@ -188,7 +189,7 @@ def main(argv):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("meshes", nargs="*")
     ap.add_argument("--surfmap", default=os.path.join(HERE, "..", "target", "release", "surfmap"))
-    ap.add_argument("--methods", default="ours,xatlas,igl_cut_slim")
+    ap.add_argument("--methods", default="ours,ours_sd,xatlas,igl_cut_slim")
     ap.add_argument("--timeout", type=float, default=300)
     ap.add_argument("--json", help="write all rows here")
     ap.add_argument("--worker", nargs=3, metavar=("METHOD", "MESH", "OUT"), help=argparse.SUPPRESS)
@@ -206,11 +207,13 @@ def main(argv):
         name = os.path.basename(path)
         for method in a.methods.split(","):
             row = {"mesh": name, "faces": len(F), "method": method, "note": ""}
-            if method == "ours":
+            if method in ("ours", "ours_sd"):
                 out, rep = os.path.join(work, "ours.obj"), os.path.join(work, "ours.json")
                 cmd = [a.surfmap, "flatten", path, "-o", out, "--report", rep, "-q"]
                 if name in CUT_HOLES:
                     cmd.append("--cut-holes")
+                if method == "ours_sd":
+                    cmd += ["--energy", "sd"]
                 p, err, wall = run(cmd, a.timeout)
                 if err is None:
                     r = json.load(open(rep))

@@ -533,9 +533,9 @@ impl<'a> CutProblem<'a> {
         let nf = self.topology.face_edges.len() as u32;
         let ne = self.topology.edges.len();
         if (link as usize) < ne {
-            match self.topology.faces_of_edge(link as usize) {
-                &[f, g] => (f, g),
-                &[f] => (f, nf + self.boundary_slot[link as usize]),
+            match *self.topology.faces_of_edge(link as usize) {
+                [f, g] => (f, g),
+                [f] => (f, nf + self.boundary_slot[link as usize]),
                 _ => unreachable!("a manifold edge has one or two faces"),
             }
         } else {
