@@ -276,16 +276,7 @@ const CREASE_DISCOUNT: f64 = 0.5;
 /// The defects that no cut fixes, as [`CutError::Defects`].
 fn check_cuttable(mesh: &TriMesh, topology: &Topology) -> Result<(), CutError> {
     mesh.check_indices()?;
-    let finite = mesh
-        .positions
-        .iter()
-        .all(|p| p.iter().all(|x| x.is_finite()));
-    let proper = mesh
-        .triangles
-        .iter()
-        .all(|&[a, b, c]| a != b && b != c && a != c);
-    if finite
-        && proper
+    if mesh.finite_and_proper()
         && !mesh.triangles.is_empty()
         && topology.face_edges.len() == mesh.triangles.len()
         && topology.num_components == 1

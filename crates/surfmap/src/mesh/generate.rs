@@ -79,15 +79,7 @@ pub fn torus(major: f64, minor: f64, n: usize, m: usize) -> TriMesh {
             positions.push([r * u.cos(), r * u.sin(), minor * v.sin()]);
         }
     }
-    let id = |i: usize, j: usize| ((i % n) * m + j % m) as u32;
-    let mut triangles = Vec::with_capacity(2 * n * m);
-    for i in 0..n {
-        for j in 0..m {
-            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-            triangles.push([a, b, c]);
-            triangles.push([a, c, d]);
-        }
-    }
+    let triangles = quad_triangles(n, m, |i, j| ((i % n) * m + j % m) as u32);
     TriMesh::new(positions, triangles)
 }
 
@@ -173,7 +165,13 @@ pub fn grid_disc(n: usize) -> TriMesh {
 /// Triangles of a row-major `(cols + 1) × (rows + 1)` vertex grid, counter-clockwise
 /// when column index grows along x and row index along y.
 fn grid_triangles(cols: usize, rows: usize) -> Vec<[u32; 3]> {
-    let id = |i: usize, j: usize| (j * (cols + 1) + i) as u32;
+    quad_triangles(cols, rows, |i, j| (j * (cols + 1) + i) as u32)
+}
+
+/// Two triangles `(a, b, c)`, `(a, c, d)` per quad `(i, j)`, `i < cols`, `j < rows`,
+/// with corners `a = id(i, j)`, `b = id(i + 1, j)`, `c = id(i + 1, j + 1)`,
+/// `d = id(i, j + 1)`, rows outermost.
+fn quad_triangles(cols: usize, rows: usize, id: impl Fn(usize, usize) -> u32) -> Vec<[u32; 3]> {
     let mut triangles = Vec::with_capacity(2 * cols * rows);
     for j in 0..rows {
         for i in 0..cols {

@@ -141,6 +141,17 @@ impl TriMesh {
         check_indices(&self.triangles, self.positions.len())
     }
 
+    /// Every position is finite and no triangle repeats a vertex.
+    pub fn finite_and_proper(&self) -> bool {
+        self.positions
+            .iter()
+            .all(|p| p.iter().all(|x| x.is_finite()))
+            && self
+                .triangles
+                .iter()
+                .all(|&[a, b, c]| a != b && b != c && a != c)
+    }
+
     /// Per-vertex UVs, when the mesh carries them per vertex (or per corner with
     /// indices equal to the vertex indices).
     pub fn vertex_uvs(&self) -> Option<&[[f64; 2]]> {
