@@ -18,7 +18,7 @@ use clap::{Parser, Subcommand};
 #[command(
     name = "surfmap",
     version,
-    about = "Variational surface maps: flip-free flattening, distortion reports, geometry images"
+    about = "Variational surface maps: flip-free flattening, distortion reports, geometry images, surface matching, texture baking, morphs and rigs"
 )]
 struct Cli {
     #[command(subcommand)]
@@ -39,6 +39,16 @@ enum Command {
     Measure(cmd::measure::Args),
     /// Geometry images: flatten (balanced), rasterize h, g, distances, pyramid; PNG + .npy.
     Images(cmd::images::Args),
+    /// Match surface A onto surface B: a fold-free correspondence through their geometry images.
+    Match(cmd::matching::Args),
+    /// Texture baking: flatten, render the old texture into the new domain (OBJ + MTL + PNG).
+    Bake(cmd::bake::Args),
+    /// Carry values, labels, landmarks, texture coordinates or a texture from B to A through a match.
+    Transfer(cmd::transfer::Args),
+    /// 3D morph A → B through a match, as glTF (one morph target, weight animated 0 → 1).
+    Morph(cmd::morph::Args),
+    /// Blend-shape rig: key poses on the neutral's connectivity, one glTF with a target per key.
+    Rig(cmd::rig::Args),
 }
 
 fn main() {
@@ -50,6 +60,11 @@ fn main() {
         Command::Demo(a) => cmd::demo::run(a),
         Command::Measure(a) => cmd::measure::run(a),
         Command::Images(a) => cmd::images::run(a),
+        Command::Match(a) => cmd::matching::run(a),
+        Command::Bake(a) => cmd::bake::run(a),
+        Command::Transfer(a) => cmd::transfer::run(a),
+        Command::Morph(a) => cmd::morph::run(a),
+        Command::Rig(a) => cmd::rig::run(a),
     };
     if let Err(e) = result {
         eprintln!("error: {}", error_message(&e));

@@ -72,6 +72,8 @@
 //! | [`render`] | PNG pictures: UV layouts, checkerboard renders, plots |
 //! | [`grid`] | regular `2^k + 1` grids over ω = `[0,1]²`: [`grid::Grid`], bilinear sampling with gradient, finite differences, restriction/prolongation, the typed Gaussian pyramid, Eikonal distances, harmonic extension |
 //! | [`raster`] | geometry images: a flattened surface rasterized onto a grid (§3.2) |
+//! | [`report`] | the documents of a run: [`InspectReport`], [`FlattenReport`] (the CLI's JSON, the Python package's dictionaries) |
+//! | [`batch`] | many mesh files on a thread pool, one bad mesh never stopping the rest, and their summary table |
 //!
 //! Internal building blocks are public for benchmarks and probes but hidden from these
 //! docs and not part of the API: the sparse solver (`linsolve`, the only place `faer`
@@ -79,17 +81,21 @@
 //! `param::element`), the ARAP warm start (`param::arap`), file-system helpers
 //! (`fsutil`) and test helpers (`testing`).
 
+pub mod apps;
+pub mod batch;
 pub mod energy;
 #[doc(hidden)]
 pub mod fsutil;
 pub mod grid;
 #[doc(hidden)]
 pub mod linsolve;
+pub mod matching;
 pub mod measure;
 pub mod mesh;
 pub mod param;
 pub mod raster;
 pub mod render;
+pub mod report;
 #[doc(hidden)]
 pub mod testing;
 pub(crate) mod vec3;
@@ -109,3 +115,4 @@ pub use param::flatten::{
 pub use param::normalize_uvs;
 pub use param::plan::{Plan, plan};
 pub use raster::{GeometryImages, GeometryImagesOptions};
+pub use report::{FlattenReport, InspectReport};

@@ -2,10 +2,10 @@
 //! own options and `mesh::repair` functions ("set `FlattenOptions::fill_holes`"); here
 //! each becomes the flag that does the same ("use --fill-holes").
 
-use serde::Serialize;
 use surfmap::FlattenError;
 use surfmap::mesh::validate::{Defect, DefectKind};
 use surfmap::param::flatten::OptionError;
+use surfmap::report::{not_a_disc_message, with_remedy};
 
 /// The remedy of a defect kind as the flags that apply it, where a flag does.
 fn flag_remedy(kind: DefectKind) -> Option<&'static str> {
@@ -40,33 +40,7 @@ fn flag_remedy(kind: DefectKind) -> Option<&'static str> {
 
 /// A defect's problem and remedy, the remedy as flags.
 pub fn defect_message(d: &Defect) -> String {
-    match flag_remedy(d.kind) {
-        Some(remedy) => format!("{} {remedy}", d.problem),
-        None => d.message(),
-    }
-}
-
-/// A defect as the command line reports it (JSON of `inspect --json` and
-/// `flatten --report`).
-#[derive(Serialize)]
-pub struct CliDefect {
-    pub kind: DefectKind,
-    pub count: usize,
-    pub examples: Vec<Vec<u64>>,
-    pub message: String,
-    pub blocks_flattening: bool,
-}
-
-impl From<&Defect> for CliDefect {
-    fn from(d: &Defect) -> Self {
-        Self {
-            kind: d.kind,
-            count: d.count,
-            examples: d.examples.clone(),
-            message: defect_message(d),
-            blocks_flattening: d.blocks_flattening,
-        }
-    }
+    with_remedy(d, flag_remedy(d.kind))
 }
 
 /// A numeric option out of range, as the flag that set it.
@@ -83,15 +57,17 @@ pub fn option_message(e: &OptionError) -> String {
 
 /// A flattening error with its remedy as flags.
 pub fn flatten_error(e: FlattenError) -> anyhow::Error {
-    let message = match &e {
-        FlattenError::NotADisc(defects) => format!(
-            "the mesh cannot be flattened as a disc:\n{}",
-            defects
-                .iter()
-                .map(|d| format!("  - {}", defect_message(d)))
-                .collect::<Vec<_>>()
-                .join("\n")
-        ),
+    match flatten_error_message(&e) {
+        Some(message) => anyhow::anyhow!(message),
+        None => e.into(),
+    }
+}
+
+/// The message of a flattening error whose remedy has a flag (`None`: the library's
+/// message says it all).
+pub fn flatten_error_message(e: &FlattenError) -> Option<String> {
+    Some(match e {
+        FlattenError::NotADisc(defects) => not_a_disc_message(defects, defect_message),
         FlattenError::Degenerate(inner) => {
             format!("{inner}; run with --drop-degenerate or fix the mesh")
         }
@@ -100,9 +76,8 @@ pub fn flatten_error(e: FlattenError) -> anyhow::Error {
              to mean-value coordinates, injective by construction)"
         ),
         FlattenError::Option(o) => option_message(o),
-        _ => return e.into(),
-    };
-    anyhow::anyhow!(message)
+        _ => return None,
+    })
 }
 
 #[cfg(test)]

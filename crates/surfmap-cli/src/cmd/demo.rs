@@ -4,14 +4,9 @@
 
 use anyhow::Context;
 use std::path::PathBuf;
-use surfmap::fsutil::write_atomically;
 use surfmap::mesh::generate::bumpy_disc;
-use surfmap::mesh::validate::validate;
 use surfmap::render::{TradeoffPanel, save_png, tradeoff_sheet};
-use surfmap::{
-    Alpha, FlattenOptions, MeasureOptions, Topology, distortion_report_per_vertex, write_mesh,
-    write_obj,
-};
+use surfmap::{Alpha, FlattenOptions, FlattenReport, write_mesh, write_obj};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -46,7 +41,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         mesh.triangles.len(),
         args.amplitude
     );
-    let defects = validate(&mesh, &Topology::new(&mesh));
     let mut maps = Vec::new();
     for (name, alpha) in [
         ("conformal", Alpha::conformal()),
@@ -58,34 +52,22 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let obj = dir.join(format!("{name}.obj"));
         write_obj(&obj, &out, None)?;
         written.push(obj);
-        let measures = distortion_report_per_vertex(
-            &mesh.positions,
-            &mesh.triangles,
-            &r.uvs,
-            &MeasureOptions::default(),
-        )?;
-        let report = super::flatten::FlattenReport::new(
-            &dir.join("surface.obj"),
+        let report = FlattenReport::measure(
+            Some(&dir.join("surface.obj")),
             &mesh,
             &r,
-            measures.clone(),
-            &defects,
-        );
-        let json = serde_json::to_vec_pretty(&report)?;
+            super::advice::defect_message,
+        )?;
         let report_path = dir.join(format!("{name}.json"));
-        write_atomically(&report_path, |w| w.write_all(&json))
-            .with_context(|| format!("cannot write {}", report_path.display()))?;
+        super::flatten::write_json(&report_path, &report)?;
         written.push(report_path);
+        let measures = &report.measures;
         written.extend(super::flatten::write_pictures(&dir.join(name), &mesh, &r)?);
         outln!(
             "{name:>9}: start {}, {} iterations, {}, energy {:.5}, flipped triangles {}, angle distortion mean {:.4} max {:.4}, {:.3} s",
             r.start_description(),
             r.iterations,
-            if r.converged {
-                "converged"
-            } else {
-                "NOT converged"
-            },
+            super::flatten::convergence(r.converged),
             r.energy,
             measures.flipped_triangles,
             measures.measures.angle.mean,

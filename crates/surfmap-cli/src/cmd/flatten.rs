@@ -2,26 +2,21 @@
 //! manifold mesh: a disc as it is, holes filled for the solve (or cut open with
 //! `--cut-holes`), closed and higher-genus surfaces cut open along seams (per-corner
 //! `vt` in the OBJ).
+//! `surfmap flatten A B … -o DIR/`: many meshes in parallel ([`super::batch`]).
 
-use super::advice::{CliDefect, flatten_error, option_message};
+use super::advice::{defect_message, flatten_error, option_message};
 use super::{RepairArgs, load_mesh};
 use anyhow::{Context, bail};
 use indicatif::{ProgressBar, ProgressStyle};
-use serde::Serialize;
 use std::io::IsTerminal;
 use std::path::Path;
 use std::path::PathBuf;
 use surfmap::fsutil::write_atomically;
-use surfmap::measure::{
-    DistortionReport, Measure, MeasureOptions, distortion_report, per_triangle_measure,
-};
-use surfmap::mesh::validate::validate;
-use surfmap::param::flatten::{MultilevelReport, StartMap};
+use surfmap::measure::{Measure, per_triangle_measure};
 use surfmap::render;
 use surfmap::{
-    Alpha, Bijective, CoarseLevel, Cut, Energy, FlattenOptions, Flattening, Guarantee,
-    IterationLog, Multilevel, Seams, Start, StopReason, Topology, TriMesh, Uvs,
-    flatten_with_progress, write_obj,
+    Alpha, Bijective, CoarseLevel, Cut, Energy, FlattenOptions, FlattenReport, Flattening,
+    Guarantee, Multilevel, Seams, Start, TriMesh, Uvs, flatten_with_progress, write_obj,
 };
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
@@ -77,52 +72,28 @@ pub enum MultilevelChoice {
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Input mesh (OBJ, OFF or PLY): connected, orientable, manifold (a disc, a disc
-    /// with holes, a closed surface, handles).
-    pub input: PathBuf,
+    /// Input meshes (OBJ, OFF or PLY): connected, orientable, manifold (a disc, a disc
+    /// with holes, a closed surface, handles). Several inputs are flattened in parallel
+    /// into the folder -o (a batch: a bad mesh is reported and skipped).
+    #[arg(required = true, num_args = 1..)]
+    pub inputs: Vec<PathBuf>,
     /// Output OBJ with texture coordinates (`vt`; per corner, split along the seams,
-    /// when the surface was cut).
+    /// when the surface was cut); for a batch a folder (ending in `/`, or existing),
+    /// which receives NAME.obj and the report NAME.json per mesh and summary.csv.
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Distortion trade-off preset.
-    #[arg(long, value_enum, default_value = "balanced")]
-    pub preset: Preset,
-    /// Custom α = L,A,C (length, area, angle weights; normalized to sum 1). Overrides --preset.
-    #[arg(long, value_parser = parse_alpha)]
-    pub alpha: Option<[f64; 3]>,
-    /// Energy density.
-    #[arg(long, value_enum, default_value = "litke")]
-    pub energy: EnergyChoice,
-    /// Continuation: minimize first at this α = L,A,C, then move to the target α in steps.
-    #[arg(long, value_parser = parse_alpha)]
-    pub from_alpha: Option<[f64; 3]>,
-    /// Initial map (an explicit one is computed on the full mesh: no multilevel start).
-    #[arg(long, value_enum, default_value = "auto")]
-    pub start: StartChoice,
-    /// Multilevel start (with --start auto): flatten a decimated copy, re-insert the
-    /// removed vertices flip-free, then run Newton on the full mesh (far fewer
-    /// full-size iterations).
-    #[arg(long, value_enum, default_value = "auto")]
-    pub multilevel: MultilevelChoice,
-    /// Vertices of the decimated copy for --multilevel (default: 1/20 of the mesh,
-    /// between 500 and 20000).
-    #[arg(long)]
-    pub coarse_vertices: Option<usize>,
+    /// Batch: meshes flattened at the same time; 0 = one per core. The batch runs on
+    /// this many threads in total.
+    #[arg(short, long, default_value_t = 0)]
+    pub jobs: usize,
+    #[command(flatten)]
+    pub solver: SolverArgs,
     /// Scale and translate the UVs into [0,1]² (aspect ratio kept).
     #[arg(long)]
     pub normalize: bool,
     /// Write the flat mesh itself: positions (u, v, 0), for viewing the layout.
     #[arg(long)]
     pub uv_as_positions: bool,
-    /// Newton iteration cap (per continuation stage).
-    #[arg(long, default_value_t = 200)]
-    pub max_iters: usize,
-    /// Stop when half the Newton decrement (energy per unit area) is below this.
-    #[arg(long, default_value_t = 1e-12)]
-    pub tolerance: f64,
-    /// Armijo sufficient-decrease constant c (thesis: 0.5).
-    #[arg(long, default_value_t = 0.5)]
-    pub armijo_c: f64,
     /// Reference a texture image from the OBJ (writes OUT.mtl with map_Kd).
     #[arg(long)]
     pub texture: Option<PathBuf>,
@@ -154,11 +125,50 @@ pub struct Args {
     #[arg(long, value_name = "EDGES")]
     pub cut_along: Option<PathBuf>,
     /// Write the seams (the cut edges) as an OBJ: the input's vertices and one `l` line
-    /// per seam edge (nothing is written when the surface was not cut).
+    /// per seam edge (nothing is written when the surface was not cut). In a batch,
+    /// give a folder (ending in `/`): it receives NAME.seams.obj per cut mesh.
     #[arg(long, value_name = "SEAMS.obj")]
     pub seams: Option<PathBuf>,
     #[command(flatten)]
     pub repair: RepairArgs,
+}
+
+/// The flattening's options, shared by every command that flattens (`flatten`, `bake`).
+#[derive(clap::Args)]
+pub struct SolverArgs {
+    /// Distortion trade-off preset.
+    #[arg(long, value_enum, default_value = "balanced")]
+    pub preset: Preset,
+    /// Custom α = L,A,C (length, area, angle weights; normalized to sum 1). Overrides --preset.
+    #[arg(long, value_parser = parse_alpha)]
+    pub alpha: Option<[f64; 3]>,
+    /// Energy density.
+    #[arg(long, value_enum, default_value = "litke")]
+    pub energy: EnergyChoice,
+    /// Continuation: minimize first at this α = L,A,C, then move to the target α in steps.
+    #[arg(long, value_parser = parse_alpha)]
+    pub from_alpha: Option<[f64; 3]>,
+    /// Initial map (an explicit one is computed on the full mesh: no multilevel start).
+    #[arg(long, value_enum, default_value = "auto")]
+    pub start: StartChoice,
+    /// Multilevel start (with --start auto): flatten a decimated copy, re-insert the
+    /// removed vertices flip-free, then run Newton on the full mesh (far fewer
+    /// full-size iterations).
+    #[arg(long, value_enum, default_value = "auto")]
+    pub multilevel: MultilevelChoice,
+    /// Vertices of the decimated copy for --multilevel (default: 1/20 of the mesh,
+    /// between 500 and 20000).
+    #[arg(long)]
+    pub coarse_vertices: Option<usize>,
+    /// Newton iteration cap (per continuation stage).
+    #[arg(long, default_value_t = 200)]
+    pub max_iters: usize,
+    /// Stop when half the Newton decrement (energy per unit area) is below this.
+    #[arg(long, default_value_t = 1e-12)]
+    pub tolerance: f64,
+    /// Armijo sufficient-decrease constant c (thesis: 0.5).
+    #[arg(long, default_value_t = 0.5)]
+    pub armijo_c: f64,
 }
 
 pub fn parse_alpha(s: &str) -> Result<[f64; 3], String> {
@@ -182,7 +192,7 @@ pub fn alpha(a: [f64; 3]) -> anyhow::Result<Alpha> {
 }
 
 /// The library options the command line asks for (parsing only: the library checks them).
-pub fn options(args: &Args) -> anyhow::Result<FlattenOptions> {
+pub fn options(args: &SolverArgs, fill_holes: bool) -> anyhow::Result<FlattenOptions> {
     let target = match (args.alpha, args.preset) {
         (Some(a), _) => alpha(a)?,
         (None, Preset::Conformal) => Alpha::conformal(),
@@ -221,25 +231,34 @@ pub fn options(args: &Args) -> anyhow::Result<FlattenOptions> {
         (StartChoice::Lscm, _) => Start::Lscm,
         (StartChoice::MeanValue, _) => Start::MeanValue,
     };
-    let cut = match &args.cut_along {
-        Some(path) => Cut::Along(read_seams(path)?),
-        None => Cut::Auto,
-    };
     let mut opts = FlattenOptions::new(energy)
         .with_start(start)
-        .with_fill_holes(!args.cut_holes)
-        .with_cut(cut)
-        .with_bijective(match args.bijective {
-            BijectiveChoice::Auto => Bijective::WhenOverlapping,
-            BijectiveChoice::Always => Bijective::Always,
-            BijectiveChoice::Off => Bijective::Off,
-        });
+        .with_fill_holes(fill_holes)
+        // One UV per vertex for every command but `flatten` (`flatten_options`).
+        .with_cut(Cut::Never);
     opts.newton.max_iterations = args.max_iters;
     opts.newton.tolerance = args.tolerance;
     opts.newton.armijo_c = args.armijo_c;
     opts.validate()
         .map_err(|e| anyhow::anyhow!(option_message(&e)))?;
     Ok(opts)
+}
+
+/// The options of `surfmap flatten` (one mesh or a batch): the solver's, with the holes
+/// filled unless `--cut-holes`, surfaces that are not discs cut open (automatically or
+/// along `--cut-along`), and the `--bijective` mode.
+pub fn flatten_options(args: &Args) -> anyhow::Result<FlattenOptions> {
+    let cut = match &args.cut_along {
+        Some(path) => Cut::Along(read_seams(path)?),
+        None => Cut::Auto,
+    };
+    Ok(options(&args.solver, !args.cut_holes)?
+        .with_cut(cut)
+        .with_bijective(match args.bijective {
+            BijectiveChoice::Auto => Bijective::WhenOverlapping,
+            BijectiveChoice::Always => Bijective::Always,
+            BijectiveChoice::Off => Bijective::Off,
+        }))
 }
 
 /// Runs the flattening with a progress spinner on a terminal; errors name the flags
@@ -372,32 +391,38 @@ pub fn write_seams(path: &Path, mesh: &TriMesh, seams: &Seams) -> anyhow::Result
     .with_context(|| format!("cannot write {}", path.display()))
 }
 
-pub fn run(args: Args) -> anyhow::Result<()> {
-    let file = load_mesh(&args.input)?;
-    let opts = options(&args)?;
-    let mesh = args.repair.apply(file.mesh, args.quiet)?;
-    let result = flatten_mesh(&mesh, &opts, args.quiet)
-        .with_context(|| format!("cannot flatten {}", args.input.display()))?;
-    let out = output_mesh(&mesh, &result, args.normalize, args.uv_as_positions);
+/// The map written: the UVs (in `[0, 1]²` with `--normalize`) on the mesh, or the flat
+/// mesh itself with `--uv-as-positions`; with the `--texture` material.
+pub fn write_output(
+    args: &Args,
+    path: &Path,
+    mesh: &TriMesh,
+    r: &Flattening,
+) -> anyhow::Result<()> {
+    let out = output_mesh(mesh, r, args.normalize, args.uv_as_positions);
     let material = args
         .texture
         .as_ref()
         .map(|t| surfmap::mesh::io::ObjMaterial { texture: t.clone() });
     // The writer's error names the file already.
-    write_obj(&args.output, &out, material.as_ref())?;
+    Ok(write_obj(path, &out, material.as_ref())?)
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    if super::batch::is_batch(&args) {
+        return super::batch::run(&args);
+    }
+    let input = &args.inputs[0];
+    let file = load_mesh(input)?;
+    let opts = flatten_options(&args)?;
+    let mesh = args.repair.apply(file.mesh, args.quiet)?;
+    let result = flatten_mesh(&mesh, &opts, args.quiet)
+        .with_context(|| format!("cannot flatten {}", input.display()))?;
+    write_output(&args, &args.output, &mesh, &result)?;
     if let Some(path) = &args.report {
         // Measured on the written map (its own scale; the measures normalize area).
-        let measures = distortion_report(
-            &mesh.positions,
-            &mesh.triangles,
-            &result.corner_uvs(&mesh.triangles),
-            &MeasureOptions::default(),
-        )?;
-        let defects = validate(&mesh, &Topology::new(&mesh));
-        let report = FlattenReport::new(&args.input, &mesh, &result, measures, &defects);
-        let json = serde_json::to_vec_pretty(&report)?;
-        write_atomically(path, |w| w.write_all(&json))
-            .with_context(|| format!("cannot write {}", path.display()))?;
+        let report = FlattenReport::measure(Some(input), &mesh, &result, defect_message)?;
+        write_json(path, &report)?;
     }
     if let (Some(path), Some(seams)) = (&args.seams, &result.seams) {
         write_seams(path, &mesh, seams)?;
@@ -420,7 +445,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         outln!(
             "{}: {}start {}{}, {} iterations, {}, energy {:.6}, flipped triangles {}{}, {:.3} s → {}",
-            args.input.display(),
+            input.display(),
             match &result.seams {
                 None => String::new(),
                 Some(s) => format!(
@@ -436,11 +461,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 n => format!(" + {n} ARAP steps"),
             },
             result.iterations,
-            if result.converged {
-                "converged"
-            } else {
-                "NOT converged"
-            },
+            convergence(result.converged),
             result.energy,
             result.flipped_triangles,
             match (result.guarantee, result.barrier) {
@@ -458,89 +479,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The JSON report of `surfmap flatten --report`.
-#[derive(Serialize)]
-pub struct FlattenReport<'a> {
-    pub input: String,
-    pub vertices: usize,
-    pub triangles: usize,
-    /// What was done before the solve: `disc as is`, `fill N holes`, `cut open along
-    /// seams (…)`.
-    pub plan: String,
-    /// The seams when the surface was cut: why, the edges (vertex pairs), their length.
-    pub seams: Option<&'a Seams>,
-    /// Initial map used: `lscm`, `mean_value`, `given` or `multilevel`.
-    pub start: StartMap,
-    /// The multilevel start's coarse level, re-insertion and timings (when tried).
-    pub multilevel: Option<&'a MultilevelReport>,
-    pub lscm_flipped_triangles: usize,
-    /// ARAP warm-start steps accepted before Newton.
-    pub warm_start_iterations: usize,
-    pub iterations: usize,
-    pub converged: bool,
-    pub stop_reason: StopReason,
-    /// Final energy per unit 3D area.
-    pub energy: f64,
-    pub continuation: &'a [[f64; 3]],
-    /// Flipped triangles of the output, counted on the output (always 0).
-    pub flipped_triangles: usize,
-    /// `bijective` (flip-free, boundary crossing-free: injective) or
-    /// `locally_injective` (flip-free only), checked on the result.
-    pub guarantee: Guarantee,
-    /// Whether the boundary barrier was used (see `--bijective`).
-    pub barrier: bool,
-    /// Holes filled for the solve (`--fill-holes`).
-    pub holes_filled: usize,
-    /// Symmetric Dirichlet energy, area-weighted mean (isometry = 4).
-    pub symmetric_dirichlet: f64,
-    pub boundary_overlap: serde_json::Value,
-    pub measures: DistortionReport,
-    pub input_defects: Vec<CliDefect>,
-    pub time_prepare_s: f64,
-    pub time_start_s: f64,
-    pub time_newton_s: f64,
-    pub time_total_s: f64,
-    pub log: &'a [IterationLog],
-}
-
-impl<'a> FlattenReport<'a> {
-    pub fn new(
-        input: &Path,
-        mesh: &TriMesh,
-        r: &'a Flattening,
-        measures: DistortionReport,
-        defects: &[surfmap::mesh::validate::Defect],
-    ) -> Self {
-        Self {
-            input: input.display().to_string(),
-            vertices: mesh.positions.len(),
-            triangles: mesh.triangles.len(),
-            plan: r.plan.describe(),
-            seams: r.seams.as_ref(),
-            start: r.start,
-            multilevel: r.multilevel.as_ref(),
-            lscm_flipped_triangles: r.lscm_flipped,
-            warm_start_iterations: r.warm_start_iterations,
-            iterations: r.iterations,
-            converged: r.converged,
-            stop_reason: r.stop_reason,
-            energy: r.energy,
-            continuation: &r.continuation,
-            flipped_triangles: measures.flipped_triangles,
-            guarantee: r.guarantee,
-            barrier: r.barrier,
-            holes_filled: r.holes_filled,
-            symmetric_dirichlet: measures.symmetric_dirichlet,
-            boundary_overlap: serde_json::to_value(&measures.boundary_overlap).unwrap_or_default(),
-            measures,
-            input_defects: defects.iter().map(CliDefect::from).collect(),
-            time_prepare_s: r.time_prepare,
-            time_start_s: r.time_start,
-            time_newton_s: r.time_newton,
-            time_total_s: r.time_total,
-            log: &r.log,
-        }
-    }
+/// Writes `value` as pretty JSON (atomically).
+pub fn write_json(path: &Path, value: &impl serde::Serialize) -> anyhow::Result<()> {
+    let json = serde_json::to_vec_pretty(value)?;
+    write_atomically(path, |w| w.write_all(&json))
+        .with_context(|| format!("cannot write {}", path.display()))
 }
 
 /// Writes the UV layout (coloured by angle distortion), the checkerboard render and
@@ -591,4 +534,13 @@ pub fn write_pictures(dir: &Path, mesh: &TriMesh, r: &Flattening) -> anyhow::Res
         render::convergence_plot_labeled(&history, "E - E_FINAL (PER UNIT AREA)", (900, 600)),
     )?;
     Ok(written)
+}
+
+/// "converged" or "NOT converged", for the one-line summaries.
+pub fn convergence(converged: bool) -> &'static str {
+    if converged {
+        "converged"
+    } else {
+        "NOT converged"
+    }
 }

@@ -117,11 +117,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             args.mesh.display(),
             flat.start_description(),
             flat.iterations,
-            if flat.converged {
-                "converged"
-            } else {
-                "NOT converged"
-            },
+            super::flatten::convergence(flat.converged),
             flat.energy,
             flat.flipped_triangles,
             flat.time_total

@@ -1,10 +1,17 @@
 pub mod advice;
+pub mod bake;
+pub mod batch;
 pub mod demo;
 pub mod flatten;
 pub mod images;
 pub mod inspect;
+pub mod matching;
+pub mod matchio;
 pub mod measure;
+pub mod morph;
+pub mod rig;
 pub mod tradeoff;
+pub mod transfer;
 
 use std::path::Path;
 use surfmap::mesh::io::{MeshFile, read_mesh};

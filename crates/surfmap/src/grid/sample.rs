@@ -52,7 +52,7 @@ fn locate(n: usize, p: [f64; 2]) -> Cell {
 
 impl<T: Vector> Grid<T> {
     /// The bilinear interpolant at `p ∈ ℝ²` (domain coordinates), `p` clamped onto ω.
-    #[inline]
+    #[inline(always)]
     pub fn sample(&self, p: [f64; 2]) -> T {
         let c = locate(self.size(), p);
         let [f00, f01, f10, f11] = self.cell_corners(c.k);
@@ -63,7 +63,7 @@ impl<T: Vector> Grid<T> {
 
     /// The bilinear interpolant at `p ∈ ℝ²` and its partial derivatives
     /// `(f, ∂f/∂ξ₀, ∂f/∂ξ₁)`; outside ω, those of the clamped function (see the module docs).
-    #[inline]
+    #[inline(always)]
     pub fn sample_with_gradient(&self, p: [f64; 2]) -> (T, T, T) {
         let c = locate(self.size(), p);
         let [f00, f01, f10, f11] = self.cell_corners(c.k);

@@ -24,6 +24,7 @@ use faer::sparse::linalg::cholesky::{
 use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMatRef, Triplet};
 use faer::{Conj, MatMut, Par, Side};
 
+pub mod dense;
 mod ordering;
 mod unknowns;
 use ordering::inverse_permutation;

@@ -15,7 +15,7 @@ use super::RasterError;
 use super::boundary::boundary_edges;
 use super::boundary_distance::signed_boundary_distance;
 use super::curvature::vertex_mean_curvature;
-use super::features::{FeatureSource, colour_name};
+use super::features::{FeatureFile, FeatureSource, colour_name};
 use super::metric::triangle_metrics;
 use super::rasterize::{OUTSIDE, Rasterization};
 use crate::grid::{
@@ -81,6 +81,12 @@ impl TextureImage {
 
     /// Bilinear lookup at texture coordinates `(u, v)`, `v` up, clamped to the edge.
     pub fn sample(&self, uv: [f64; 2]) -> [u8; 3] {
+        self.sample_linear(uv).map(|c| c.round() as u8)
+    }
+
+    /// [`Self::sample`] before rounding: channels in `[0, 255]` as `f64`.
+    #[inline]
+    pub fn sample_linear(&self, uv: [f64; 2]) -> [f64; 3] {
         let (w, h) = (self.width as usize, self.height as usize);
         let x = (uv[0] * w as f64 - 0.5).clamp(0.0, (w - 1) as f64);
         let y = ((1.0 - uv[1]) * h as f64 - 0.5).clamp(0.0, (h - 1) as f64);
@@ -91,7 +97,7 @@ impl TextureImage {
         std::array::from_fn(|c| {
             let top = p(x0, y0)[c] as f64 * (1.0 - fx) + p(x1, y0)[c] as f64 * fx;
             let bot = p(x0, y1)[c] as f64 * (1.0 - fx) + p(x1, y1)[c] as f64 * fx;
-            (top * (1.0 - fy) + bot * fy).round() as u8
+            top * (1.0 - fy) + bot * fy
         })
     }
 }
@@ -353,6 +359,48 @@ impl GeometryImages {
             pyramid,
             timings,
         })
+    }
+}
+
+impl GeometryImages {
+    /// Distance maps (in the metric `g`, continued outside the surface with the extended
+    /// metric, as [`Self::features`]) of further named vertex curves of `mesh`, whose
+    /// flattening `uvs` these images were computed from: lets a caller add features
+    /// found after the images (e.g. hole rims paired across two surfaces).
+    pub fn curve_distances(
+        &self,
+        mesh: &TriMesh,
+        uvs: &[[f64; 2]],
+        file: &FeatureFile,
+    ) -> Result<Vec<FeatureDistance>, RasterError> {
+        file.validate(mesh.num_vertices())?;
+        if uvs.len() != mesh.num_vertices() {
+            return Err(RasterError::UvCount {
+                count: uvs.len(),
+                num_vertices: mesh.num_vertices(),
+            });
+        }
+        let n = self.size;
+        let inside = self.raster.inside_mask();
+        let outside = inside.map(|&b| !b);
+        file.features
+            .par_iter()
+            .map(|f| {
+                let pts: Vec<[f64; 2]> = f
+                    .vertices
+                    .iter()
+                    .map(|&v| self.transform.to_domain(uvs[v as usize]))
+                    .collect();
+                let mut d = Grid::new(n, f64::INFINITY)?;
+                seed_polyline(&self.metric, &inside, &pts, f.closed, &mut d)?;
+                solve_eikonal(&self.metric, &inside, &mut d)?;
+                solve_eikonal(&self.metric_extended, &outside, &mut d)?;
+                Ok(FeatureDistance {
+                    name: f.name.clone(),
+                    distance: d,
+                })
+            })
+            .collect()
     }
 }
 

@@ -24,7 +24,7 @@ pub use grid_image::{NO_DATA, grid_image, image_with_colormap};
 pub use image::RgbImage;
 pub use plot::{PlotPanel, Series, convergence_plot, convergence_plot_labeled, line_plot};
 pub use sheet::contact_sheet;
-pub use surface::{automatic_view, checker_render};
+pub use surface::{View, automatic_view, checker_render, surface_render};
 pub use tradeoff::{TradeoffPanel, tradeoff_sheet};
 pub use uv_layout::uv_layout;
 

@@ -119,6 +119,57 @@ pub fn automatic_view(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> [[f64; 
     [right, up, d]
 }
 
+/// A fixed orthographic view: camera axes `(right, up, towards_viewer)` and the
+/// rectangle `[lo, hi]` of the projected plane it frames. One view for several frames
+/// of an animation keeps them comparable.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct View {
+    pub axes: [[f64; 3]; 3],
+    pub lo: [f64; 2],
+    pub hi: [f64; 2],
+}
+
+impl View {
+    /// The [`automatic_view`] of the first frame, framing the valid triangles of every
+    /// frame (each frame one position per vertex, all on `triangles`). `None` when no
+    /// triangle is valid.
+    pub fn framing(frames: &[&[[f64; 3]]], triangles: &[[u32; 3]]) -> Option<View> {
+        Self::framing_tilted(frames, triangles, 0.0)
+    }
+
+    /// [`Self::framing`] with the camera tilted by `tilt` radians about its `right`
+    /// axis (towards the bottom of the picture: the surface is seen obliquely from
+    /// above, so heights show in the outline and shading).
+    pub fn framing_tilted(
+        frames: &[&[[f64; 3]]],
+        triangles: &[[u32; 3]],
+        tilt: f64,
+    ) -> Option<View> {
+        let [right, up, d] = automatic_view(frames.first()?, triangles);
+        let (s, c) = tilt.sin_cos();
+        let axes = [
+            right,
+            [0, 1, 2].map(|k| c * up[k] + s * d[k]),
+            [0, 1, 2].map(|k| c * d[k] - s * up[k]),
+        ];
+        let mut lo = [f64::INFINITY; 2];
+        let mut hi = [f64::NEG_INFINITY; 2];
+        for positions in frames {
+            for tri in triangles.iter().filter(|t| valid_triangle(positions, t)) {
+                for &v in tri {
+                    let s = [
+                        dot3(positions[v as usize], axes[0]),
+                        dot3(positions[v as usize], axes[1]),
+                    ];
+                    lo = [lo[0].min(s[0]), lo[1].min(s[1])];
+                    hi = [hi[0].max(s[0]), hi[1].max(s[1])];
+                }
+            }
+        }
+        (lo[0] <= hi[0]).then_some(View { axes, lo, hi })
+    }
+}
+
 /// Draws the shaded, checkered surface into `rect` of the canvas (depth test on).
 pub(crate) fn draw_surface(
     canvas: &mut Canvas,
@@ -128,31 +179,91 @@ pub(crate) fn draw_surface(
     corner_uvs: &[[[f64; 2]; 3]],
     checks: u32,
 ) {
-    canvas.enable_depth();
     let [r, u, d] = automatic_view(positions, triangles);
-    let ok: Vec<bool> = triangles
-        .iter()
-        .zip(corner_uvs)
-        .map(|(t, c)| valid_triangle(positions, t) && c.iter().flatten().all(|x| x.is_finite()))
-        .collect();
-    // Smooth vertex normals (area-weighted face normals), oriented per triangle later.
-    let mut vn = vec![[0.0f64; 3]; positions.len()];
+    let ok = valid_triangles(positions, triangles, corner_uvs);
     let mut lo = [f64::INFINITY; 2];
     let mut hi = [f64::NEG_INFINITY; 2];
     let mut uvlo = [f64::INFINITY; 2];
     let mut uvhi = [f64::NEG_INFINITY; 2];
     for (t, tri) in triangles.iter().enumerate().filter(|(t, _)| ok[*t]) {
         let p = tri.map(|v| positions[v as usize]);
-        let n = cross3(sub3(p[1], p[0]), sub3(p[2], p[0]));
         for k in 0..3 {
-            let v = &mut vn[tri[k] as usize];
-            *v = [v[0] + n[0], v[1] + n[1], v[2] + n[2]];
             let s = [dot3(p[k], r), dot3(p[k], u)];
             lo = [lo[0].min(s[0]), lo[1].min(s[1])];
             hi = [hi[0].max(s[0]), hi[1].max(s[1])];
             let c = corner_uvs[t][k];
             uvlo = [uvlo[0].min(c[0]), uvlo[1].min(c[1])];
             uvhi = [uvhi[0].max(c[0]), uvhi[1].max(c[1])];
+        }
+    }
+    let uv_span = (uvhi[0] - uvlo[0]).max(uvhi[1] - uvlo[1]).max(1e-300);
+    let check = checks.max(1) as f64 / uv_span;
+    let (light_c, dark_c) = (rgb(245, 240, 230), rgb(215, 95, 35));
+    let view = View {
+        axes: [r, u, d],
+        lo,
+        hi,
+    };
+    draw_shaded(
+        canvas,
+        rect,
+        &view,
+        positions,
+        triangles,
+        corner_uvs,
+        &ok,
+        &|uv| {
+            let cell = ((uv[0] - uvlo[0]) * check).floor() as i64
+                + ((uv[1] - uvlo[1]) * check).floor() as i64;
+            if cell.rem_euclid(2) == 0 {
+                light_c
+            } else {
+                dark_c
+            }
+        },
+    );
+}
+
+fn valid_triangles(
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    corner_uvs: &[[[f64; 2]; 3]],
+) -> Vec<bool> {
+    triangles
+        .iter()
+        .zip(corner_uvs)
+        .map(|(t, c)| valid_triangle(positions, t) && c.iter().flatten().all(|x| x.is_finite()))
+        .collect()
+}
+
+/// Draws the triangles marked `ok` seen through `view` into `rect`, coloured by
+/// `colour(uv)` at each sample's interpolated UV and Lambert-shaded with smooth vertex
+/// normals (area-weighted face normals), depth test on.
+#[allow(clippy::too_many_arguments)]
+fn draw_shaded(
+    canvas: &mut Canvas,
+    rect: Rect,
+    view: &View,
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    corner_uvs: &[[[f64; 2]; 3]],
+    ok: &[bool],
+    colour: &dyn Fn([f64; 2]) -> [f32; 3],
+) {
+    canvas.enable_depth();
+    let ([r, u, d], lo, hi) = (view.axes, view.lo, view.hi);
+    let mut vn = vec![[0.0f64; 3]; positions.len()];
+    for tri in triangles
+        .iter()
+        .enumerate()
+        .filter(|(t, _)| ok[*t])
+        .map(|(_, t)| t)
+    {
+        let p = tri.map(|v| positions[v as usize]);
+        let n = cross3(sub3(p[1], p[0]), sub3(p[2], p[0]));
+        for k in 0..3 {
+            let v = &mut vn[tri[k] as usize];
+            *v = [v[0] + n[0], v[1] + n[1], v[2] + n[2]];
         }
     }
     if lo[0].is_nan() || hi[0].is_nan() || lo[0] > hi[0] {
@@ -164,14 +275,11 @@ pub(crate) fn draw_surface(
         * 0.95;
     let ox = rect.x + 0.5 * (rect.w - s * (hi[0] - lo[0]));
     let oy = rect.y + 0.5 * (rect.h + s * (hi[1] - lo[1]));
-    let uv_span = (uvhi[0] - uvlo[0]).max(uvhi[1] - uvlo[1]).max(1e-300);
-    let check = checks.max(1) as f64 / uv_span;
     let light = normalize([
         d[0] + 0.35 * u[0] + 0.25 * r[0],
         d[1] + 0.35 * u[1] + 0.25 * r[1],
         d[2] + 0.35 * u[2] + 0.25 * r[2],
     ]);
-    let (light_c, dark_c) = (rgb(245, 240, 230), rgb(215, 95, 35));
     for (t, tri) in triangles.iter().enumerate().filter(|(t, _)| ok[*t]) {
         let p = tri.map(|v| positions[v as usize]);
         let scr = p.map(|q| [ox + s * (dot3(q, r) - lo[0]), oy - s * (dot3(q, u) - lo[1])]);
@@ -183,19 +291,36 @@ pub(crate) fn draw_surface(
                 b[0] * c[0][0] + b[1] * c[1][0] + b[2] * c[2][0],
                 b[0] * c[0][1] + b[1] * c[1][1] + b[2] * c[2][1],
             ];
-            let cell = ((uv[0] - uvlo[0]) * check).floor() as i64
-                + ((uv[1] - uvlo[1]) * check).floor() as i64;
-            let base = if cell.rem_euclid(2) == 0 {
-                light_c
-            } else {
-                dark_c
-            };
+            let base = colour(uv);
             let nn = [0, 1, 2].map(|k| b[0] * n[0][k] + b[1] * n[1][k] + b[2] * n[2][k]);
             let lambert = (dot3(nn, light) / norm3(nn).max(1e-300)).abs();
             let shade = (0.25 + 0.75 * lambert) as f32;
             Some(base.map(|x| x * shade))
         });
     }
+}
+
+/// The surface seen through a fixed `view` (see [`View::framing`]), coloured by
+/// `colour(uv)` at the UV interpolated from `corner_uvs` (a texture lookup, a
+/// checkerboard, …) and shaded, with an optional title, `size = (width, height)`.
+/// Triangles with bad indices or non-finite coordinates are skipped.
+pub fn surface_render(
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    corner_uvs: &[[[f64; 2]; 3]],
+    view: &View,
+    colour: &dyn Fn([f64; 2]) -> [f32; 3],
+    title: &str,
+    size: (u32, u32),
+) -> RgbImage {
+    titled_picture(title, size, |canvas, rect| {
+        if corner_uvs.len() == triangles.len() {
+            let ok = valid_triangles(positions, triangles, corner_uvs);
+            draw_shaded(
+                canvas, rect, view, positions, triangles, corner_uvs, &ok, colour,
+            );
+        }
+    })
 }
 
 /// The surface rendered with a checkerboard of `checks` squares across the UV layout's
@@ -209,6 +334,16 @@ pub fn checker_render(
     title: &str,
     size: (u32, u32),
 ) -> RgbImage {
+    titled_picture(title, size, |canvas, rect| {
+        if corner_uvs.len() == triangles.len() {
+            draw_surface(canvas, rect, positions, triangles, corner_uvs, checks);
+        }
+    })
+}
+
+/// A white `size` picture with `title` on top and `draw` filling the rest (less a 3 %
+/// margin), supersampled 3×.
+fn titled_picture(title: &str, size: (u32, u32), draw: impl FnOnce(&mut Canvas, Rect)) -> RgbImage {
     let (w, h) = (size.0.clamp(64, 16384), size.1.clamp(64, 16384));
     let font = if w.min(h) >= 600 { 2 } else { 1 };
     let top = if title.is_empty() {
@@ -217,16 +352,14 @@ pub fn checker_render(
         text_height(font) as f64 + 12.0
     };
     let mut canvas = Canvas::new(w, h, 3, [1.0; 3]);
-    if corner_uvs.len() == triangles.len() {
-        let m = 0.03 * w.min(h) as f64;
-        let rect = Rect {
-            x: m,
-            y: top + m,
-            w: w as f64 - 2.0 * m,
-            h: h as f64 - top - 2.0 * m,
-        };
-        draw_surface(&mut canvas, rect, positions, triangles, corner_uvs, checks);
-    }
+    let m = 0.03 * w.min(h) as f64;
+    let rect = Rect {
+        x: m,
+        y: top + m,
+        w: w as f64 - 2.0 * m,
+        h: h as f64 - top - 2.0 * m,
+    };
+    draw(&mut canvas, rect);
     let mut img = canvas.into_image();
     draw_text(&mut img, 8, 6, title, font, [20, 20, 20]);
     img

@@ -1,0 +1,221 @@
+//! `surfmap match A B -o DIR`: a fold-free correspondence from surface A onto surface B
+//! (thesis §2.2, §3.2): both are flattened and turned into geometry images, φ is
+//! found coarse to fine, and the per-vertex table, A placed on B, φ and a report are
+//! written into DIR (library: `surfmap::matching`).
+
+use std::path::PathBuf;
+
+use anyhow::{Context, bail};
+use surfmap::matching::{
+    Align, Guidance, HoleFeatures, Landmarks, MatchOptions, match_surfaces, output, pictures,
+    write_match_folder,
+};
+use surfmap::raster::FeatureFile;
+use surfmap::render::save_png;
+
+use super::{RepairArgs, load_mesh};
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum AlignArg {
+    /// From features/landmarks when given, else from the shapes in space.
+    Auto,
+    /// From the features/landmarks (an error without them).
+    Features,
+    /// From the shapes in space (trimmed point-to-plane ICP), even with features.
+    Shape,
+    /// The flattened domains as placed in ω.
+    None,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum HoleArg {
+    /// Pair hole rims when both surfaces have the same number of filled holes.
+    Auto,
+    /// Pair hole rims; an error when the hole counts differ.
+    On,
+    Off,
+}
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Surface A (OBJ, OFF or PLY): a disc, possibly with holes.
+    pub a: PathBuf,
+    /// Surface B.
+    pub b: PathBuf,
+    /// Output folder (created if missing).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Landmarks: JSON `{"names": [...], "A": [vertex ids of A], "B": [vertex ids of B]}`.
+    #[arg(long, value_name = "L.json")]
+    pub landmarks: Option<PathBuf>,
+    /// Feature curves of A, as for `surfmap images --features`; paired with B's by name.
+    #[arg(long, value_name = "FA.json", requires = "features_b")]
+    pub features_a: Option<PathBuf>,
+    /// Feature curves of B.
+    #[arg(long, value_name = "FB.json", requires = "features_a")]
+    pub features_b: Option<PathBuf>,
+    /// Hole rims as paired features (after alignment).
+    #[arg(long, value_enum, default_value = "auto")]
+    pub hole_features: HoleArg,
+    /// Refuse surfaces with holes instead of filling them for the solve.
+    #[arg(long)]
+    pub no_fill_holes: bool,
+    /// Finest grid, 2^k + 1 nodes per side.
+    #[arg(long, default_value_t = 257)]
+    pub size: usize,
+    /// Energy weights β: bending, regularization, features (thesis 2.16).
+    #[arg(long, value_name = "B,R,F", value_delimiter = ',', num_args = 3)]
+    pub beta: Option<Vec<f64>>,
+    /// Weight of the 3D position term (0 = the thesis energy alone).
+    #[arg(long)]
+    pub position_weight: Option<f64>,
+    /// Initial alignment.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub align: AlignArg,
+    /// Keep the vertices of image triangles that turn over or collapse in space
+    /// (by default they are reported unmatched).
+    #[arg(long)]
+    pub keep_folds: bool,
+    /// Also draw pictures: checkerboard carried across, deformed grid, energy staircase.
+    #[arg(long)]
+    pub pictures: bool,
+    /// Print nothing but errors.
+    #[arg(short, long)]
+    pub quiet: bool,
+    #[command(flatten)]
+    pub repair: RepairArgs,
+}
+
+fn read_features(path: &Option<PathBuf>, vertices: usize) -> anyhow::Result<Option<FeatureFile>> {
+    let Some(p) = path else { return Ok(None) };
+    let json = std::fs::read_to_string(p)
+        .with_context(|| format!("cannot read features file {}", p.display()))?;
+    Ok(Some(FeatureFile::parse(&json, vertices).with_context(
+        || format!("invalid features file {}", p.display()),
+    )?))
+}
+
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let clock = std::time::Instant::now();
+    let mesh_a = args.repair.apply(load_mesh(&args.a)?.mesh, args.quiet)?;
+    let mesh_b = args.repair.apply(load_mesh(&args.b)?.mesh, args.quiet)?;
+    let mut options = MatchOptions {
+        size: args.size,
+        fill_holes: !args.no_fill_holes,
+        drop_folds: !args.keep_folds,
+        align: match args.align {
+            AlignArg::Auto => Align::Auto,
+            AlignArg::Features => Align::Features,
+            AlignArg::Shape => Align::Shape,
+            AlignArg::None => Align::None,
+        },
+        hole_features: match args.hole_features {
+            HoleArg::Auto => HoleFeatures::Auto,
+            HoleArg::On => HoleFeatures::On,
+            HoleArg::Off => HoleFeatures::Off,
+        },
+        ..Default::default()
+    };
+    if let Some(b) = &args.beta {
+        if b.iter().any(|x| !x.is_finite() || *x < 0.0) {
+            bail!("--beta: weights must be finite and ≥ 0, got {b:?}");
+        }
+        (
+            options.betas.bend,
+            options.betas.reg,
+            options.betas.features,
+        ) = (b[0], b[1], b[2]);
+    }
+    if let Some(w) = args.position_weight {
+        if !w.is_finite() || w < 0.0 {
+            bail!("--position-weight must be finite and ≥ 0, got {w}");
+        }
+        options.betas.position = w;
+    }
+    surfmap::grid::grid_level(args.size).context("--size")?;
+    let landmarks = match &args.landmarks {
+        Some(p) => {
+            let json = std::fs::read_to_string(p)
+                .with_context(|| format!("cannot read landmarks file {}", p.display()))?;
+            let lm: Landmarks = serde_json::from_str(&json).with_context(|| {
+                format!(
+                    "invalid landmarks file {}: expected {{\"names\": [...], \"A\": [vertex ids], \"B\": [vertex ids]}}",
+                    p.display()
+                )
+            })?;
+            Some(lm)
+        }
+        None => None,
+    };
+    let guidance = Guidance {
+        landmarks,
+        features_a: read_features(&args.features_a, mesh_a.num_vertices())?,
+        features_b: read_features(&args.features_b, mesh_b.num_vertices())?,
+    };
+    let matched = match_surfaces(&mesh_a, &mesh_b, &guidance, &options).with_context(|| {
+        format!(
+            "cannot match {} onto {}",
+            args.a.display(),
+            args.b.display()
+        )
+    })?;
+    let (corr, folds, dropped) =
+        matched.checked_correspondence(&mesh_a, &mesh_b, options.drop_folds)?;
+    let report = matched.report(&corr, &folds, dropped, &options);
+    // Pictures are drawn before anything is written: an error leaves no partial folder.
+    let drawn = if args.pictures {
+        let placed = output::a_on_b(&mesh_a, &mesh_b, &matched, &corr);
+        vec![
+            (
+                "checker_carried.png",
+                pictures::checker_carried(&mesh_a, &placed, &matched, &corr, 700),
+            ),
+            ("deformed_grid.png", pictures::deformed_grid(&matched, 800)),
+            (
+                "energy.png",
+                pictures::energy_staircase(&matched, (900, 500)),
+            ),
+        ]
+    } else {
+        vec![]
+    };
+    let mut written = write_match_folder(&args.output, &mesh_a, &mesh_b, &matched, &corr, &report)
+        .with_context(|| format!("cannot write the match into {}", args.output.display()))?;
+    for (name, img) in &drawn {
+        let path = args.output.join(name);
+        save_png(&path, img).with_context(|| format!("cannot write {}", path.display()))?;
+        written.push(path);
+    }
+    if !args.quiet {
+        let filled = match (report.holes_filled_a, report.holes_filled_b) {
+            (0, 0) => String::new(),
+            (a, b) => format!(", holes filled for the solve A {a} B {b}"),
+        };
+        outln!(
+            "match: {} levels up to {n}², {} iterations, energy {:.4e}, min det Dφ {:.3}, matched {:.1}% of A ({} of {}), {:.1}% of B covered{filled}, {} vertices unmatched for folds ({} flipped, {} collapsed), alignment {}, {:.2} s",
+            report.levels.len(),
+            report.iterations,
+            report.energy,
+            report.min_det,
+            100.0 * report.matched_fraction_a,
+            report.matched_vertices_a,
+            report.vertices_a,
+            100.0 * report.covered_fraction_b,
+            report.dropped_vertices,
+            report.flipped_triangles,
+            report.collapsed_triangles,
+            report.alignment.method,
+            clock.elapsed().as_secs_f64(),
+            n = report.grid_size,
+        );
+        outln!("wrote into {}:", args.output.display());
+        for p in &written {
+            outln!(
+                "  {}",
+                p.file_name()
+                    .map_or(p.display().to_string(), |n| n.to_string_lossy().into())
+            );
+        }
+    }
+    Ok(())
+}

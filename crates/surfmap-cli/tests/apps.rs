@@ -1,0 +1,307 @@
+//! The application commands end to end on generated inputs with known correspondences
+//! (`surfmap::apps::inputs`): `bake`, `transfer`, `morph` and `rig`; every glTF written
+//! is read back with the `gltf` crate.
+
+mod common;
+use common::*;
+use std::path::Path;
+use surfmap::apps::Texture;
+use surfmap::apps::match_folder::read_match_folder;
+use surfmap::apps::texture::corner_uvs;
+use surfmap::raster::npy::read_npy_f64;
+
+fn run(dir: &Path, args: &[&str]) -> String {
+    let out = surfmap().current_dir(dir).args(args).output().unwrap();
+    assert!(
+        out.status.success(),
+        "surfmap {args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+fn inputs(name: &str) -> std::path::PathBuf {
+    let dir = temp_dir(name);
+    surfmap::apps::inputs::write_inputs(&dir, None, 512);
+    dir
+}
+
+fn read_glb(path: &Path) -> (gltf::Document, Vec<u8>) {
+    let bytes = std::fs::read(path).unwrap();
+    let g = gltf::Gltf::from_slice(&bytes).expect("a glTF file");
+    let blob = g.blob.clone().expect("a BIN chunk");
+    (g.document, blob)
+}
+
+fn target_names(doc: &gltf::Document) -> Vec<String> {
+    let mesh = doc.meshes().next().unwrap();
+    let extras: serde_json::Value =
+        serde_json::from_str(mesh.extras().as_ref().unwrap().get()).unwrap();
+    extras["targetNames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap().to_owned())
+        .collect()
+}
+
+#[test]
+fn bake_renders_the_photographs_into_one_seamless_texture() {
+    let dir = inputs("bake");
+    let line = run(
+        &dir,
+        &[
+            "bake",
+            "scan.obj",
+            "-o",
+            "baked.obj",
+            "--size",
+            "512",
+            "--sheet",
+            "sheet.png",
+        ],
+    );
+    assert!(line.contains("baked photos.png"), "{line}");
+    // The before/after sheet: four 480-pixel tiles in a row (pad 8, label 30).
+    let sheet = Texture::read(&dir.join("sheet.png")).unwrap();
+    assert_eq!(
+        (sheet.width, sheet.height),
+        (4 * (480 + 8) + 8, 480 + 8 + 30 + 8)
+    );
+    let mtl = std::fs::read_to_string(dir.join("baked.mtl")).unwrap();
+    assert!(mtl.contains("map_Kd baked.png"), "{mtl}");
+    let old = surfmap::read_mesh(&dir.join("scan.obj")).unwrap();
+    assert_eq!(old.texture, Some(dir.join("photos.png")));
+    let new = surfmap::read_mesh(&dir.join("baked.obj")).unwrap();
+    assert_eq!(new.texture, Some(dir.join("baked.png")));
+    let new_uv = new.mesh.vertex_uvs().expect("per-vertex UVs").to_vec();
+    assert!(new_uv.iter().flatten().all(|x| (0.0..=1.0).contains(x)));
+    let photos = Texture::read(&dir.join("photos.png")).unwrap();
+    let baked = Texture::read(&dir.join("baked.png")).unwrap();
+    assert_eq!((baked.width, baked.height), (512, 512));
+    // At every corner away from the border, the new texture at the new UV shows what the
+    // photographs show at the old UV (whichever photograph the triangle came from).
+    let old_corners = corner_uvs(old.mesh.uvs.as_ref().unwrap(), &old.mesh.triangles).unwrap();
+    let mut worst = 0.0f64;
+    let mut checked = 0;
+    for (t, tri) in old.mesh.triangles.iter().enumerate().step_by(7) {
+        for k in 0..3 {
+            let v = tri[k] as usize;
+            let p = old.mesh.positions[v];
+            if p[0].abs().max(p[1].abs()) > 0.9 {
+                continue;
+            }
+            let a = photos.sample_linear(old_corners[t][k]);
+            let b = baked.sample_linear(new_uv[v]);
+            worst = worst.max((0..3).map(|c| (a[c] - b[c]).abs()).fold(0.0, f64::max));
+            checked += 1;
+        }
+    }
+    assert!(checked > 1000);
+    // Texel sizes differ (photos 512² per view, bake 512² for the whole surface): a grid
+    // line's edge moves by a texel, which changes a colour by up to ~40 of 255.
+    assert!(worst < 60.0, "largest colour difference {worst} of 255");
+    // Bad input: a mesh without texture coordinates asks for colours or a scalar field.
+    let out = surfmap()
+        .current_dir(&dir)
+        .args(["bake", "a.obj", "-o", "x.obj", "--texture", "photos.png"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("no texture coordinates") && err.contains("--scalar"),
+        "{err}"
+    );
+}
+
+#[test]
+fn morph_writes_a_playable_gltf_and_frames_that_end_on_b() {
+    let dir = inputs("morph");
+    let line = run(
+        &dir,
+        &[
+            "morph",
+            "a.obj",
+            "b.obj",
+            "--match",
+            "match_ab",
+            "-o",
+            "m.glb",
+            "--frames",
+            "3",
+            "--stills",
+            "stills.png",
+        ],
+    );
+    assert!(line.contains("harmonic extension"), "{line}");
+    let a = surfmap::read_mesh(&dir.join("a.obj")).unwrap().mesh;
+    let b = surfmap::read_mesh(&dir.join("b.obj")).unwrap().mesh;
+    let ab = read_match_folder(&dir.join("match_ab"))
+        .unwrap()
+        .correspondence;
+    let (doc, blob) = read_glb(&dir.join("m.glb"));
+    assert_eq!(target_names(&doc), vec!["a to b"]);
+    let prim = doc.meshes().next().unwrap().primitives().next().unwrap();
+    assert_eq!(prim.morph_targets().count(), 1);
+    let reader = prim.reader(|_| Some(&blob));
+    let pos: Vec<[f32; 3]> = reader.read_positions().unwrap().collect();
+    let disp: Vec<[f32; 3]> = reader
+        .read_morph_targets()
+        .next()
+        .unwrap()
+        .0
+        .unwrap()
+        .collect();
+    assert_eq!(pos.len(), a.num_vertices());
+    // Position + target = the image on B, for every matched vertex (f32 precision).
+    for (i, p) in ab.iter().enumerate() {
+        if let Some(p) = p {
+            let want = p.position(&b.positions, &b.triangles);
+            for k in 0..3 {
+                assert!((pos[i][k] + disp[i][k] - want[k] as f32).abs() < 1e-5);
+            }
+        }
+    }
+    let anim = doc.animations().next().expect("an animation");
+    assert_eq!(anim.channels().count(), 1);
+    // The frames: t = 0 is A, t = 1 puts matched vertices on B exactly.
+    let last = surfmap::read_mesh(&dir.join("m_frames/frame_002.obj"))
+        .unwrap()
+        .mesh;
+    let first = surfmap::read_mesh(&dir.join("m_frames/frame_000.obj"))
+        .unwrap()
+        .mesh;
+    assert_eq!(first.positions, a.positions);
+    for (i, p) in ab.iter().enumerate() {
+        if let Some(p) = p {
+            let want = p.position(&b.positions, &b.triangles);
+            for (got, want) in last.positions[i].iter().zip(want) {
+                assert!((got - want).abs() < 1e-12);
+            }
+        }
+    }
+    assert!(dir.join("stills.png").is_file());
+    // A match for other meshes is refused with the reason.
+    let out = surfmap()
+        .current_dir(&dir)
+        .args([
+            "morph", "b.obj", "a.obj", "--match", "match_ab", "-o", "x.glb",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("does not fit"), "{err}");
+}
+
+#[test]
+fn chained_rig_matches_the_direct_one_and_reads_back() {
+    let dir = inputs("rig");
+    let line = run(
+        &dir,
+        &[
+            "rig",
+            "neutral.obj",
+            "key1.obj",
+            "key2.obj",
+            "--match",
+            "match_n1",
+            "--match",
+            "match_12",
+            "--chain",
+            "--direct",
+            "match_n1",
+            "--direct",
+            "match_n2",
+            "--names",
+            "wide,wider",
+            "-o",
+            "rig.glb",
+            "--report",
+            "rig.json",
+        ],
+    );
+    assert!(line.contains("rig: 2 keys"), "{line}");
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("rig.json")).unwrap()).unwrap();
+    let keys = report["keys"].as_array().unwrap();
+    assert_eq!(keys.len(), 2);
+    // The first key's chain is the direct map itself; the second is a composition of two
+    // closed-form maps, within interpolation error of the direct map.
+    let d1 = &keys[0]["composed_vs_direct"];
+    assert_eq!(d1["max"].as_f64(), Some(0.0));
+    let d2 = &keys[1]["composed_vs_direct"];
+    let rel = d2["p95"].as_f64().unwrap() / d2["sqrt_area"].as_f64().unwrap();
+    assert!(rel < 1e-3, "composed vs direct: {d2}");
+    let (doc, blob) = read_glb(&dir.join("rig.glb"));
+    assert_eq!(target_names(&doc), vec!["wide", "wider"]);
+    let prim = doc.meshes().next().unwrap().primitives().next().unwrap();
+    assert_eq!(prim.morph_targets().count(), 2);
+    for t in prim.morph_targets() {
+        let acc = t.positions().unwrap();
+        assert!(acc.min().is_some() && acc.max().is_some());
+    }
+    let anim = doc.animations().next().unwrap();
+    let r = anim.channels().next().unwrap().reader(|_| Some(&blob));
+    assert_eq!(r.read_inputs().unwrap().count(), 5);
+    // Each key as OBJ in the neutral's topology.
+    let neutral = surfmap::read_mesh(&dir.join("neutral.obj")).unwrap().mesh;
+    for name in ["wide", "wider"] {
+        let key = surfmap::read_mesh(&dir.join(format!("rig_keys/{name}.obj")))
+            .unwrap()
+            .mesh;
+        assert_eq!(key.triangles, neutral.triangles);
+        assert_ne!(key.positions, neutral.positions);
+    }
+}
+
+#[test]
+fn transfer_interpolates_values_and_marks_unmatched() {
+    let dir = inputs("transfer");
+    run(
+        &dir,
+        &[
+            "transfer",
+            "a.obj",
+            "b.obj",
+            "--match",
+            "match_ab",
+            "--values",
+            "b_height.npy",
+            "-o",
+            "h.npy",
+        ],
+    );
+    let a = surfmap::read_mesh(&dir.join("a.obj")).unwrap().mesh;
+    let b = surfmap::read_mesh(&dir.join("b.obj")).unwrap().mesh;
+    let ab = read_match_folder(&dir.join("match_ab"))
+        .unwrap()
+        .correspondence;
+    let (shape, h) = read_npy_f64(&std::fs::read(dir.join("h.npy")).unwrap()).unwrap();
+    assert_eq!(shape, vec![a.num_vertices()]);
+    for (p, v) in ab.iter().zip(&h) {
+        match p {
+            // B's height at the image = the image's z coordinate.
+            Some(p) => assert!((p.position(&b.positions, &b.triangles)[2] - v).abs() < 1e-12),
+            None => assert!(v.is_nan()),
+        }
+    }
+    // The wrong number of values is refused with the counts.
+    let out = surfmap()
+        .current_dir(&dir)
+        .args([
+            "transfer",
+            "b.obj",
+            "a.obj",
+            "--match",
+            "match_ab",
+            "--values",
+            "b_height.npy",
+            "-o",
+            "x.npy",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+}

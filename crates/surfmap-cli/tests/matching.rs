@@ -1,0 +1,191 @@
+//! End-to-end tests of `surfmap match`: the match folder's contents against a known
+//! correspondence (registered ICT faces: vertex i ↔ vertex i), and clear errors with
+//! nothing written for bad input.
+
+mod common;
+
+use common::{run_demo, shared_file, surfmap, temp_dir};
+use std::path::Path;
+
+/// Reads a float64 `.npy` written by us (little-endian, C order): shape and data.
+fn read_npy(path: &Path) -> (Vec<usize>, Vec<f64>) {
+    let bytes = std::fs::read(path).unwrap();
+    assert_eq!(&bytes[..6], b"\x93NUMPY");
+    let header_len = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
+    let header = std::str::from_utf8(&bytes[10..10 + header_len]).unwrap();
+    assert!(header.contains("'descr': '<f8'"), "{header}");
+    let shape_text = header
+        .split("'shape': (")
+        .nth(1)
+        .unwrap()
+        .split(')')
+        .next()
+        .unwrap();
+    let shape: Vec<usize> = shape_text
+        .split(',')
+        .filter(|s| !s.trim().is_empty())
+        .map(|s| s.trim().parse().unwrap())
+        .collect();
+    let data: Vec<f64> = bytes[10 + header_len..]
+        .chunks_exact(8)
+        .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
+        .collect();
+    assert_eq!(data.len(), shape.iter().product::<usize>());
+    (shape, data)
+}
+
+#[test]
+fn matching_two_registered_faces_finds_the_registration() {
+    let (Some(a), Some(b)) = (
+        shared_file("faces/ict/ict_neutral.obj"),
+        shared_file("faces/ict/ict_id004.obj"),
+    ) else {
+        return;
+    };
+    let dir = temp_dir("match-ict");
+    let out = surfmap()
+        .arg("match")
+        .arg(&a)
+        .arg(&b)
+        .arg("-o")
+        .arg(&dir)
+        .arg("--pictures")
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("min det Dφ") && stdout.contains("holes filled"),
+        "{stdout}"
+    );
+    let mesh_b = surfmap::read_mesh(&b).unwrap().mesh;
+    let (shape, rows) = read_npy(&dir.join("correspondence.npy"));
+    assert_eq!(shape, vec![9409, 4]);
+    // The registration (vertex i ↔ vertex i) is the independent answer; distances in
+    // units of √area(B).
+    let unit = mesh_b.area().sqrt();
+    let mut within = 0;
+    let mut matched = 0;
+    for (v, r) in rows.chunks_exact(4).enumerate() {
+        if r[0] < 0.0 {
+            assert_eq!(&r[1..], &[0.0, 0.0, 0.0]);
+            continue;
+        }
+        matched += 1;
+        let t = mesh_b.triangles[r[0] as usize];
+        assert!((r[1] + r[2] + r[3] - 1.0).abs() < 1e-9 && r[1..].iter().all(|&b| b >= -1e-9));
+        let p: [f64; 3] = std::array::from_fn(|c| {
+            (0..3)
+                .map(|k| r[1 + k] * mesh_b.positions[t[k] as usize][c])
+                .sum()
+        });
+        let q = mesh_b.positions[v];
+        let d = ((0..3).map(|c| (p[c] - q[c]).powi(2)).sum::<f64>()).sqrt() / unit;
+        if d < 0.05 {
+            within += 1;
+        }
+    }
+    assert!(matched as f64 > 0.9 * 9409.0, "matched {matched}");
+    assert!(within as f64 > 0.9 * 9409.0, "within 0.05: {within}");
+    // The report agrees with the table, and φ has no fold.
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("match.json")).unwrap()).unwrap();
+    assert_eq!(report["matched_vertices_a"], matched);
+    assert!(report["min_det"].as_f64().unwrap() > 0.0);
+    assert_eq!(report["holes_filled_a"], 3);
+    let (phi_shape, _) = read_npy(&dir.join("deformation.npy"));
+    assert_eq!(phi_shape, vec![257, 257, 2]);
+    let csv = std::fs::read_to_string(dir.join("correspondence.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 9410);
+    let placed = surfmap::read_mesh(&dir.join("A_on_B.obj")).unwrap().mesh;
+    assert_eq!(placed.num_vertices(), 9409);
+    for name in ["checker_carried.png", "deformed_grid.png", "energy.png"] {
+        let png = std::fs::read(dir.join(name)).unwrap();
+        assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n", "{name}");
+        let width = u32::from_be_bytes(png[16..20].try_into().unwrap());
+        assert!(width >= 500, "{name}: {width} px");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Runs `surfmap match` expecting failure; returns stderr and checks that the output
+/// folder was not created.
+fn fails(args: &[&str], dir: &Path) -> String {
+    let out = surfmap()
+        .arg("match")
+        .args(args)
+        .arg("-o")
+        .arg(dir)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(!dir.exists(), "nothing may be written on error");
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(err.starts_with("error: "), "{err}");
+    err
+}
+
+#[test]
+fn bad_guidance_is_refused_by_name_and_nothing_is_written() {
+    let base = temp_dir("match-errors");
+    run_demo(&base, 10);
+    let s = base.join("surface.obj");
+    let s = s.to_str().unwrap();
+    let write = |name: &str, text: &str| {
+        let p = base.join(name);
+        std::fs::write(&p, text).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let out = base.join("out");
+    // A feature on one side only.
+    let fa = write(
+        "fa.json",
+        r#"{"features": [{"name": "nose", "vertices": [1, 2, 3]}]}"#,
+    );
+    let fb = write(
+        "fb.json",
+        r#"{"features": [{"name": "chin", "vertices": [1, 2, 3]}]}"#,
+    );
+    let err = fails(&[s, s, "--features-a", &fa, "--features-b", &fb], &out);
+    assert!(
+        err.contains("'nose'") && err.contains("paired by name"),
+        "{err}"
+    );
+    // A landmark id out of range.
+    let lm = write("lm.json", r#"{"names": ["tip"], "A": [5], "B": [999999]}"#);
+    let err = fails(&[s, s, "--landmarks", &lm], &out);
+    assert!(
+        err.contains("'tip'") && err.contains("999999") && err.contains("vertices"),
+        "{err}"
+    );
+    // Malformed landmarks.
+    let lm = write("bad.json", r#"{"names": ["tip"], "A": [5]}"#);
+    let err = fails(&[s, s, "--landmarks", &lm], &out);
+    assert!(err.contains("invalid landmarks file"), "{err}");
+    // A grid size that is not 2^k + 1.
+    let err = fails(&[s, s, "--size", "100"], &out);
+    assert!(err.contains("--size"), "{err}");
+    let _ = std::fs::remove_dir_all(&base);
+}
+
+#[test]
+fn hole_features_on_with_different_hole_counts_is_an_error() {
+    let Some(a) = shared_file("faces/ict/ict_neutral.obj") else {
+        return;
+    };
+    // A: a face with eyes and mouth open (3 holes); B: a disc without holes.
+    let dir = temp_dir("match-holes");
+    run_demo(&dir, 10);
+    let out = dir.join("out");
+    let (a, b) = (
+        a.to_str().unwrap().to_string(),
+        dir.join("surface.obj").to_str().unwrap().to_string(),
+    );
+    let err = fails(&[&a, &b, "--hole-features", "on", "--size", "65"], &out);
+    assert!(err.contains("A has 3 filled holes and B has 0"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,0 +1,99 @@
+# Type stubs of the Rust extension surfmap._surfmap (docstrings: help(surfmap.flatten), …).
+# tests/test_stubs.py checks that every function here has the runtime's parameters.
+
+import os
+from typing import Any, Callable, Dict, List, Literal, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+PathLike = Union[str, os.PathLike[str]]
+FloatArray = npt.NDArray[np.floating[Any]]
+IndexArray = npt.NDArray[np.integer[Any]]
+Alpha = Tuple[float, float, float]
+Report = Dict[str, Any]
+Row = Dict[str, Any]
+
+# The columns of the batch table (summary.csv, the rows of flatten_file / flatten_many).
+BATCH_COLUMNS: List[str]
+
+class MeshError(ValueError):
+    """The mesh cannot be used as given; ``defects`` lists why (dicts as in inspect())."""
+
+    defects: List[Dict[str, Any]]
+
+class SolverError(RuntimeError):
+    """The computation failed on a valid mesh; the message says what to try."""
+
+def inspect(V: FloatArray, F: IndexArray) -> Report: ...
+def measure(
+    V: FloatArray,
+    F: IndexArray,
+    UV: FloatArray,
+    *,
+    normalize: bool = True,
+    overlap: bool = True,
+) -> Report: ...
+def flatten(
+    V: FloatArray,
+    F: IndexArray,
+    *,
+    preset: Literal["conformal", "balanced", "area", "length"] = "balanced",
+    alpha: Optional[Alpha] = None,
+    energy: Literal["litke", "sd", "mips", "arap"] = "litke",
+    from_alpha: Optional[Alpha] = None,
+    start: Literal["auto", "lscm", "mean_value"] = "auto",
+    multilevel: Literal["auto", "on", "off"] = "auto",
+    coarse_vertices: Optional[int] = None,
+    fill_holes: bool = False,
+    max_iters: int = 200,
+    tolerance: float = 1e-12,
+    armijo_c: float = 0.5,
+    normalize: bool = False,
+) -> Tuple[npt.NDArray[np.float64], Report]: ...
+def geometry_images(
+    V: FloatArray,
+    F: IndexArray,
+    *,
+    size: int = 257,
+    UV: Optional[FloatArray] = None,
+    pyramid: bool = True,
+    features: Optional[Sequence[Dict[str, Any]]] = None,
+    fill_holes: bool = False,
+) -> Dict[str, Any]: ...
+def read_mesh(path: PathLike) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]]: ...
+def write_obj(
+    path: PathLike, V: FloatArray, F: IndexArray, UV: Optional[FloatArray] = None
+) -> None: ...
+def repair(
+    V: FloatArray,
+    F: IndexArray,
+    *,
+    weld: Optional[float] = None,
+    drop_degenerate: bool = False,
+    reorient: bool = False,
+    keep_largest: bool = False,
+    component: Optional[int] = None,
+    drop_unreferenced: bool = False,
+) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.int64], Dict[str, int]]: ...
+
+# flatten_file and flatten_many take the keywords of flatten() (preset, alpha, energy,
+# from_alpha, start, multilevel, coarse_vertices, fill_holes, max_iters, tolerance,
+# armijo_c, normalize) as **options.
+def flatten_file(
+    path: PathLike, outdir: PathLike, name: Optional[str] = None, **options: Any
+) -> Row: ...
+def output_names(paths: Sequence[PathLike]) -> List[str]: ...
+def _check_flatten_options(**options: Any) -> None: ...
+def _flatten_many(
+    paths: Sequence[PathLike],
+    outdir: PathLike,
+    workers: int = 0,
+    callback: Optional[Callable[[Row], None]] = None,
+    **options: Any,
+) -> List[Row]: ...
+
+# Matching (surfmap.match, the SurfaceMatch class with .correspondence and .map) goes
+# here when it is bound: see src/matching.rs.

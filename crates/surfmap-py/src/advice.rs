@@ -1,0 +1,82 @@
+//! The library's problems with their remedies worded for Python. The library names its
+//! own options and `mesh::repair` functions ("set `FlattenOptions::fill_holes`"); here
+//! each becomes the call that does the same from Python (`fill_holes=True`,
+//! `surfmap.repair(V, F, weld=0.0)`), as the command line words them as its flags.
+
+use surfmap::FlattenError;
+use surfmap::mesh::validate::{Defect, DefectKind};
+use surfmap::param::flatten::OptionError;
+use surfmap::report::{not_a_disc_message, with_remedy};
+
+/// The remedy of a defect kind as the Python call that applies it, where one does.
+fn python_remedy(kind: DefectKind) -> Option<&'static str> {
+    Some(match kind {
+        DefectKind::NonFiniteCoordinates => {
+            "Fix the exporter, or drop them with surfmap.repair(V, F, drop_unreferenced=True) if no face uses them."
+        }
+        DefectKind::RepeatedIndexFaces => {
+            "Remove them with surfmap.repair(V, F, drop_degenerate=True)."
+        }
+        DefectKind::ZeroAreaFaces => {
+            "Remove them with surfmap.repair(V, F, drop_degenerate=True) (this may open holes), or fix them in a mesh editor."
+        }
+        DefectKind::UnreferencedVertices => {
+            "Remove them with surfmap.repair(V, F, drop_unreferenced=True)."
+        }
+        DefectKind::DuplicateVertices => {
+            "Merge coincident vertices with surfmap.repair(V, F, weld=0.0)."
+        }
+        DefectKind::SeveralComponents => {
+            "Keep one with surfmap.repair(V, F, keep_largest=True), or component=N to choose one."
+        }
+        DefectKind::NonManifoldEdges => {
+            "No automatic fix: remove the extra faces (fins, internal walls) in a mesh editor, \
+             or try surfmap.repair(V, F, keep_largest=True) if they belong to a stray piece."
+        }
+        DefectKind::InconsistentOrientation => {
+            "Flip them with surfmap.repair(V, F, reorient=True)."
+        }
+        DefectKind::SeveralBoundaryLoops => {
+            "pass fill_holes=True to fill all but the longest for the flattening (they stay \
+             open in the map), or cut from each hole to the outer boundary."
+        }
+        DefectKind::ClosedSurface | DefectKind::PositiveGenus => {
+            "surfmap.flatten returns one UV per vertex and does not cut: cut it open first, \
+             or run `surfmap flatten` on the command line, which cuts it along seams."
+        }
+        DefectKind::NoFaces | DefectKind::NonManifoldVertices | DefectKind::NonOrientable => {
+            return None;
+        }
+    })
+}
+
+/// A defect's problem and remedy, the remedy as a Python call.
+pub fn defect_message(d: &Defect) -> String {
+    with_remedy(d, python_remedy(d.kind))
+}
+
+/// A numeric option out of range, as the keyword that set it.
+pub fn option_message(e: &OptionError) -> String {
+    match e {
+        OptionError::Tolerance(t) => format!("tolerance must be positive, got {t}"),
+        OptionError::ArmijoC(c) => format!("armijo_c must be in (0, 1), got {c}"),
+        OptionError::CoarseVertices(n) => format!("coarse_vertices must be at least 16, got {n}"),
+        other => other.to_string(),
+    }
+}
+
+/// A flattening error's message with its remedy as Python calls.
+pub fn flatten_error_message(e: &FlattenError) -> String {
+    match e {
+        FlattenError::NotADisc(defects) => not_a_disc_message(defects, defect_message),
+        FlattenError::Degenerate(inner) => {
+            format!("{inner}; surfmap.repair(V, F, drop_degenerate=True) removes them")
+        }
+        FlattenError::LscmFlipped(n) => format!(
+            "the LSCM start flips or degenerates {n} triangles; use start=\"auto\" (falls back \
+             to mean-value coordinates, injective by construction)"
+        ),
+        FlattenError::Option(o) => option_message(o),
+        other => other.to_string(),
+    }
+}

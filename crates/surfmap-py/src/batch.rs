@@ -1,0 +1,163 @@
+//! Mesh files in, files out: `flatten_file` (one mesh: the unit of work of a batch, and
+//! of a task on a Dask or Ray cluster) and `_flatten_many` (a folder's worth on a thread
+//! pool; the package's `flatten_many` adds the progress display). Rows are the library's
+//! [`BatchRow`]s, the lines of `summary.csv`, as dictionaries.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use surfmap::batch::{self, BatchRow};
+use surfmap::{FlattenOptions, FlattenReport, TriMesh, Uvs};
+
+use crate::advice::{defect_message, flatten_error_message};
+use crate::convert::{to_dict, to_python};
+use crate::errors::os_error;
+use crate::flatten::FlattenArgs;
+
+/// Reads `input`, flattens it, writes `dir/name.obj` and the report `dir/name.json`:
+/// the row, or the failed row with the library's message.
+fn flatten_one(
+    input: &Path,
+    dir: &Path,
+    name: &str,
+    options: &FlattenOptions,
+    normalize: bool,
+) -> BatchRow {
+    let clock = Instant::now();
+    let result = (|| -> Result<BatchRow, String> {
+        let mesh = surfmap::read_mesh(input).map_err(|e| e.to_string())?.mesh;
+        let r = surfmap::flatten(&mesh, options).map_err(|e| {
+            format!(
+                "cannot flatten {}: {}",
+                input.display(),
+                flatten_error_message(&e)
+            )
+        })?;
+        let report = FlattenReport::measure(Some(input), &mesh, &r, defect_message)
+            .map_err(|e| format!("cannot measure {}: {e}", input.display()))?;
+        let json_path = dir.join(format!("{name}.json"));
+        let json = serde_json::to_vec_pretty(&report).map_err(|e| e.to_string())?;
+        surfmap::fsutil::write_atomically(&json_path, |w| w.write_all(&json))
+            .map_err(|e| format!("cannot write {}: {e}", json_path.display()))?;
+        let uvs = if normalize {
+            r.normalized_uvs()
+        } else {
+            r.uvs.clone()
+        };
+        let obj = dir.join(format!("{name}.obj"));
+        let out = TriMesh {
+            uvs: Some(Uvs::PerVertex(uvs)),
+            ..mesh
+        };
+        surfmap::write_obj(&obj, &out, None).map_err(|e| e.to_string())?;
+        Ok(BatchRow::done(
+            input,
+            &obj,
+            &json_path,
+            &report,
+            clock.elapsed().as_secs_f64(),
+        ))
+    })();
+    result.unwrap_or_else(|e| BatchRow::failed(input, e, clock.elapsed().as_secs_f64()))
+}
+
+fn create_dir(dir: &Path) -> PyResult<()> {
+    std::fs::create_dir_all(dir)
+        .map_err(|e| os_error(e.kind(), format!("cannot create {}: {e}", dir.display())))
+}
+
+/// Flattens one mesh file into the folder ``outdir``: writes ``outdir/NAME.obj`` (the
+/// mesh with one texture coordinate per vertex) and ``outdir/NAME.json`` (the report of
+/// ``surfmap flatten --report``), NAME being ``name`` or the file's stem.
+///
+/// Never raises for a bad mesh: returns the row of the batch table (``summary.csv`` of
+/// ``flatten_many``), a dictionary with ``input``, ``status`` ("ok" or "failed"),
+/// ``output``, ``report``, the headline numbers (``vertices``, ``iterations``,
+/// ``energy``, ``angle_mean``, …), ``time_s`` and ``error`` (None, or why it failed).
+/// This makes it the unit of work on a cluster: see ``surfmap.distributed``.
+/// ``options`` are the keywords of ``flatten``. Releases the GIL.
+///
+/// >>> import os, tempfile, surfmap
+/// >>> row = surfmap.flatten_file("no/such/mesh.obj", tempfile.mkdtemp())
+/// >>> row["status"], "no/such/mesh.obj" in row["error"]
+/// ('failed', True)
+#[pyfunction]
+#[pyo3(signature = (path, outdir, name=None, **options))]
+pub fn flatten_file<'py>(
+    py: Python<'py>,
+    path: PathBuf,
+    outdir: PathBuf,
+    name: Option<String>,
+    options: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let args = FlattenArgs::from_kwargs(options)?;
+    let opts = args.options()?;
+    create_dir(&outdir)?;
+    let name = name.unwrap_or_else(|| batch::output_names(std::slice::from_ref(&path)).remove(0));
+    let row = py.detach(|| flatten_one(&path, &outdir, &name, &opts, args.normalize));
+    to_dict(py, &row)
+}
+
+/// Checks flattening keywords without flattening anything (a `ValueError` for an
+/// unknown name or a bad value): what a cluster driver does before sending tasks.
+#[pyfunction]
+#[pyo3(signature = (**options))]
+pub fn _check_flatten_options(options: Option<&Bound<'_, PyDict>>) -> PyResult<()> {
+    FlattenArgs::from_kwargs(options)?.options().map(|_| ())
+}
+
+/// Output names for mesh files: each file's stem, made unique by ``-2``, ``-3``, … in
+/// order where stems repeat (the names ``flatten_many`` writes under).
+///
+/// >>> import surfmap
+/// >>> surfmap.output_names(["a/face.obj", "b/face.off", "head.ply"])
+/// ['face', 'face-2', 'head']
+#[pyfunction]
+pub fn output_names(paths: Vec<PathBuf>) -> Vec<String> {
+    batch::output_names(&paths)
+}
+
+/// The engine of ``flatten_many``: every path on a pool of ``workers`` threads (0: one
+/// per core), ``callback(row)`` as each finishes, ``summary.csv`` written; returns the
+/// rows in input order.
+#[pyfunction]
+#[pyo3(signature = (paths, outdir, workers=0, callback=None, **options))]
+pub fn _flatten_many<'py>(
+    py: Python<'py>,
+    paths: Vec<PathBuf>,
+    outdir: PathBuf,
+    workers: usize,
+    callback: Option<Py<PyAny>>,
+    options: Option<&Bound<'py, PyDict>>,
+) -> PyResult<Bound<'py, PyList>> {
+    let args = FlattenArgs::from_kwargs(options)?;
+    let opts = args.options()?;
+    create_dir(&outdir)?;
+    let names = batch::output_names(&paths);
+    let rows = py.detach(|| {
+        batch::run(
+            &paths,
+            workers,
+            |i, input| flatten_one(input, &outdir, &names[i], &opts, args.normalize),
+            |row| {
+                if let Some(cb) = &callback {
+                    Python::attach(|py| {
+                        // A failing callback must not lose the batch: report and go on.
+                        if let Err(e) = to_python(py, row).and_then(|r| cb.call1(py, (r,))) {
+                            e.write_unraisable(py, None);
+                        }
+                    });
+                }
+            },
+        )
+    });
+    let rows = rows.map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
+    let summary = outdir.join("summary.csv");
+    batch::write_csv(&summary, &rows)
+        .map_err(|e| os_error(e.kind(), format!("cannot write {}: {e}", summary.display())))?;
+    to_python(py, &rows)?
+        .cast_into::<PyList>()
+        .map_err(Into::into)
+}

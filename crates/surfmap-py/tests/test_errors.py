@@ -1,0 +1,205 @@
+"""Bad input raises the right exception with a message that names the problem and the
+remedy; any memory layout and the common dtypes give the same results as the plain
+arrays; the remedies the messages name fix the defects they name."""
+
+import os
+
+import numpy as np
+import pytest
+
+import surfmap
+from conftest import wavy_grid
+
+
+@pytest.fixture
+def grid():
+    return wavy_grid(8)
+
+
+@pytest.mark.parametrize(
+    "V_of,needle",
+    [
+        (lambda V: V.tolist(), "must be a numpy array of shape (n, 3)"),
+        (lambda V: V[:, :2], "must have shape (n, 3)"),
+        (lambda V: V.ravel(), "got shape (192,)"),
+        (lambda V: V[None], "must have shape (n, 3)"),
+        (lambda V: V.astype(np.int64), "must hold floats"),
+        (lambda V: V.astype(np.complex128), "must hold floats"),
+        (lambda V: V.astype(str), "astype(numpy.float64)"),
+    ],
+)
+def test_bad_vertex_arrays_are_value_errors(grid, V_of, needle):
+    V, F = grid
+    with pytest.raises(ValueError, match="V ") as e:
+        surfmap.flatten(V_of(V), F)
+    assert needle in str(e.value)
+    assert not isinstance(e.value, surfmap.MeshError)
+
+
+@pytest.mark.parametrize(
+    "F_of,needle",
+    [
+        (lambda F: F.astype(float), "must hold integers"),
+        (lambda F: F.astype(bool), "must hold integers"),
+        (lambda F: F[:, :2], "must have shape (n, 3)"),
+        (lambda F: None, "got a NoneType"),
+    ],
+)
+def test_bad_triangle_arrays_are_value_errors(grid, F_of, needle):
+    V, F = grid
+    with pytest.raises(ValueError) as e:
+        surfmap.inspect(V, F_of(F))
+    assert needle in str(e.value) and "F" in str(e.value)
+
+
+def test_indices_out_of_range_are_mesh_errors(grid):
+    V, F = grid
+    bad = F.copy()
+    bad[5, 1] = len(V)
+    with pytest.raises(surfmap.MeshError, match=rf"triangle 5 uses vertex {len(V)} \(corner 1\)"):
+        surfmap.flatten(V, bad)
+    bad[5, 1] = -1
+    with pytest.raises(surfmap.MeshError, match=r"F\[5, 1\] = -1: vertex indices count from 0"):
+        surfmap.measure(V, bad, V[:, :2])
+    bad[5, 1] = 2**40
+    with pytest.raises(surfmap.MeshError, match="must be below the number of vertices"):
+        surfmap.inspect(V, bad)
+    assert issubclass(surfmap.MeshError, ValueError)
+
+
+def test_layouts_and_dtypes_give_identical_results(grid):
+    V, F = grid
+    UV, report = surfmap.flatten(V, F)
+    variants = [
+        (np.asfortranarray(V), F),
+        (V, np.asfortranarray(F)),
+        (np.repeat(V, 2, axis=0)[::2], F),  # a strided view
+        (V, F.astype(np.int32)),
+        (V, F.astype(np.uint32)),
+        (V, F.astype(np.uint16)),
+    ]
+    for W, G in variants:
+        UV2, report2 = surfmap.flatten(W, G)
+        assert np.array_equal(UV, UV2)
+        assert report2["energy"] == report["energy"]
+    # float32 positions are widened exactly: the same as the float64 of the same values.
+    V32 = V.astype(np.float32)
+    assert np.array_equal(surfmap.flatten(V32, F)[0], surfmap.flatten(V32.astype(np.float64), F)[0])
+    # Outputs are fresh C-ordered arrays that own their memory.
+    assert UV.flags.c_contiguous and UV.flags.writeable and UV.dtype == np.float64
+
+
+def test_not_a_disc_lists_each_defect_with_a_python_remedy(grid):
+    V, F = grid
+    # Two copies side by side with a duplicated vertex: two components, duplicates.
+    V2 = np.r_[V, V + [2.0, 0, 0], V[:1]]
+    F2 = np.r_[F, F + len(V)]
+    with pytest.raises(surfmap.MeshError) as e:
+        surfmap.flatten(V2, F2)
+    kinds = [d["kind"] for d in e.value.defects]
+    assert kinds == ["several_components", "several_boundary_loops"]
+    message = str(e.value)
+    assert message.startswith("the mesh cannot be flattened as a disc:")
+    assert "surfmap.repair(V, F, keep_largest=True)" in message
+    assert "repair::" not in message and "--" not in message
+    # The remedies work: keep one component, drop the stray vertex, flatten.
+    W, G, done = surfmap.repair(V2, F2, keep_largest=True, drop_unreferenced=True)
+    # Keeping a component drops the vertices only the others used (the stray one too).
+    assert done == {"dropped_faces": len(F), "dropped_unreferenced": 0}
+    assert np.array_equal(W, V) and np.array_equal(G, F)
+    assert surfmap.inspect(W, G)["disc"]
+    assert surfmap.flatten(W, G)[1]["flipped_triangles"] == 0
+
+
+def test_remedies_fix_what_they_name(data):
+    """The repairs the messages name, applied to real meshes with those defects."""
+    V, F = surfmap.read_mesh(data / "mask_cone.off")  # duplicates, 2 components, 2 holes
+    messages = {d["kind"]: d["message"] for d in surfmap.inspect(V, F)["defects"]}
+    assert "surfmap.repair(V, F, weld=0.0)" in messages["duplicate_vertices"]
+    assert "surfmap.repair(V, F, keep_largest=True)" in messages["several_components"]
+    W, G, done = surfmap.repair(V, F, weld=0.0, keep_largest=True, drop_unreferenced=True)
+    assert done["welded"] > 0 and done["dropped_faces"] > 0
+    assert surfmap.inspect(W, G)["defects"] == []
+    assert surfmap.flatten(W, G)[1]["flipped_triangles"] == 0
+
+    V, F = surfmap.read_mesh(data / "halftunnel.off")  # three boundary loops
+    with pytest.raises(surfmap.MeshError, match="pass fill_holes=True to fill"):
+        surfmap.flatten(V, F)
+    UV, report = surfmap.flatten(V, F, fill_holes=True)
+    assert report["holes_filled"] == 2 and report["flipped_triangles"] == 0
+
+
+def test_non_finite_positions_are_mesh_errors(grid):
+    V, F = grid
+    V = V.copy()
+    V[3, 2] = np.nan
+    with pytest.raises(surfmap.MeshError) as e:
+        surfmap.flatten(V, F)
+    assert [d["kind"] for d in e.value.defects] == ["non_finite_coordinates"]
+    assert e.value.defects[0]["examples"] == [[3]]
+
+
+@pytest.mark.parametrize(
+    "options,needle",
+    [
+        ({"preset": "fast"}, 'unknown preset "fast"; choose one of "conformal", "balanced"'),
+        ({"energy": "dirichlet"}, "unknown energy"),
+        ({"alpha": (1, -1, 1)}, "alpha"),
+        ({"alpha": (1, 2)}, "alpha must be three numbers (length, area, angle weights)"),
+        ({"from_alpha": (1, 1, 1), "energy": "mips"}, "from_alpha"),
+        ({"tolerance": 0.0}, "tolerance must be positive, got 0"),
+        ({"armijo_c": 1.5}, "armijo_c must be in (0, 1)"),
+        ({"coarse_vertices": 3}, "coarse_vertices must be at least 16"),
+        ({"multilevel": "on", "start": "lscm"}, 'multilevel="on" needs start="auto"'),
+    ],
+)
+def test_bad_options_are_value_errors(grid, options, needle):
+    V, F = grid
+    with pytest.raises((ValueError, TypeError)) as e:
+        surfmap.flatten(V, F, **options)
+    assert needle in str(e.value)
+    assert not isinstance(e.value, surfmap.MeshError)
+
+
+def test_unknown_batch_options_are_value_errors(tmp_path):
+    with pytest.raises(ValueError, match='unknown option "tolerence"; the flattening options are .*tolerance'):
+        surfmap.flatten_file("x.obj", tmp_path, tolerence=1e-9)
+    with pytest.raises(ValueError, match="option max_iters"):
+        surfmap.flatten_many(["x.obj"], tmp_path, max_iters="many")
+    with pytest.raises(ValueError, match="workers must be a positive integer"):
+        surfmap.flatten_many(["x.obj"], tmp_path, workers=0)
+
+
+def test_uv_arrays_are_checked(grid):
+    V, F = grid
+    with pytest.raises(ValueError, match="UV has 10 rows but the mesh has 64 vertices"):
+        surfmap.measure(V, F, V[:10, :2])
+    with pytest.raises(ValueError, match=r"UV must have shape \(n, 2\)"):
+        surfmap.write_obj("x.obj", V, F, UV=V)
+
+
+def test_file_errors(tmp_path):
+    with pytest.raises(FileNotFoundError, match="no_such.obj"):
+        surfmap.read_mesh(tmp_path / "no_such.obj")
+    with pytest.raises(ValueError, match="unknown mesh file extension"):
+        surfmap.read_mesh(tmp_path / "mesh.stl")
+    bad = tmp_path / "bad.off"
+    bad.write_text("OFF\n3 1 0\n0 0 0\n1 0 0\n")
+    with pytest.raises(surfmap.MeshError, match="bad.off: line 5"):
+        surfmap.read_mesh(bad)
+    V, F = wavy_grid(3)
+    with pytest.raises(OSError, match="cannot write"):
+        surfmap.write_obj(tmp_path / "missing_dir" / "m.obj", V, F)
+    # A failed write leaves nothing behind.
+    assert os.listdir(tmp_path) == ["bad.off"]
+
+
+def test_a_closed_surface_is_refused_not_cut(data):
+    """flatten returns one UV per vertex, so it never cuts: a closed surface is refused
+    with a remedy that says so (the command line cuts it along seams)."""
+    V, F = surfmap.read_mesh(data / "sphere.obj")
+    assert surfmap.inspect(V, F)["flatten_cuts"]  # what `surfmap flatten` would do
+    with pytest.raises(surfmap.MeshError) as e:
+        surfmap.flatten(V, F)
+    assert [d["kind"] for d in e.value.defects] == ["closed_surface"]
+    assert "does not cut" in str(e.value) and "--" not in str(e.value)

@@ -1,0 +1,162 @@
+//! A match folder on disk: `DIR/correspondence.npy` (float64, shape `(n_A, 4)`, row `a`
+//! = `[triangle of B, b0, b1, b2]`, triangle `−1` (or any negative or NaN value) for a
+//! vertex of A without a counterpart) and `DIR/match.json` (whatever the matcher
+//! recorded about the match; kept as JSON).
+
+use std::path::Path;
+
+use super::AppError;
+use crate::mesh::SurfacePoint;
+use crate::raster::npy::{read_npy_f64, save_npy};
+
+/// File names inside a match folder.
+pub const CORRESPONDENCE_FILE: &str = "correspondence.npy";
+pub const INFO_FILE: &str = "match.json";
+
+/// A match folder's contents.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MatchFolder {
+    /// One entry per vertex of A.
+    pub correspondence: Vec<Option<SurfacePoint>>,
+    /// `match.json` (`Null` when the folder has none).
+    pub info: serde_json::Value,
+}
+
+/// The correspondence encoded as rows `[triangle, b0, b1, b2]`, `−1` rows for `None`.
+pub fn correspondence_rows(points: &[Option<SurfacePoint>]) -> Vec<f64> {
+    points
+        .iter()
+        .flat_map(|p| match p {
+            Some(p) => [
+                p.triangle as f64,
+                p.barycentric[0],
+                p.barycentric[1],
+                p.barycentric[2],
+            ],
+            None => [-1.0, 0.0, 0.0, 0.0],
+        })
+        .collect()
+}
+
+/// Decodes rows `[triangle, b0, b1, b2]` (negative or NaN triangle: unmatched). A
+/// triangle that is not a whole number is an error naming the row.
+pub fn correspondence_from_rows(rows: &[f64]) -> Result<Vec<Option<SurfacePoint>>, String> {
+    if !rows.len().is_multiple_of(4) {
+        return Err(format!("{} values do not form rows of 4", rows.len()));
+    }
+    rows.chunks_exact(4)
+        .enumerate()
+        .map(|(i, r)| {
+            let t = r[0];
+            if t.is_nan() || t < 0.0 {
+                return Ok(None);
+            }
+            if t.fract() != 0.0 || t > u32::MAX as f64 {
+                return Err(format!(
+                    "row {i}: triangle {t} is not a triangle index (a whole number ≥ 0, or −1 for unmatched)"
+                ));
+            }
+            Ok(Some(SurfacePoint {
+                triangle: t as u32,
+                barycentric: [r[1], r[2], r[3]],
+            }))
+        })
+        .collect()
+}
+
+/// Reads a match folder. The correspondence is not checked against meshes here (see
+/// [`super::correspondence::check_correspondence`]).
+pub fn read_match_folder(dir: &Path) -> Result<MatchFolder, AppError> {
+    if !dir.is_dir() {
+        return Err(AppError::file(
+            dir,
+            "not a folder; a match folder holds correspondence.npy and match.json (written by `surfmap match`)",
+        ));
+    }
+    let npy = dir.join(CORRESPONDENCE_FILE);
+    let bytes = std::fs::read(&npy).map_err(AppError::io(&npy))?;
+    let (shape, values) = read_npy_f64(&bytes).map_err(|e| AppError::file(&npy, e))?;
+    if shape.len() != 2 || shape[1] != 4 {
+        return Err(AppError::file(
+            &npy,
+            format!(
+                "shape {shape:?}; a correspondence has shape (vertices of A, 4): rows [triangle of B, b0, b1, b2]"
+            ),
+        ));
+    }
+    let correspondence = correspondence_from_rows(&values).map_err(|e| AppError::file(&npy, e))?;
+    let json = dir.join(INFO_FILE);
+    let info = match std::fs::read(&json) {
+        Ok(text) => serde_json::from_slice(&text)
+            .map_err(|e| AppError::file(&json, format!("not valid JSON: {e}")))?,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => serde_json::Value::Null,
+        Err(e) => return Err(AppError::io(&json)(e)),
+    };
+    Ok(MatchFolder {
+        correspondence,
+        info,
+    })
+}
+
+/// Writes a match folder (created if missing): the correspondence and `info` as
+/// `match.json`, each file atomically.
+pub fn write_match_folder(
+    dir: &Path,
+    correspondence: &[Option<SurfacePoint>],
+    info: &serde_json::Value,
+) -> Result<(), AppError> {
+    std::fs::create_dir_all(dir).map_err(AppError::io(dir))?;
+    let npy = dir.join(CORRESPONDENCE_FILE);
+    save_npy(
+        &npy,
+        &[correspondence.len(), 4],
+        &correspondence_rows(correspondence),
+    )
+    .map_err(AppError::io(&npy))?;
+    let json = dir.join(INFO_FILE);
+    let text = serde_json::to_vec_pretty(info).map_err(|e| AppError::file(&json, e.to_string()))?;
+    crate::fsutil::write_atomically(&json, |w| w.write_all(&text)).map_err(AppError::io(&json))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn folders_round_trip_and_bad_files_are_named() {
+        let dir = std::env::temp_dir().join(format!("surfmap-match-folder-{}", std::process::id()));
+        let points = vec![
+            Some(SurfacePoint {
+                triangle: 3,
+                barycentric: [0.25, 0.5, 0.25],
+            }),
+            None,
+            Some(SurfacePoint {
+                triangle: 0,
+                barycentric: [1.0, 0.0, 0.0],
+            }),
+        ];
+        let info = serde_json::json!({"a": "neutral.obj", "b": "smile.obj"});
+        write_match_folder(&dir, &points, &info).unwrap();
+        let back = read_match_folder(&dir).unwrap();
+        assert_eq!(back.correspondence, points);
+        assert_eq!(back.info, info);
+        // NaN triangles are unmatched too; a fractional one is an error naming its row.
+        assert_eq!(
+            correspondence_from_rows(&[f64::NAN, 0.0, 0.0, 0.0]).unwrap(),
+            vec![None]
+        );
+        let e = correspondence_from_rows(&[0.0, 1.0, 0.0, 0.0, 2.5, 1.0, 0.0, 0.0]).unwrap_err();
+        assert!(e.contains("row 1"), "{e}");
+        // A wrong shape names the file and the expected shape.
+        save_npy(&dir.join(CORRESPONDENCE_FILE), &[2, 3], &[0.0f64; 6]).unwrap();
+        let e = read_match_folder(&dir).unwrap_err().to_string();
+        assert!(
+            e.contains("correspondence.npy") && e.contains("(vertices of A, 4)"),
+            "{e}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+        let e = read_match_folder(&dir).unwrap_err().to_string();
+        assert!(e.contains("not a folder"), "{e}");
+    }
+}

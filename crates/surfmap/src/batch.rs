@@ -1,0 +1,375 @@
+//! Many meshes at once: a thread pool that runs one job per input file and never lets
+//! one bad mesh stop the others ([`run`]), unique output names for the inputs
+//! ([`output_names`]), and the summary table, one [`BatchRow`] per mesh, written as CSV
+//! ([`write_csv`]).
+//!
+//! The command line's `surfmap flatten a.obj b.obj … -o DIR/` and the Python package's
+//! `flatten_many` and `flatten_file` (also the unit of work on a Dask or Ray cluster)
+//! produce these rows, so their tables have the same columns.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::report::FlattenReport;
+
+/// One mesh of a batch: what was written and the headline numbers of its report, or
+/// why it failed. Numbers are `None` for a failed mesh.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct BatchRow {
+    /// The input file, as given.
+    pub input: String,
+    /// `"ok"` or `"failed"`.
+    pub status: &'static str,
+    /// The flattened mesh written (OBJ with texture coordinates).
+    pub output: Option<String>,
+    /// The full report written (JSON, the fields of [`FlattenReport`]).
+    pub report: Option<String>,
+    pub vertices: Option<usize>,
+    pub triangles: Option<usize>,
+    /// Initial map used (`lscm`, `mean_value`, `given`, `multilevel`).
+    pub start: Option<String>,
+    pub iterations: Option<usize>,
+    pub converged: Option<bool>,
+    /// Final energy per unit 3D area.
+    pub energy: Option<f64>,
+    /// Symmetric Dirichlet energy, area-weighted mean (isometry = 4).
+    pub symmetric_dirichlet: Option<f64>,
+    /// Thesis angle distortion `σ1/σ2`: area-weighted mean and maximum (ideal 1).
+    pub angle_mean: Option<f64>,
+    pub angle_max: Option<f64>,
+    /// Thesis area distortion `σ1σ2` after scaling: minimum and maximum (ideal 1).
+    pub area_min: Option<f64>,
+    pub area_max: Option<f64>,
+    pub flipped_triangles: Option<usize>,
+    /// Whether the boundary of the map crosses itself.
+    pub boundary_overlap: Option<bool>,
+    pub holes_filled: Option<usize>,
+    /// Wall-clock seconds for this mesh: reading, flattening, measuring, writing.
+    pub time_s: f64,
+    /// Why the mesh failed (the error message, remedy included).
+    pub error: Option<String>,
+}
+
+impl BatchRow {
+    /// The column names of [`BatchRow::csv_record`], in order (the field names).
+    pub const CSV_HEADER: [&'static str; 20] = [
+        "input",
+        "status",
+        "output",
+        "report",
+        "vertices",
+        "triangles",
+        "start",
+        "iterations",
+        "converged",
+        "energy",
+        "symmetric_dirichlet",
+        "angle_mean",
+        "angle_max",
+        "area_min",
+        "area_max",
+        "flipped_triangles",
+        "boundary_overlap",
+        "holes_filled",
+        "time_s",
+        "error",
+    ];
+
+    /// A mesh flattened and written to `output`, its report to `report_file`.
+    pub fn done(
+        input: &Path,
+        output: &Path,
+        report_file: &Path,
+        report: &FlattenReport<'_>,
+        time_s: f64,
+    ) -> Self {
+        let m = &report.measures;
+        Self {
+            input: input.display().to_string(),
+            status: "ok",
+            output: Some(output.display().to_string()),
+            report: Some(report_file.display().to_string()),
+            vertices: Some(report.vertices),
+            triangles: Some(report.triangles),
+            start: serde_json::to_value(report.start)
+                .ok()
+                .and_then(|v| v.as_str().map(str::to_owned)),
+            iterations: Some(report.iterations),
+            converged: Some(report.converged),
+            energy: Some(report.energy),
+            symmetric_dirichlet: Some(report.symmetric_dirichlet),
+            angle_mean: Some(m.measures.angle.mean),
+            angle_max: Some(m.measures.angle.max),
+            area_min: Some(m.measures.area.min),
+            area_max: Some(m.measures.area.max),
+            flipped_triangles: Some(report.flipped_triangles),
+            boundary_overlap: Some(m.boundary_overlap.self_intersecting),
+            holes_filled: Some(report.holes_filled),
+            time_s,
+            error: None,
+        }
+    }
+
+    /// A mesh that failed with `error`.
+    pub fn failed(input: &Path, error: String, time_s: f64) -> Self {
+        Self {
+            input: input.display().to_string(),
+            status: "failed",
+            output: None,
+            report: None,
+            vertices: None,
+            triangles: None,
+            start: None,
+            iterations: None,
+            converged: None,
+            energy: None,
+            symmetric_dirichlet: None,
+            angle_mean: None,
+            angle_max: None,
+            area_min: None,
+            area_max: None,
+            flipped_triangles: None,
+            boundary_overlap: None,
+            holes_filled: None,
+            time_s,
+            error: Some(error),
+        }
+    }
+
+    /// Whether the mesh was flattened.
+    pub fn ok(&self) -> bool {
+        self.error.is_none()
+    }
+
+    /// The row's values as CSV fields, in the order of [`BatchRow::CSV_HEADER`]:
+    /// empty for `None`, floats in their shortest exact form, text quoted when needed
+    /// (an error message may span lines: a list of defects).
+    pub fn csv_record(&self) -> String {
+        fn opt<T: ToString>(v: &Option<T>) -> String {
+            v.as_ref().map(T::to_string).unwrap_or_default()
+        }
+        [
+            self.input.clone(),
+            self.status.to_owned(),
+            opt(&self.output),
+            opt(&self.report),
+            opt(&self.vertices),
+            opt(&self.triangles),
+            opt(&self.start),
+            opt(&self.iterations),
+            opt(&self.converged),
+            opt(&self.energy),
+            opt(&self.symmetric_dirichlet),
+            opt(&self.angle_mean),
+            opt(&self.angle_max),
+            opt(&self.area_min),
+            opt(&self.area_max),
+            opt(&self.flipped_triangles),
+            opt(&self.boundary_overlap),
+            opt(&self.holes_filled),
+            self.time_s.to_string(),
+            opt(&self.error),
+        ]
+        .iter()
+        .map(|f| csv_field(f))
+        .collect::<Vec<_>>()
+        .join(",")
+    }
+}
+
+/// One CSV field (RFC 4180): quoted, with quotes doubled, when it holds a comma, a
+/// quote or a line break.
+fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_owned()
+    }
+}
+
+/// Writes the summary table: a header and one line per row (atomically).
+pub fn write_csv(path: &Path, rows: &[BatchRow]) -> std::io::Result<()> {
+    crate::fsutil::write_atomically(path, |w| {
+        writeln!(w, "{}", BatchRow::CSV_HEADER.join(","))?;
+        for r in rows {
+            writeln!(w, "{}", r.csv_record())?;
+        }
+        Ok(())
+    })
+}
+
+/// An output name per input: the file stem, made unique by `-2`, `-3`, … in input
+/// order where stems repeat (`a/x.obj`, `b/x.off` → `x`, `x-2`).
+pub fn output_names(inputs: &[PathBuf]) -> Vec<String> {
+    let mut taken: HashMap<String, usize> = HashMap::new();
+    let stems: Vec<String> = inputs
+        .iter()
+        .map(|p| {
+            p.file_stem()
+                .map_or_else(|| "mesh".to_owned(), |s| s.to_string_lossy().into_owned())
+        })
+        .collect();
+    let mut used: std::collections::HashSet<String> = stems.iter().cloned().collect();
+    stems
+        .into_iter()
+        .map(|stem| {
+            let seen = taken.entry(stem.clone()).or_insert(0);
+            *seen += 1;
+            if *seen == 1 {
+                return stem;
+            }
+            // The next free `stem-k` (an input may itself be called `x-2`).
+            let mut k = *seen;
+            loop {
+                let name = format!("{stem}-{k}");
+                if used.insert(name.clone()) {
+                    return name;
+                }
+                k += 1;
+            }
+        })
+        .collect()
+}
+
+/// Why a batch could not start.
+#[derive(Debug, thiserror::Error)]
+#[error("cannot start {threads} worker threads: {source}")]
+pub struct PoolError {
+    pub threads: usize,
+    #[source]
+    pub source: rayon::ThreadPoolBuildError,
+}
+
+/// Runs `job` on every input on a pool of `threads` threads (0: one per core) and
+/// returns the rows in input order. Everything `job` computes runs on that pool, its
+/// parallel loops included, so `threads` bounds the cores used. `on_done` sees each row
+/// as it finishes (from the worker thread; for progress). A job that panics gives a
+/// failed row naming the panic instead of stopping the batch.
+pub fn run(
+    inputs: &[PathBuf],
+    threads: usize,
+    job: impl Fn(usize, &Path) -> BatchRow + Sync,
+    on_done: impl Fn(&BatchRow) + Sync,
+) -> Result<Vec<BatchRow>, PoolError> {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|source| PoolError { threads, source })?;
+    Ok(pool.install(|| {
+        inputs
+            .par_iter()
+            .enumerate()
+            .with_max_len(1)
+            .map(|(i, input)| {
+                let clock = std::time::Instant::now();
+                let row = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| job(i, input)))
+                    .unwrap_or_else(|panic| {
+                        let what = panic
+                            .downcast_ref::<&str>()
+                            .map(|s| s.to_string())
+                            .or_else(|| panic.downcast_ref::<String>().cloned())
+                            .unwrap_or_default();
+                        BatchRow::failed(
+                            input,
+                            format!("internal error ({what}); please report this mesh"),
+                            clock.elapsed().as_secs_f64(),
+                        )
+                    });
+                on_done(&row);
+                row
+            })
+            .collect()
+    }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn output_names_are_unique_stems() {
+        let inputs: Vec<PathBuf> = ["a/x.obj", "b/x.off", "y.ply", "c/x.obj", "x-2.obj"]
+            .iter()
+            .map(PathBuf::from)
+            .collect();
+        assert_eq!(output_names(&inputs), ["x", "x-3", "y", "x-4", "x-2"]);
+    }
+
+    /// Quoted fields survive a round trip through an independent reading of RFC 4180.
+    #[test]
+    fn csv_quotes_commas_quotes_and_line_breaks() {
+        let row = BatchRow::failed(
+            Path::new("dir,with comma/m.obj"),
+            "the mesh cannot be flattened as a disc:\n  - 2 \"holes\", fill them".into(),
+            0.25,
+        );
+        let line = row.csv_record();
+        let fields = parse_csv_line(&line);
+        assert_eq!(fields.len(), BatchRow::CSV_HEADER.len());
+        assert_eq!(fields[0], "dir,with comma/m.obj");
+        assert_eq!(fields[1], "failed");
+        assert_eq!(fields[18], "0.25");
+        assert_eq!(fields[19], row.error.as_deref().unwrap());
+        assert!(fields[2..18].iter().all(String::is_empty));
+    }
+
+    /// A minimal RFC 4180 reader for one record (the test's oracle).
+    fn parse_csv_line(s: &str) -> Vec<String> {
+        let mut out = vec![String::new()];
+        let mut quoted = false;
+        let mut chars = s.chars().peekable();
+        while let Some(c) = chars.next() {
+            match (quoted, c) {
+                (false, ',') => out.push(String::new()),
+                (false, '"') => quoted = true,
+                (true, '"') if chars.peek() == Some(&'"') => {
+                    chars.next();
+                    out.last_mut().unwrap().push('"');
+                }
+                (true, '"') => quoted = false,
+                (_, c) => out.last_mut().unwrap().push(c),
+            }
+        }
+        out
+    }
+
+    /// Every input gets its row in order; a panicking job fails its own row only; the
+    /// pool has the threads asked for, and the job's own parallel loops run on it.
+    #[test]
+    fn run_isolates_failures_and_keeps_order() {
+        let inputs: Vec<PathBuf> = (0..6).map(|i| PathBuf::from(format!("m{i}.obj"))).collect();
+        let done = std::sync::atomic::AtomicUsize::new(0);
+        let rows = run(
+            &inputs,
+            2,
+            |i, input| {
+                assert_eq!(rayon::current_num_threads(), 2);
+                if i == 3 {
+                    panic!("boom at {}", input.display());
+                }
+                let inner: usize = (0..100usize).into_par_iter().sum();
+                BatchRow::failed(input, format!("job {i}: {inner}"), 0.0)
+            },
+            |_| {
+                done.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            },
+        )
+        .unwrap();
+        assert_eq!(done.into_inner(), 6);
+        for (i, r) in rows.iter().enumerate() {
+            assert_eq!(r.input, format!("m{i}.obj"));
+            if i == 3 {
+                let e = r.error.as_deref().unwrap();
+                assert!(
+                    e.contains("boom at m3.obj") && e.contains("internal error"),
+                    "{e}"
+                );
+            } else {
+                assert_eq!(r.error.as_deref(), Some(format!("job {i}: 4950").as_str()));
+            }
+        }
+    }
+}

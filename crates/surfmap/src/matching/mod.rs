@@ -1,0 +1,53 @@
+//! Surface matching (thesis §2.2, §3.2, §4.2): a smooth, fold-free correspondence
+//! `φ_M = x_B ∘ φ ∘ x_A⁻¹` between two disc-like surfaces, found by minimizing the
+//! matching energy (2.16) over deformations φ of the parameter plane, coarse to fine.
+//!
+//! Data flow: each surface is flattened and rasterized into geometry images
+//! ([`surface`]); the deformation lives on the grid ([`deformation`]); the energy
+//! terms and their gradients are in [`energy`]; [`ncg`] minimizes one level;
+//! [`solve`] runs the multiscale schedule with the initial alignment
+//! ([`similarity`], [`rigid`], [`align`]); [`output`] checks the result for folds in
+//! space, maps points and writes the match folder; [`pictures`] draws it.
+
+pub mod align;
+pub mod deformation;
+pub mod energy;
+pub mod ncg;
+pub mod output;
+pub mod pictures;
+pub mod precondition;
+pub mod rigid;
+pub mod similarity;
+pub mod solve;
+pub mod surface;
+
+pub use deformation::Deformation;
+pub use energy::{Betas, EnergyTerms, Similarity3};
+pub use ncg::{LevelLog, NcgSettings, StopReason};
+pub use output::{FoldCheck, MatchReport, PointMap, check_folds, write_match_folder};
+pub use similarity::Similarity2;
+pub use solve::{
+    Align, AlignmentReport, Guidance, HoleFeatures, Landmarks, MatchOptions, SurfaceMatch,
+    match_surfaces,
+};
+pub use surface::MatchSurface;
+
+/// What went wrong while matching, and what to do about it.
+#[derive(Debug, thiserror::Error)]
+pub enum MatchError {
+    #[error("cannot flatten the surface: {0}")]
+    Flatten(#[from] crate::param::flatten::FlattenError),
+    #[error("geometry images: {0}")]
+    Images(#[from] crate::raster::RasterError),
+    #[error("grid: {0}")]
+    Grid(#[from] crate::grid::GridError),
+    #[error("{0}")]
+    Guidance(String),
+    #[error("invalid option: {0}")]
+    Option(String),
+    #[error("{0}")]
+    Output(String),
+}
+
+#[cfg(test)]
+mod tests;

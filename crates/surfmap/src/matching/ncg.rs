@@ -1,0 +1,212 @@
+//! Nonlinear conjugate gradients in the L² metric with an Armijo line search
+//! (thesis §3.2.4), fold-free by construction: every trial step stays below the
+//! closed-form largest fold-free step ([`super::deformation`]).
+//!
+//! Direction: Polak–Ribière+ (`β = max(0, gₖ₊₁·(gₖ₊₁ − gₖ)/|gₖ|²)`), restarted with
+//! steepest descent whenever it is not a descent direction. The first trial step of
+//! an iteration is `t_prev·(gₖ₋₁·dₖ₋₁)/(gₖ·dₖ)` (Nocedal & Wright (3.60)), capped at
+//! 0.9 × the fold-free bound; Armijo halves it until
+//! `E(u + t d) ≤ E(u) + c·t·∇E·d`. Stop when the relative energy decrease of an
+//! iteration falls below the tolerance (the thesis's 10⁻⁶), or the line search locks.
+
+use serde::Serialize;
+
+use super::deformation::Deformation;
+use super::energy::{EnergyTerms, LevelEnergy, Workspace};
+use super::precondition::SobolevPreconditioner;
+
+/// Settings of one level's minimization.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct NcgSettings {
+    /// Stop when `(E_k − E_{k+1}) / E_k` is below this.
+    pub tolerance: f64,
+    pub max_iterations: usize,
+    /// Armijo sufficient-decrease constant.
+    pub armijo_c: f64,
+    /// Refit the position term's similarity every this many iterations (0: never).
+    pub refit_every: usize,
+}
+
+impl Default for NcgSettings {
+    fn default() -> Self {
+        Self {
+            tolerance: 1e-6,
+            max_iterations: 300,
+            armijo_c: 1e-4,
+            refit_every: 10,
+        }
+    }
+}
+
+/// Why a level's minimization stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StopReason {
+    Converged,
+    /// No step along the direction lowered the energy enough.
+    Locked,
+    MaxIterations,
+}
+
+/// What one level's minimization did.
+#[derive(Clone, Debug, Serialize)]
+pub struct LevelLog {
+    pub level: usize,
+    pub size: usize,
+    pub epsilon: f64,
+    pub iterations: usize,
+    pub evaluations: usize,
+    pub start: EnergyTerms,
+    pub end: EnergyTerms,
+    pub stop: StopReason,
+    /// Total energy after every iteration (first entry: the start).
+    pub history: Vec<f64>,
+    pub seconds: f64,
+}
+
+/// Minimizes `energy` over the displacement of `phi` (in place). `refit` is called
+/// every `settings.refit_every` iterations (and before the first) to refit the
+/// similarity of the position term; it must not raise the energy.
+pub(crate) fn minimize(
+    energy: &mut LevelEnergy,
+    phi: &mut Deformation,
+    settings: &NcgSettings,
+    level: usize,
+    precondition: Option<&SobolevPreconditioner>,
+    refit: &mut dyn FnMut(&mut LevelEnergy, &Deformation),
+) -> LevelLog {
+    let clock = std::time::Instant::now();
+    let n = phi.size;
+    let h = 1.0 / (n - 1) as f64;
+    refit(energy, phi);
+    let mut grad = vec![[0.0; 2]; n * n];
+    let mut work = Workspace::default();
+    let mut e = energy.evaluate(&phi.displacement, &mut grad, &mut work);
+    let start = e;
+    let mut evaluations = 1;
+    let mut history = vec![e.total];
+    // z = P g: the gradient in the preconditioner's metric.
+    let apply = |g: &[[f64; 2]], z: &mut Vec<[f64; 2]>| match precondition {
+        Some(p) => p.apply(g, z),
+        None => z.copy_from_slice(g),
+    };
+    let mut z = vec![[0.0; 2]; n * n];
+    apply(&grad, &mut z);
+    let mut dir: Vec<[f64; 2]> = z.iter().map(|g| [-g[0], -g[1]]).collect();
+    let mut trial_z = vec![[0.0; 2]; n * n];
+    let mut trial = phi.clone();
+    let mut trial_grad = vec![[0.0; 2]; n * n];
+    let mut prev_step: Option<(f64, f64)> = None; // (t, slope)
+    let mut stop = StopReason::MaxIterations;
+    let mut iterations = 0;
+    while iterations < settings.max_iterations {
+        if !e.total.is_finite() {
+            stop = StopReason::Locked;
+            break;
+        }
+        let mut slope = dot(&grad, &dir);
+        if slope.is_nan() || slope >= 0.0 {
+            dir.iter_mut()
+                .zip(&z)
+                .for_each(|(d, g)| *d = [-g[0], -g[1]]);
+            slope = dot(&grad, &dir);
+            prev_step = None;
+            if slope.is_nan() || slope >= 0.0 {
+                stop = StopReason::Converged;
+                break;
+            }
+        }
+        let bound = 0.9 * phi.max_fold_free_step(&dir);
+        let max_dir = dir
+            .iter()
+            .map(|d| d[0].abs().max(d[1].abs()))
+            .fold(0.0, f64::max);
+        let mut t = match prev_step {
+            Some((t_prev, slope_prev)) => t_prev * slope_prev / slope,
+            None => 0.5 * h / max_dir.max(f64::MIN_POSITIVE),
+        };
+        t = t.min(bound);
+        let mut accepted = false;
+        for _ in 0..40 {
+            for ((tu, u), d) in trial
+                .displacement
+                .iter_mut()
+                .zip(&phi.displacement)
+                .zip(&dir)
+            {
+                *tu = [u[0] + t * d[0], u[1] + t * d[1]];
+            }
+            let et = energy.evaluate(&trial.displacement, &mut trial_grad, &mut work);
+            evaluations += 1;
+            if et.total.is_finite() && et.total <= e.total + settings.armijo_c * t * slope {
+                let decrease = (e.total - et.total) / e.total.abs().max(f64::MIN_POSITIVE);
+                std::mem::swap(phi, &mut trial);
+                // Polak–Ribière+ in the preconditioner's metric:
+                // β = zₖ₊₁·(gₖ₊₁ − gₖ) / zₖ·gₖ.
+                apply(&trial_grad, &mut trial_z);
+                let zg = dot(&z, &grad);
+                let beta = if zg > 0.0 {
+                    let num: f64 = trial_z
+                        .iter()
+                        .zip(trial_grad.iter().zip(&grad))
+                        .map(|(a, (g1, g0))| a[0] * (g1[0] - g0[0]) + a[1] * (g1[1] - g0[1]))
+                        .sum();
+                    (num / zg).max(0.0)
+                } else {
+                    0.0
+                };
+                std::mem::swap(&mut grad, &mut trial_grad);
+                std::mem::swap(&mut z, &mut trial_z);
+                for (d, g) in dir.iter_mut().zip(&z) {
+                    *d = [-g[0] + beta * d[0], -g[1] + beta * d[1]];
+                }
+                prev_step = Some((t, slope));
+                e = et;
+                history.push(e.total);
+                iterations += 1;
+                accepted = true;
+                if decrease < settings.tolerance {
+                    stop = StopReason::Converged;
+                }
+                break;
+            }
+            t *= 0.5;
+        }
+        if !accepted {
+            stop = StopReason::Locked;
+            break;
+        }
+        if stop == StopReason::Converged {
+            break;
+        }
+        if settings.refit_every > 0 && iterations % settings.refit_every == 0 {
+            refit(energy, phi);
+            e = energy.evaluate(&phi.displacement, &mut grad, &mut work);
+            evaluations += 1;
+            apply(&grad, &mut z);
+            dir.iter_mut()
+                .zip(&z)
+                .for_each(|(d, g)| *d = [-g[0], -g[1]]);
+            prev_step = None;
+        }
+    }
+    LevelLog {
+        level,
+        size: n,
+        epsilon: energy.epsilon,
+        iterations,
+        evaluations,
+        start,
+        end: e,
+        stop,
+        history,
+        seconds: clock.elapsed().as_secs_f64(),
+    }
+}
+
+fn dot(a: &[[f64; 2]], b: &[[f64; 2]]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| x[0] * y[0] + x[1] * y[1])
+        .sum()
+}

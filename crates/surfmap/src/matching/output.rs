@@ -1,0 +1,413 @@
+//! What a match hands back: the per-vertex correspondence checked for folds in space,
+//! a map of any surface point of A, a serializable report, and the match folder
+//! (`correspondence.npy/.csv`, `A_on_B.obj`, `deformation.npy`, `match.json`).
+//!
+//! φ is fold-free on the grid (min det Dφ > 0, [`super::deformation`]), but the
+//! induced map of A's *triangles* onto B — each vertex carried to a point of B, the
+//! triangle spanned by the three points — can still turn over where B bends more
+//! sharply than the grid resolves (lip corners, ear folds), or shrink to nothing
+//! where several vertices land on one point. [`check_folds`] finds those triangles in
+//! space, by the same test an independent referee applies: the image triangle's normal
+//! against B's normals at its corners (flip), and its area against A's (collapse).
+//! By default their vertices are reported unmatched rather than wrong
+//! ([`MatchOptions::drop_folds`](super::MatchOptions)).
+
+use std::path::Path;
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use super::solve::{MatchOptions, SurfaceMatch};
+use super::{LevelLog, MatchError};
+use crate::fsutil::write_atomically;
+use crate::mesh::{PointLocator, SurfacePoint, TriMesh};
+use crate::raster::npy::save_npy;
+
+/// Triangles of A whose image on B turns over or collapses.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct FoldCheck {
+    /// Triangles of A with all three vertices matched (before dropping).
+    pub matched_triangles: usize,
+    /// Image normal opposite to B's normals at the three points.
+    pub flipped: Vec<u32>,
+    /// Image area below [`COLLAPSE_RATIO`] of A's area (scaled by area B / area A).
+    pub collapsed: Vec<u32>,
+}
+
+/// An image triangle smaller than this fraction of its (area-scaled) source collapses.
+pub const COLLAPSE_RATIO: f64 = 0.01;
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn cross(u: [f64; 3], v: [f64; 3]) -> [f64; 3] {
+    [
+        u[1] * v[2] - u[2] * v[1],
+        u[2] * v[0] - u[0] * v[2],
+        u[0] * v[1] - u[1] * v[0],
+    ]
+}
+
+fn norm(u: [f64; 3]) -> f64 {
+    (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt()
+}
+
+/// Flipped and collapsed image triangles of A on B under `correspondence` (one entry
+/// per vertex of A). The image of triangle `(i, j, k)` is the triangle through the
+/// three matched points `p_i, p_j, p_k` of B; with `n = (p_j − p_i) × (p_k − p_i)` it
+/// is *collapsed* when `|n|/2 < COLLAPSE_RATIO · area_A(t) · area(B)/area(A)` and
+/// otherwise *flipped* when `n · (N_B(t_i) + N_B(t_j) + N_B(t_k)) < 0`, `N_B(t)` the
+/// unit normal of the triangle of B that hosts each point.
+pub fn check_folds(a: &TriMesh, b: &TriMesh, correspondence: &[Option<SurfacePoint>]) -> FoldCheck {
+    let ratio = b.area() / a.area();
+    let normal_b = |t: u32| {
+        let [p, q, r] = b.triangles[t as usize].map(|i| b.positions[i as usize]);
+        let n = cross(sub(q, p), sub(r, p));
+        let l = norm(n);
+        if l > 0.0 { n.map(|c| c / l) } else { n }
+    };
+    let results: Vec<(u32, u8)> = a
+        .triangles
+        .par_iter()
+        .enumerate()
+        .filter_map(|(t, tri)| {
+            let pts = tri.map(|v| correspondence.get(v as usize).copied().flatten());
+            let [Some(p0), Some(p1), Some(p2)] = pts else {
+                return None;
+            };
+            let x = [p0, p1, p2].map(|s| s.position(&b.positions, &b.triangles));
+            let n = cross(sub(x[1], x[0]), sub(x[2], x[0]));
+            let [u, v, w] = tri.map(|i| a.positions[i as usize]);
+            let area_a = 0.5 * norm(cross(sub(v, u), sub(w, u)));
+            if 0.5 * norm(n) < COLLAPSE_RATIO * area_a * ratio {
+                return Some((t as u32, 2));
+            }
+            let reference = [p0, p1, p2]
+                .map(|s| normal_b(s.triangle))
+                .into_iter()
+                .fold([0.0; 3], |s, m| [s[0] + m[0], s[1] + m[1], s[2] + m[2]]);
+            let d = n[0] * reference[0] + n[1] * reference[1] + n[2] * reference[2];
+            Some((t as u32, if d < 0.0 { 1 } else { 0 }))
+        })
+        .collect();
+    FoldCheck {
+        matched_triangles: results.len(),
+        flipped: results.iter().filter(|r| r.1 == 1).map(|r| r.0).collect(),
+        collapsed: results.iter().filter(|r| r.1 == 2).map(|r| r.0).collect(),
+    }
+}
+
+/// Marks the vertices of the flipped and collapsed triangles unmatched; returns how
+/// many vertices were dropped. No fully matched triangle is then flipped or collapsed:
+/// the remaining ones keep their images.
+pub fn drop_folds(
+    a: &TriMesh,
+    folds: &FoldCheck,
+    correspondence: &mut [Option<SurfacePoint>],
+) -> usize {
+    let mut dropped = 0;
+    for &t in folds.flipped.iter().chain(&folds.collapsed) {
+        for v in a.triangles[t as usize] {
+            if correspondence[v as usize].take().is_some() {
+                dropped += 1;
+            }
+        }
+    }
+    dropped
+}
+
+/// Maps surface points of A onto B through a match (built once: a point locator over
+/// B's parameter domain).
+pub struct PointMap<'a> {
+    matched: &'a SurfaceMatch,
+    locator: PointLocator,
+    tolerance: f64,
+}
+
+impl<'a> PointMap<'a> {
+    pub fn new(matched: &'a SurfaceMatch) -> Result<Self, MatchError> {
+        let locator = PointLocator::new(&matched.b.uvs, &matched.b.triangles)
+            .map_err(|e| MatchError::Option(format!("locating points on B: {e}")))?;
+        let to_b = matched.b.images.transform;
+        let tolerance = matched.snap_cells / (matched.deformation.size - 1) as f64 / to_b.scale;
+        Ok(Self {
+            matched,
+            locator,
+            tolerance,
+        })
+    }
+
+    /// The counterpart on B of a point of A's parameter domain `uv` (A's UV units), or
+    /// `None` where φ carries it off B's surface. A point that φ puts within
+    /// [`MatchOptions::snap_cells`] grid cells of B's surface is snapped onto it.
+    pub fn map_uv(&self, uv: [f64; 2]) -> Option<SurfacePoint> {
+        let xi = self.matched.a.images.transform.to_domain(uv);
+        let target = self
+            .matched
+            .b
+            .images
+            .transform
+            .to_uv(self.matched.map_domain(xi));
+        self.locator.locate(target).or_else(|| {
+            self.locator
+                .nearest(target)
+                .filter(|n| n.distance <= self.tolerance)
+                .map(|n| n.point)
+        })
+    }
+
+    /// The counterpart on B of a point of A's surface (a triangle of A and barycentric
+    /// coordinates), or `None`.
+    pub fn map(&self, p: SurfacePoint) -> Option<SurfacePoint> {
+        let a = &self.matched.a;
+        if p.triangle as usize >= a.triangles.len() {
+            return None;
+        }
+        let [u, v, w] = a.triangles[p.triangle as usize].map(|i| a.uvs[i as usize]);
+        let b = p.barycentric;
+        self.map_uv(std::array::from_fn(|c| {
+            b[0] * u[c] + b[1] * v[c] + b[2] * w[c]
+        }))
+    }
+}
+
+/// One level of the solve, for reports.
+#[derive(Clone, Debug, Serialize)]
+pub struct LevelSummary {
+    pub level: usize,
+    pub size: usize,
+    pub epsilon: f64,
+    pub iterations: usize,
+    pub evaluations: usize,
+    pub stop: super::StopReason,
+    pub energy_start: super::EnergyTerms,
+    pub energy_end: super::EnergyTerms,
+    pub seconds: f64,
+}
+
+impl From<&LevelLog> for LevelSummary {
+    fn from(l: &LevelLog) -> Self {
+        Self {
+            level: l.level,
+            size: l.size,
+            epsilon: l.epsilon,
+            iterations: l.iterations,
+            evaluations: l.evaluations,
+            stop: l.stop,
+            energy_start: l.start,
+            energy_end: l.end,
+            seconds: l.seconds,
+        }
+    }
+}
+
+/// Everything `match.json` says about a match.
+#[derive(Clone, Debug, Serialize)]
+pub struct MatchReport {
+    pub vertices_a: usize,
+    pub vertices_b: usize,
+    /// Vertices of A with a counterpart on B (after dropping folds).
+    pub matched_vertices_a: usize,
+    pub matched_fraction_a: f64,
+    /// Area of B covered by the images of A's fully matched triangles, as a fraction of
+    /// B's area (capped at 1; φ is injective, so the images barely overlap).
+    pub covered_fraction_b: f64,
+    pub holes_filled_a: usize,
+    pub holes_filled_b: usize,
+    /// Minimum det Dφ over the grid's triangles (> 0: φ has no fold).
+    pub min_det: f64,
+    /// Image triangles that turned over or collapsed in space, before dropping.
+    pub flipped_triangles: usize,
+    pub collapsed_triangles: usize,
+    /// Vertices reported unmatched because a triangle around them folded.
+    pub dropped_vertices: usize,
+    pub alignment: super::AlignmentReport,
+    /// The rigid motion (with scale) of the position term at the end, A's length units
+    /// to B's (both in the shared unit ℓ).
+    pub similarity: super::Similarity3,
+    pub length_unit: f64,
+    pub grid_size: usize,
+    pub levels: Vec<LevelSummary>,
+    pub iterations: usize,
+    pub energy: f64,
+    pub seconds_flatten: f64,
+    pub seconds_images: f64,
+    pub seconds_solve: f64,
+    pub options: MatchOptions,
+}
+
+impl SurfaceMatch {
+    /// The per-vertex correspondence with the fold check applied per `options`
+    /// (vertices of folded image triangles unmatched when `drop_folds`).
+    pub fn checked_correspondence(
+        &self,
+        mesh_a: &TriMesh,
+        mesh_b: &TriMesh,
+        drop: bool,
+    ) -> Result<(Vec<Option<SurfacePoint>>, FoldCheck, usize), MatchError> {
+        let mut corr = self.correspondence()?;
+        let folds = check_folds(mesh_a, mesh_b, &corr);
+        let dropped = if drop {
+            drop_folds(mesh_a, &folds, &mut corr)
+        } else {
+            0
+        };
+        Ok((corr, folds, dropped))
+    }
+
+    /// The report of `match.json` for a correspondence from
+    /// [`SurfaceMatch::checked_correspondence`].
+    pub fn report(
+        &self,
+        correspondence: &[Option<SurfacePoint>],
+        folds: &FoldCheck,
+        dropped: usize,
+        options: &MatchOptions,
+    ) -> MatchReport {
+        let matched = correspondence.iter().filter(|p| p.is_some()).count();
+        let mut covered = 0.0;
+        let mut area_b = 0.0;
+        for t in &self.b.triangles {
+            let [p, q, r] = t.map(|i| self.b.positions[i as usize]);
+            area_b += 0.5 * norm(cross(sub(q, p), sub(r, p)));
+        }
+        for t in &self.a.triangles {
+            let pts = t.map(|v| correspondence[v as usize]);
+            if let [Some(p), Some(q), Some(r)] = pts {
+                let [p, q, r] = [p, q, r].map(|s| s.position(&self.b.positions, &self.b.triangles));
+                covered += 0.5 * norm(cross(sub(q, p), sub(r, p)));
+            }
+        }
+        let levels: Vec<LevelSummary> = self.levels.iter().map(LevelSummary::from).collect();
+        MatchReport {
+            vertices_a: correspondence.len(),
+            vertices_b: self.b.positions.len(),
+            matched_vertices_a: matched,
+            matched_fraction_a: matched as f64 / correspondence.len().max(1) as f64,
+            covered_fraction_b: (covered / area_b.max(f64::MIN_POSITIVE)).min(1.0),
+            holes_filled_a: self.a.filled_holes,
+            holes_filled_b: self.b.filled_holes,
+            min_det: self.min_det,
+            flipped_triangles: folds.flipped.len(),
+            collapsed_triangles: folds.collapsed.len(),
+            dropped_vertices: dropped,
+            alignment: self.alignment.clone(),
+            similarity: self.similarity,
+            length_unit: self.a.length_unit,
+            grid_size: self.deformation.size,
+            iterations: levels.iter().map(|l| l.iterations).sum(),
+            energy: levels.last().map_or(f64::NAN, |l| l.energy_end.total),
+            levels,
+            seconds_flatten: self.a.flatten_time + self.b.flatten_time,
+            seconds_images: self.a.time_images + self.b.time_images,
+            seconds_solve: self.seconds_solve,
+            options: options.clone(),
+        }
+    }
+}
+
+/// The correspondence as rows `[triangle of B, b0, b1, b2]` (triangle −1 and zeros
+/// where unmatched), row-major (n_A, 4).
+pub fn correspondence_rows(correspondence: &[Option<SurfacePoint>]) -> Vec<f64> {
+    correspondence
+        .iter()
+        .flat_map(|p| match p {
+            Some(s) => [
+                s.triangle as f64,
+                s.barycentric[0],
+                s.barycentric[1],
+                s.barycentric[2],
+            ],
+            None => [-1.0, 0.0, 0.0, 0.0],
+        })
+        .collect()
+}
+
+/// A's triangles at their matched positions on B: every vertex of A at its point on B
+/// (unmatched vertices at their position moved by the final similarity, so the file
+/// keeps A's numbering), triangles with an unmatched vertex left out.
+pub fn a_on_b(
+    mesh_a: &TriMesh,
+    mesh_b: &TriMesh,
+    matched: &SurfaceMatch,
+    correspondence: &[Option<SurfacePoint>],
+) -> TriMesh {
+    let unit_a = matched.a.length_unit;
+    let unit_b = matched.b.length_unit;
+    let positions = correspondence
+        .iter()
+        .zip(&mesh_a.positions)
+        .map(|(p, x)| match p {
+            Some(s) => s.position(&mesh_b.positions, &mesh_b.triangles),
+            None => matched
+                .similarity
+                .apply(x.map(|c| c / unit_a))
+                .map(|c| c * unit_b),
+        })
+        .collect();
+    let triangles = mesh_a
+        .triangles
+        .iter()
+        .filter(|t| t.iter().all(|&v| correspondence[v as usize].is_some()))
+        .copied()
+        .collect();
+    TriMesh::new(positions, triangles)
+}
+
+/// Writes the match folder: `correspondence.npy` (float64 (n_A, 4)),
+/// `correspondence.csv` (`vertex,triangle,b0,b1,b2`), `A_on_B.obj`, `deformation.npy`
+/// (float64 (n, n, 2): φ at the grid nodes, in ω_B) and `match.json` (the report).
+/// Every file is written to a temporary name and renamed into place; the folder is
+/// created if missing. Returns the paths written.
+pub fn write_match_folder(
+    dir: &Path,
+    mesh_a: &TriMesh,
+    mesh_b: &TriMesh,
+    matched: &SurfaceMatch,
+    correspondence: &[Option<SurfacePoint>],
+    report: &MatchReport,
+) -> Result<Vec<std::path::PathBuf>, MatchError> {
+    let io = |what: &str, e: &dyn std::fmt::Display| MatchError::Output(format!("{what}: {e}"));
+    std::fs::create_dir_all(dir)
+        .map_err(|e| io(&format!("cannot create {}", dir.display()), &e))?;
+    // Everything is computed before the first file is written.
+    let rows = correspondence_rows(correspondence);
+    let n = matched.deformation.size;
+    let phi: Vec<f64> = matched.grid_positions().iter().flat_map(|p| *p).collect();
+    let placed = a_on_b(mesh_a, mesh_b, matched, correspondence);
+    let json =
+        serde_json::to_string_pretty(report).map_err(|e| io("cannot encode the report", &e))?;
+    let mut csv = String::with_capacity(correspondence.len() * 48);
+    csv.push_str("vertex,triangle,b0,b1,b2\n");
+    for (v, r) in rows.chunks_exact(4).enumerate() {
+        csv.push_str(&format!("{v},{},{},{},{}\n", r[0] as i64, r[1], r[2], r[3]));
+    }
+    let mut written = vec![];
+    let mut file = |name: &str, f: &mut dyn FnMut(&Path) -> Result<(), MatchError>| {
+        let path = dir.join(name);
+        f(&path)?;
+        written.push(path);
+        Ok::<(), MatchError>(())
+    };
+    file("correspondence.npy", &mut |p| {
+        save_npy(p, &[correspondence.len(), 4], &rows)
+            .map_err(|e| io(&format!("cannot write {}", p.display()), &e))
+    })?;
+    file("correspondence.csv", &mut |p| {
+        write_atomically(p, |w| w.write_all(csv.as_bytes()))
+            .map_err(|e| io(&format!("cannot write {}", p.display()), &e))
+    })?;
+    file("A_on_B.obj", &mut |p| {
+        crate::mesh::io::write_obj(p, &placed, None)
+            .map_err(|e| io(&format!("cannot write {}", p.display()), &e))
+    })?;
+    file("deformation.npy", &mut |p| {
+        save_npy(p, &[n, n, 2], &phi).map_err(|e| io(&format!("cannot write {}", p.display()), &e))
+    })?;
+    file("match.json", &mut |p| {
+        write_atomically(p, |w| w.write_all(json.as_bytes()))
+            .map_err(|e| io(&format!("cannot write {}", p.display()), &e))
+    })?;
+    Ok(written)
+}

@@ -1,0 +1,432 @@
+//! Rigid alignment of two surfaces in space by trimmed point-to-plane ICP (iterative
+//! closest points with the worst pairs dropped, Chetverikov et al. 2002; distances
+//! measured along B's normals, Chen & Medioni 1991, so that a surface slides onto the
+//! other instead of snapping vertex to vertex), started from the 24
+//! rotations of the cube's symmetry group about the centroids (every rotation is within
+//! 62.8° of one of them), from the four rotations that align the principal axes, and
+//! from the caller's candidates.
+//!
+//! Used by the matcher's automatic alignment ([`super::solve`]): the rigid motion
+//! pairs A's vertices with their closest vertices of B, which gives the similarity of
+//! the parameter domains. Trimming (the best [`KEEP`] of the pairs) lets a partial
+//! overlap align without its unmatched rim dragging it. Cost: `O(starts · iterations ·
+//! samples · log n_B)` with a k-d tree over B's vertices (`kiddo`).
+
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use rayon::prelude::*;
+
+use super::energy::Similarity3;
+use crate::linsolve::dense::symmetric_eigen;
+
+/// Fraction of the pairs (closest first) that each ICP step fits.
+pub const KEEP: f64 = 0.7;
+
+/// The best rigid motion found and its trimmed root-mean-square distance.
+#[derive(Clone, Copy, Debug)]
+pub struct RigidAlignment {
+    pub motion: Similarity3,
+    pub rms: f64,
+}
+
+/// Closest vertices of B by k-d tree.
+pub struct ClosestPoints {
+    tree: ImmutableKdTree<f64, 3>,
+}
+
+impl ClosestPoints {
+    pub fn new(points: &[[f64; 3]]) -> Self {
+        Self {
+            tree: ImmutableKdTree::new_from_slice(points),
+        }
+    }
+
+    /// Index of and squared distance to the closest point.
+    #[inline]
+    pub fn closest(&self, p: &[f64; 3]) -> (usize, f64) {
+        let nn = self.tree.nearest_one::<SquaredEuclidean>(p);
+        (nn.item as usize, nn.distance)
+    }
+}
+
+/// The 24 rotations of the cube (signed permutation matrices with determinant +1).
+fn cube_rotations() -> Vec<[[f64; 3]; 3]> {
+    let perms = [
+        [0, 1, 2],
+        [0, 2, 1],
+        [1, 0, 2],
+        [1, 2, 0],
+        [2, 0, 1],
+        [2, 1, 0],
+    ];
+    let mut out = vec![];
+    for p in perms {
+        for signs in 0..8 {
+            let mut m = [[0.0; 3]; 3];
+            for r in 0..3 {
+                m[r][p[r]] = if signs >> r & 1 == 1 { -1.0 } else { 1.0 };
+            }
+            let det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+                - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+                + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+            if det > 0.0 {
+                out.push(m);
+            }
+        }
+    }
+    out
+}
+
+/// The four rotations that carry A's principal axes (of the point covariance) onto
+/// B's, with the signs that keep them proper: the classic starting poses for shapes of
+/// similar extent, whatever their relative orientation.
+fn principal_axes_starts(
+    a: &[[f64; 3]],
+    b: &[[f64; 3]],
+    ca: [f64; 3],
+    cb: [f64; 3],
+) -> Vec<Similarity3> {
+    let axes = |p: &[[f64; 3]], c: [f64; 3]| {
+        let mut m = [[0.0; 3]; 3];
+        for x in p {
+            for i in 0..3 {
+                for j in 0..3 {
+                    m[i][j] += (x[i] - c[i]) * (x[j] - c[j]);
+                }
+            }
+        }
+        symmetric_eigen(&m).map(|(_, v)| v)
+    };
+    let (Some(ea), Some(eb)) = (axes(a, ca), axes(b, cb)) else {
+        return vec![];
+    };
+    let mut out = vec![];
+    for (s0, s1) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
+        // Columns: B's axes (third = cross product, keeping a proper rotation) times
+        // A's axes transposed.
+        let signs = [s0, s1];
+        let mut fa = [[0.0; 3]; 3];
+        let mut fb = [[0.0; 3]; 3];
+        for k in 0..2 {
+            for i in 0..3 {
+                fa[k][i] = ea[k + 1][i];
+                fb[k][i] = signs[k] * eb[k + 1][i];
+            }
+        }
+        let cross = |u: [f64; 3], v: [f64; 3]| {
+            [
+                u[1] * v[2] - u[2] * v[1],
+                u[2] * v[0] - u[0] * v[2],
+                u[0] * v[1] - u[1] * v[0],
+            ]
+        };
+        fa[2] = cross(fa[0], fa[1]);
+        fb[2] = cross(fb[0], fb[1]);
+        // R = Σ_k fb_k fa_kᵀ maps A's frame onto B's.
+        let r: [[f64; 3]; 3] = std::array::from_fn(|i| {
+            std::array::from_fn(|j| (0..3).map(|k| fb[k][i] * fa[k][j]).sum())
+        });
+        let rc: [f64; 3] =
+            std::array::from_fn(|i| r[i][0] * ca[0] + r[i][1] * ca[1] + r[i][2] * ca[2]);
+        out.push(Similarity3 {
+            matrix: r,
+            translation: std::array::from_fn(|i| cb[i] - rc[i]),
+        });
+    }
+    out
+}
+
+/// `count` points of `points`, evenly spread over the index range (deterministic).
+fn subsample(points: &[[f64; 3]], count: usize) -> Vec<[f64; 3]> {
+    let step = (points.len() as f64 / count as f64).max(1.0);
+    (0..count.min(points.len()))
+        .map(|i| points[((i as f64 * step) as usize).min(points.len() - 1)])
+        .collect()
+}
+
+fn centroid(points: &[[f64; 3]]) -> [f64; 3] {
+    let n = points.len().max(1) as f64;
+    let s = points
+        .iter()
+        .fold([0.0; 3], |a, p| [a[0] + p[0], a[1] + p[1], a[2] + p[2]]);
+    s.map(|v| v / n)
+}
+
+/// Area-weighted vertex normals (unit; zero for isolated vertices).
+pub fn vertex_normals(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> Vec<[f64; 3]> {
+    let mut n = vec![[0.0; 3]; positions.len()];
+    for t in triangles {
+        let [a, b, c] = t.map(|i| positions[i as usize]);
+        let (u, v) = (sub(b, a), sub(c, a));
+        let cr = cross(u, v);
+        for &i in t {
+            for k in 0..3 {
+                n[i as usize][k] += cr[k];
+            }
+        }
+    }
+    for x in &mut n {
+        let l = dot(*x, *x).sqrt();
+        if l > 0.0 {
+            *x = x.map(|c| c / l);
+        }
+    }
+    n
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn cross(u: [f64; 3], v: [f64; 3]) -> [f64; 3] {
+    [
+        u[1] * v[2] - u[2] * v[1],
+        u[2] * v[0] - u[0] * v[2],
+        u[0] * v[1] - u[1] * v[0],
+    ]
+}
+
+/// One linearized point-to-plane step (Chen & Medioni 1991, Low 2004): with the
+/// pairs' current images `p`, targets `q` and target normals `n`, the small motion
+/// `p ↦ p + ω × (p − c) + t` (c the centroid of the images) minimizing
+/// `Σ ((p + ω × (p − c) + t − q) · n)²`, solved from the 6 × 6 normal equations by
+/// eigen-decomposition with directions of (near) zero curvature left alone — the
+/// motions along which the surface slides onto itself. Returned as the rigid motion
+/// with the exact rotation of angle `|ω|` about `ω`.
+fn point_to_plane_step(p: &[[f64; 3]], q: &[[f64; 3]], n: &[[f64; 3]]) -> Option<Similarity3> {
+    let c = centroid(p);
+    let mut a = [[0.0; 6]; 6];
+    let mut b = [0.0; 6];
+    for i in 0..p.len() {
+        let pc = sub(p[i], c);
+        let pn = cross(pc, n[i]);
+        let j = [pn[0], pn[1], pn[2], n[i][0], n[i][1], n[i][2]];
+        let r = dot(sub(p[i], q[i]), n[i]);
+        for u in 0..6 {
+            b[u] -= j[u] * r;
+            for v in 0..6 {
+                a[u][v] += j[u] * j[v];
+            }
+        }
+    }
+    let (values, vectors) = symmetric_eigen(&a)?;
+    let largest = values.iter().fold(0.0f64, |m, &v| m.max(v));
+    if largest <= 0.0 {
+        return None;
+    }
+    let mut x = [0.0; 6];
+    for k in 0..6 {
+        if values[k] > 1e-9 * largest {
+            let coefficient = (0..6).map(|u| vectors[k][u] * b[u]).sum::<f64>() / values[k];
+            for u in 0..6 {
+                x[u] += coefficient * vectors[k][u];
+            }
+        }
+    }
+    let omega = [x[0], x[1], x[2]];
+    let angle = dot(omega, omega).sqrt();
+    let r = if angle > 0.0 {
+        let axis = omega.map(|v| v / angle);
+        let (s, co) = angle.sin_cos();
+        let k = |i: usize, j: usize| axis[i] * axis[j] * (1.0 - co);
+        [
+            [co + k(0, 0), k(0, 1) - axis[2] * s, k(0, 2) + axis[1] * s],
+            [k(1, 0) + axis[2] * s, co + k(1, 1), k(1, 2) - axis[0] * s],
+            [k(2, 0) - axis[1] * s, k(2, 1) + axis[0] * s, co + k(2, 2)],
+        ]
+    } else {
+        [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+    };
+    // p ↦ R (p − c) + c + t.
+    let rc: [f64; 3] = std::array::from_fn(|i| dot(r[i], c));
+    Some(Similarity3 {
+        matrix: r,
+        translation: std::array::from_fn(|i| c[i] + x[3 + i] - rc[i]),
+    })
+}
+
+/// Trimmed point-to-plane ICP from `start`: pairs each point of A (moved) with its
+/// closest vertex of B, keeps the closest [`KEEP`] of the pairs and takes one
+/// [`point_to_plane_step`] against B's vertex normals `normals`. Returns the motion
+/// and the trimmed root-mean-square point-to-vertex distance.
+fn icp(
+    a: &[[f64; 3]],
+    b: &[[f64; 3]],
+    normals: &[[f64; 3]],
+    closest: &ClosestPoints,
+    start: Similarity3,
+    iterations: usize,
+) -> RigidAlignment {
+    let mut motion = start;
+    let mut pairs: Vec<(f64, usize, usize)> = Vec::with_capacity(a.len());
+    let (mut p, mut q, mut n) = (vec![], vec![], vec![]);
+    let mut rms = f64::INFINITY;
+    for _ in 0..=iterations {
+        pairs.clear();
+        for (i, x) in a.iter().enumerate() {
+            let (j, d2) = closest.closest(&motion.apply(*x));
+            pairs.push((d2, i, j));
+        }
+        let keep = ((KEEP * pairs.len() as f64) as usize).clamp(3, pairs.len());
+        pairs.select_nth_unstable_by(keep - 1, |x, y| x.0.total_cmp(&y.0));
+        let kept = &pairs[..keep];
+        rms = (kept.iter().map(|x| x.0).sum::<f64>() / keep as f64).sqrt();
+        p.clear();
+        q.clear();
+        n.clear();
+        for &(_, i, j) in kept {
+            p.push(motion.apply(a[i]));
+            q.push(b[j]);
+            n.push(normals[j]);
+        }
+        let Some(step) = point_to_plane_step(&p, &q, &n) else {
+            break;
+        };
+        let next = Similarity3 {
+            matrix: std::array::from_fn(|i| {
+                std::array::from_fn(|j| {
+                    (0..3)
+                        .map(|k| step.matrix[i][k] * motion.matrix[k][j])
+                        .sum()
+                })
+            }),
+            translation: step.apply(motion.translation),
+        };
+        // Size of the step: how far it moves the kept points at most (rotation part
+        // bounded by the spread of the points).
+        let moved = p
+            .iter()
+            .map(|x| {
+                let y = step.apply(*x);
+                dot(sub(y, *x), sub(y, *x))
+            })
+            .fold(0.0f64, f64::max)
+            .sqrt();
+        motion = next;
+        if moved <= 1e-9 * (1.0 + rms) {
+            break;
+        }
+    }
+    RigidAlignment { motion, rms }
+}
+
+/// The rigid motion of ℝ³ that best puts surface A (points `a`) onto surface B
+/// (points `b`): trimmed ICP on a subsample from 24 rotations about the centroids and
+/// from the caller's `starts`; the best is refined on more points.
+pub fn align_rigidly(
+    a: &[[f64; 3]],
+    b: &[[f64; 3]],
+    normals: &[[f64; 3]],
+    starts: &[Similarity3],
+) -> Option<RigidAlignment> {
+    if a.len() < 3 || b.len() < 3 {
+        return None;
+    }
+    let closest = ClosestPoints::new(b);
+    let (ca, cb) = (centroid(a), centroid(b));
+    let coarse = subsample(a, 400);
+    let mut all: Vec<Similarity3> = cube_rotations()
+        .into_iter()
+        .map(|r| {
+            let rc: [f64; 3] =
+                std::array::from_fn(|i| r[i][0] * ca[0] + r[i][1] * ca[1] + r[i][2] * ca[2]);
+            Similarity3 {
+                matrix: r,
+                translation: std::array::from_fn(|i| cb[i] - rc[i]),
+            }
+        })
+        .collect();
+    all.extend(principal_axes_starts(a, b, ca, cb));
+    all.extend_from_slice(starts);
+    let best = all
+        .into_par_iter()
+        .map(|start| icp(&coarse, b, normals, &closest, start, 40))
+        .min_by(|x, y| x.rms.total_cmp(&y.rms))?;
+    let fine = subsample(a, 3000);
+    Some(icp(&fine, b, normals, &closest, best.motion, 100))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::generate::bumpy_disc;
+
+    fn rotation(axis: [f64; 3], angle: f64) -> [[f64; 3]; 3] {
+        let n = (axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]).sqrt();
+        let a = axis.map(|v| v / n);
+        let (s, c) = angle.sin_cos();
+        let k = |i: usize, j: usize| a[i] * a[j] * (1.0 - c);
+        [
+            [c + k(0, 0), k(0, 1) - a[2] * s, k(0, 2) + a[1] * s],
+            [k(1, 0) + a[2] * s, c + k(1, 1), k(1, 2) - a[0] * s],
+            [k(2, 0) - a[1] * s, k(2, 1) + a[0] * s, c + k(2, 2)],
+        ]
+    }
+
+    /// An asymmetric height field over a disc with one bump (a "nose").
+    fn surface() -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+        let mut mesh = bumpy_disc(24, 0.0);
+        for p in &mut mesh.positions {
+            let (x, y) = (p[0], p[1]);
+            p[2] = 0.4 * x * x + 0.25 * x * y - 0.3 * y * y * y
+                + 0.2 * (3.0 * x + 1.0).sin()
+                + 0.6 * (-((x - 0.2).powi(2) + (y + 0.1).powi(2)) / 0.05).exp();
+        }
+        (mesh.positions, mesh.triangles)
+    }
+
+    /// ICP from the truth stays there; the search finds a pose whose image of every
+    /// point of A lies within `tolerance` of the true image.
+    fn check(a: &[[f64; 3]], b: &[[f64; 3]], bt: &[[u32; 3]], truth: &Similarity3, tolerance: f64) {
+        let closest = ClosestPoints::new(b);
+        let normals = vertex_normals(b, bt);
+        assert!(icp(a, b, &normals, &closest, *truth, 10).rms < 1e-9);
+        let found = align_rigidly(a, b, &normals, &[]).unwrap();
+        for p in a {
+            let (x, y) = (found.motion.apply(*p), truth.apply(*p));
+            let d = ((0..3).map(|c| (x[c] - y[c]).powi(2)).sum::<f64>()).sqrt();
+            assert!(d < tolerance, "{x:?} vs {y:?}");
+        }
+    }
+
+    #[test]
+    fn recovers_any_rotation_of_a_whole_copy() {
+        let truth = Similarity3 {
+            matrix: rotation([0.3, -0.5, 0.8], 100f64.to_radians()),
+            translation: [0.4, -1.0, 2.0],
+        };
+        let (a, triangles) = surface();
+        let b: Vec<[f64; 3]> = a.iter().map(|&p| truth.apply(p)).collect();
+        check(&a, &b, &triangles, &truth, 1e-5);
+    }
+
+    #[test]
+    fn recovers_the_pose_of_a_partial_copy() {
+        // A: a part of the surface (a partial overlap, as two crops of one scan).
+        let truth = Similarity3 {
+            matrix: rotation([0.3, -0.5, 0.8], 40f64.to_radians()),
+            translation: [0.4, -1.0, 2.0],
+        };
+        let (whole, triangles) = surface();
+        let b: Vec<[f64; 3]> = whole.iter().map(|&p| truth.apply(p)).collect();
+        let a: Vec<[f64; 3]> = whole.iter().copied().filter(|p| p[0] > -0.3).collect();
+        check(&a, &b, &triangles, &truth, 1e-5);
+    }
+
+    #[test]
+    fn the_cube_group_has_24_proper_rotations() {
+        let r = cube_rotations();
+        assert_eq!(r.len(), 24);
+        for m in &r {
+            for i in 0..3 {
+                for j in 0..3 {
+                    let dot: f64 = (0..3).map(|k| m[i][k] * m[j][k]).sum();
+                    assert_eq!(dot, if i == j { 1.0 } else { 0.0 });
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,260 @@
+//! Least-squares similarity fits: in the plane (the initial alignment of ω_A onto
+//! ω_B from paired points, NOTES §2b) and in space (the motion and scale under which
+//! the position term compares the two surfaces).
+
+use serde::Serialize;
+
+use super::energy::Similarity3;
+use crate::linsolve::dense::symmetric_eigen;
+
+/// A similarity of the plane, `p ↦ z·p + t` with `z = (c, s)` a complex factor
+/// (rotation by `atan2(s, c)`, scale `|z|`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Similarity2 {
+    pub z: [f64; 2],
+    pub t: [f64; 2],
+}
+
+impl Similarity2 {
+    pub fn identity() -> Self {
+        Self {
+            z: [1.0, 0.0],
+            t: [0.0, 0.0],
+        }
+    }
+
+    /// Rotation by `angle` and scaling by `scale` about `centre`, then moved so that
+    /// `centre` lands on `target`.
+    pub fn about(centre: [f64; 2], angle: f64, scale: f64, target: [f64; 2]) -> Self {
+        let z = [scale * angle.cos(), scale * angle.sin()];
+        let zc = mul(z, centre);
+        Self {
+            z,
+            t: [target[0] - zc[0], target[1] - zc[1]],
+        }
+    }
+
+    #[inline]
+    pub fn apply(&self, p: [f64; 2]) -> [f64; 2] {
+        let q = mul(self.z, p);
+        [q[0] + self.t[0], q[1] + self.t[1]]
+    }
+
+    pub fn angle(&self) -> f64 {
+        self.z[1].atan2(self.z[0])
+    }
+
+    pub fn scale(&self) -> f64 {
+        self.z[0].hypot(self.z[1])
+    }
+}
+
+#[inline]
+fn mul(z: [f64; 2], p: [f64; 2]) -> [f64; 2] {
+    [z[0] * p[0] - z[1] * p[1], z[0] * p[1] + z[1] * p[0]]
+}
+
+/// The similarity minimizing `Σ |S(pᵢ) − qᵢ|²` (closed form in complex arithmetic:
+/// `z = Σ conj(p̃ᵢ) q̃ᵢ / Σ |p̃ᵢ|²` for centred points). `None` with fewer than two
+/// distinct source points.
+pub fn fit_similarity_2d(p: &[[f64; 2]], q: &[[f64; 2]]) -> Option<Similarity2> {
+    let n = p.len().min(q.len());
+    if n < 2 {
+        return None;
+    }
+    let mean = |v: &[[f64; 2]]| {
+        let s = v[..n]
+            .iter()
+            .fold([0.0; 2], |a, x| [a[0] + x[0], a[1] + x[1]]);
+        [s[0] / n as f64, s[1] / n as f64]
+    };
+    let (pm, qm) = (mean(p), mean(q));
+    let (mut num, mut den) = ([0.0; 2], 0.0);
+    for k in 0..n {
+        let a = [p[k][0] - pm[0], p[k][1] - pm[1]];
+        let b = [q[k][0] - qm[0], q[k][1] - qm[1]];
+        // conj(a)·b
+        num[0] += a[0] * b[0] + a[1] * b[1];
+        num[1] += a[0] * b[1] - a[1] * b[0];
+        den += a[0] * a[0] + a[1] * a[1];
+    }
+    if den <= 1e-300 {
+        return None;
+    }
+    let z = [num[0] / den, num[1] / den];
+    let zp = mul(z, pm);
+    Some(Similarity2 {
+        z,
+        t: [qm[0] - zp[0], qm[1] - zp[1]],
+    })
+}
+
+/// The similarity `T(x) = s·R·x + t` minimizing `Σ wᵢ |T(pᵢ) − qᵢ|²` (Horn's closed
+/// form: the rotation is the unit quaternion of the largest eigenvalue of a 4 × 4
+/// symmetric matrix built from the weighted cross-covariance; then
+/// `s = Σ wᵢ q̃ᵢ·R p̃ᵢ / Σ wᵢ |p̃ᵢ|²`). With `allow_scale = false`, `s = 1` (a rigid
+/// motion). `None` when the weights vanish or the points are degenerate.
+pub fn fit_similarity_3d(
+    p: &[[f64; 3]],
+    q: &[[f64; 3]],
+    w: &[f64],
+    allow_scale: bool,
+) -> Option<Similarity3> {
+    let total: f64 = w.iter().sum();
+    if total.is_nan() || total <= 0.0 {
+        return None;
+    }
+    let mut pm = [0.0; 3];
+    let mut qm = [0.0; 3];
+    for k in 0..p.len() {
+        for c in 0..3 {
+            pm[c] += w[k] * p[k][c] / total;
+            qm[c] += w[k] * q[k][c] / total;
+        }
+    }
+    let mut s = [[0.0; 3]; 3];
+    let mut spp = 0.0;
+    for k in 0..p.len() {
+        if w[k] == 0.0 {
+            continue;
+        }
+        let a: [f64; 3] = std::array::from_fn(|c| p[k][c] - pm[c]);
+        let b: [f64; 3] = std::array::from_fn(|c| q[k][c] - qm[c]);
+        for r in 0..3 {
+            for c in 0..3 {
+                s[r][c] += w[k] * a[r] * b[c];
+            }
+            spp += w[k] * a[r] * a[r];
+        }
+    }
+    if spp.is_nan() || spp <= 0.0 {
+        return None;
+    }
+    let [[sxx, sxy, sxz], [syx, syy, syz], [szx, szy, szz]] = s;
+    let n = [
+        [sxx + syy + szz, syz - szy, szx - sxz, sxy - syx],
+        [syz - szy, sxx - syy - szz, sxy + syx, szx + sxz],
+        [szx - sxz, sxy + syx, -sxx + syy - szz, syz + szy],
+        [sxy - syx, szx + sxz, syz + szy, -sxx - syy + szz],
+    ];
+    let (_, vectors) = symmetric_eigen(&n)?;
+    let [q0, qx, qy, qz] = vectors[3];
+    let r = [
+        [
+            q0 * q0 + qx * qx - qy * qy - qz * qz,
+            2.0 * (qx * qy - q0 * qz),
+            2.0 * (qx * qz + q0 * qy),
+        ],
+        [
+            2.0 * (qx * qy + q0 * qz),
+            q0 * q0 - qx * qx + qy * qy - qz * qz,
+            2.0 * (qy * qz - q0 * qx),
+        ],
+        [
+            2.0 * (qx * qz - q0 * qy),
+            2.0 * (qy * qz + q0 * qx),
+            q0 * q0 - qx * qx - qy * qy + qz * qz,
+        ],
+    ];
+    let scale = if allow_scale {
+        // Σ w q̃·R p̃ = Σ_ab R_ab S_ba
+        let mut num = 0.0;
+        for a in 0..3 {
+            for b in 0..3 {
+                num += r[a][b] * s[b][a];
+            }
+        }
+        (num / spp).max(f64::MIN_POSITIVE)
+    } else {
+        1.0
+    };
+    let matrix = r.map(|row| row.map(|v| scale * v));
+    let mp: [f64; 3] =
+        std::array::from_fn(|a| matrix[a][0] * pm[0] + matrix[a][1] * pm[1] + matrix[a][2] * pm[2]);
+    Some(Similarity3 {
+        matrix,
+        translation: std::array::from_fn(|a| qm[a] - mp[a]),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testing::Rng;
+
+    #[test]
+    fn plane_similarity_is_recovered_from_exact_pairs() {
+        let truth = Similarity2::about([0.3, 0.4], 2.1, 0.7, [0.6, 0.2]);
+        let mut rng = Rng(5);
+        let p: Vec<[f64; 2]> = (0..7).map(|_| [rng.uniform(), rng.uniform()]).collect();
+        let q: Vec<[f64; 2]> = p.iter().map(|&x| truth.apply(x)).collect();
+        let fit = fit_similarity_2d(&p, &q).unwrap();
+        assert!((fit.angle() - 2.1).abs() < 1e-12 && (fit.scale() - 0.7).abs() < 1e-12);
+        for x in &p {
+            let (a, b) = (fit.apply(*x), truth.apply(*x));
+            assert!((a[0] - b[0]).abs() < 1e-12 && (a[1] - b[1]).abs() < 1e-12);
+        }
+        assert!(fit_similarity_2d(&p[..1], &q[..1]).is_none());
+        assert!(fit_similarity_2d(&[[1.0, 1.0]; 3], &q[..3]).is_none());
+    }
+
+    #[test]
+    fn space_similarity_is_recovered_and_is_optimal() {
+        // Rotation about an oblique axis by 1.3 rad, scale 1.4, a translation.
+        let axis = [0.48, -0.6, 0.64];
+        let (s, c) = 1.3f64.sin_cos();
+        let k = |i: usize, j: usize| axis[i] * axis[j] * (1.0 - c);
+        let r = [
+            [c + k(0, 0), k(0, 1) - axis[2] * s, k(0, 2) + axis[1] * s],
+            [k(1, 0) + axis[2] * s, c + k(1, 1), k(1, 2) - axis[0] * s],
+            [k(2, 0) - axis[1] * s, k(2, 1) + axis[0] * s, c + k(2, 2)],
+        ];
+        let truth = Similarity3 {
+            matrix: r.map(|row| row.map(|v| 1.4 * v)),
+            translation: [0.5, -2.0, 3.0],
+        };
+        let mut rng = Rng(9);
+        let p: Vec<[f64; 3]> = (0..50)
+            .map(|_| [rng.uniform(), rng.uniform(), rng.uniform()])
+            .collect();
+        let q: Vec<[f64; 3]> = p.iter().map(|&x| truth.apply(x)).collect();
+        let w: Vec<f64> = (0..50).map(|_| rng.range(0.5, 2.0)).collect();
+        let fit = fit_similarity_3d(&p, &q, &w, true).unwrap();
+        for x in &p {
+            let (a, b) = (fit.apply(*x), truth.apply(*x));
+            for c in 0..3 {
+                assert!((a[c] - b[c]).abs() < 1e-9, "{a:?} vs {b:?}");
+            }
+        }
+        // With noise the fit is a stationary point: perturbing it raises the residual.
+        let noisy: Vec<[f64; 3]> = q
+            .iter()
+            .map(|x| x.map(|v| v + rng.range(-0.05, 0.05)))
+            .collect();
+        let fit = fit_similarity_3d(&p, &noisy, &w, false).unwrap();
+        let cost = |t: &Similarity3| -> f64 {
+            p.iter()
+                .zip(&noisy)
+                .zip(&w)
+                .map(|((a, b), wi)| {
+                    let y = t.apply(*a);
+                    wi * (0..3).map(|c| (y[c] - b[c]).powi(2)).sum::<f64>()
+                })
+                .sum()
+        };
+        let base = cost(&fit);
+        for dt in [[1e-3, 0.0, 0.0], [0.0, -1e-3, 0.0], [0.0, 0.0, 1e-3]] {
+            let mut moved = fit;
+            for (t, d) in moved.translation.iter_mut().zip(dt) {
+                *t += d;
+            }
+            assert!(cost(&moved) > base);
+        }
+        // Rigid: the matrix is a rotation.
+        let m = fit.matrix;
+        let det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+        assert!((det - 1.0).abs() < 1e-9);
+    }
+}

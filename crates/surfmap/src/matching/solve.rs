@@ -1,0 +1,717 @@
+//! The multiscale matching driver (thesis §3.2.4, Fig. 3.7) with the initial
+//! alignment of the two parameter domains.
+//!
+//! Levels `k = k₀ … K` live on `(2^k + 1)²` grids; level `k` uses images filtered with
+//! `σ_k = 2^−k` (the finest unfiltered) and the cut-off width `ε_k = 2^{1−k}` (thesis:
+//! `ε = 2σ_k`; on the finest level, where `σ = 0`, two grid cells). Each level is
+//! minimized by [`super::ncg`] and prolongated (exactly, as a P1 map) to the next.
+//!
+//! Alignment: both flattenings preserve orientation, so ω_A and ω_B differ by a
+//! similarity of the plane. With paired landmarks or features it is their
+//! least-squares fit; otherwise rotations of ω_A about its centroid are tried at the
+//! coarse levels and the lowest energy (per matched area) is kept.
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use super::MatchError;
+use super::align::AlignmentScore;
+use super::deformation::{Deformation, node};
+use super::energy::{B_SD, B_X, Betas, LevelEnergy, Similarity3, chi, robust};
+use super::ncg::{LevelLog, NcgSettings, minimize};
+use super::precondition::SobolevPreconditioner;
+use super::rigid::{ClosestPoints, align_rigidly, vertex_normals};
+use super::similarity::{Similarity2, fit_similarity_2d, fit_similarity_3d};
+use super::surface::MatchSurface;
+use crate::mesh::{SurfacePoint, TriMesh};
+use crate::raster::{FeatureCurve, FeatureFile};
+
+/// How the initial similarity between ω_A and ω_B is found.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Align {
+    /// From the features/landmarks when given, else from the surfaces' shapes
+    /// ([`Align::Shape`]).
+    #[default]
+    Auto,
+    /// From the features/landmarks (an error without them).
+    Features,
+    /// From the surfaces' 3D shapes even when features are given: a rigid alignment
+    /// in space by trimmed ICP ([`super::rigid`]) pairs the vertices, and their domain
+    /// positions give the similarity of the planes.
+    Shape,
+    /// The domains as placed in ω (the thesis's "rough alignment").
+    None,
+}
+
+/// Paired landmark points: `a[i]` on A corresponds to `b[i]` on B.
+#[derive(Clone, Debug, PartialEq, serde::Deserialize, Serialize)]
+pub struct Landmarks {
+    pub names: Vec<String>,
+    #[serde(rename = "A")]
+    pub a: Vec<u32>,
+    #[serde(rename = "B")]
+    pub b: Vec<u32>,
+}
+
+/// Optional user guidance, paired by name between A and B.
+#[derive(Clone, Debug, Default)]
+pub struct Guidance {
+    pub landmarks: Option<Landmarks>,
+    pub features_a: Option<FeatureFile>,
+    pub features_b: Option<FeatureFile>,
+}
+
+/// Options of [`match_surfaces`].
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct MatchOptions {
+    /// Finest grid, `2^K + 1` nodes per side.
+    pub size: usize,
+    /// Coarsest level `k₀` (grid `2^k₀ + 1`). Default 6 (65²): once the surfaces are
+    /// aligned in space ([`Align::Shape`]), the coarser levels (σ ≥ 1/16 of the domain)
+    /// only let the blurred energy drag φ away from a good start — measured on the
+    /// ICT pairs, starting at level 3 lost 10–25 points of the fraction within 0.05
+    /// on every track but the partial one (BENCHMARKS.md, "Matching").
+    pub coarsest_level: usize,
+    pub betas: Betas,
+    /// `(αl, αa)` of the regularization density (2.8).
+    pub alpha: (f64, f64),
+    /// Factor of B's metric far outside ω_B (thesis §2.2.5: a "softer" material).
+    pub soft: f64,
+    pub ncg: NcgSettings,
+    pub align: Align,
+    /// Rotations tried by the alignment search.
+    pub align_rotations: usize,
+    /// Fill holes (eyes, mouth) for the flattenings.
+    pub fill_holes: bool,
+    /// Pair the rims of filled holes and match them as features.
+    pub hole_features: HoleFeatures,
+    /// Let the position term's similarity scale (else a rigid motion).
+    pub allow_scale: bool,
+    /// Cut-off width (ω units) of the position term around ω_B: B's harmonically
+    /// extended positions keep pulling A's rim into place up to this far outside.
+    pub position_band: f64,
+    /// Vertices of A mapped within this many finest-grid cells of B's surface are
+    /// snapped onto it ([`SurfaceMatch::correspondence`]).
+    pub snap_cells: f64,
+    /// Width (finest-grid cells) of the Gaussian applied to the mean curvature before
+    /// the pyramid (0: the thesis's unfiltered finest level).
+    pub curvature_sigma: f64,
+    /// Scale τ (ℓ units) of the position term's robust penalty: residuals beyond it
+    /// stop pulling (0: plain squares).
+    pub position_scale: f64,
+    /// Sobolev preconditioner width in grid cells of each level (`λ = (w·h_k)²`);
+    /// 0: plain L² gradients, as the thesis.
+    pub sobolev_cells: f64,
+    /// Report the vertices of image triangles that turn over or collapse in space as
+    /// unmatched rather than wrong ([`super::output::check_folds`]).
+    pub drop_folds: bool,
+}
+
+impl Default for MatchOptions {
+    fn default() -> Self {
+        Self {
+            size: 257,
+            coarsest_level: 6,
+            betas: Betas {
+                bend: 1.0,
+                reg: 0.01,
+                features: 5.0,
+                position: 1000.0,
+                uncovered: 0.0,
+            },
+            alpha: (0.5, 0.5),
+            soft: 0.1,
+            ncg: NcgSettings::default(),
+            align: Align::Auto,
+            align_rotations: 24,
+            fill_holes: true,
+            hole_features: HoleFeatures::Auto,
+            allow_scale: true,
+            sobolev_cells: 4.0,
+            position_band: 0.0,
+            curvature_sigma: 0.0,
+            snap_cells: SNAP_CELLS,
+            position_scale: 0.0,
+            drop_folds: true,
+        }
+    }
+}
+
+/// The alignment that was used.
+#[derive(Clone, Debug, Serialize)]
+pub struct AlignmentReport {
+    pub method: String,
+    pub similarity: Similarity2,
+    /// Hole rims paired as features: `(hole of A, hole of B, distance of their centres
+    /// in ω after the alignment)`.
+    pub hole_pairs: Vec<(usize, usize, f64)>,
+}
+
+/// Whether the rims of filled holes (eyes, mouth) are paired across the surfaces and
+/// matched as labelled features.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum HoleFeatures {
+    /// When both surfaces have the same number of holes and the rims pair up
+    /// unambiguously after the alignment.
+    #[default]
+    Auto,
+    /// Always (an error when the hole counts differ or the rims do not pair up).
+    On,
+    Off,
+}
+
+/// Pairs the hole rims of A and B by the distance of their centres in ω after the
+/// alignment `s` (closest pairs first), adds each pair as a labelled closed feature
+/// curve `hole:k` to both surfaces, and returns the pairs.
+fn add_hole_features(
+    sa: &mut MatchSurface,
+    sb: &mut MatchSurface,
+    s: &Similarity2,
+    mode: HoleFeatures,
+) -> Result<Vec<(usize, usize, f64)>, MatchError> {
+    let (ra, rb) = (sa.hole_rims(), sb.hole_rims());
+    if ra.len() != rb.len() || ra.is_empty() {
+        return if mode == HoleFeatures::On {
+            Err(MatchError::Guidance(format!(
+                "hole features pair the rims one to one, but A has {} holes and B has {}; \
+                 fill or cut the extra holes, or turn hole features off",
+                ra.len(),
+                rb.len()
+            )))
+        } else {
+            Ok(vec![])
+        };
+    }
+    let centre = |surface: &MatchSurface, rim: &[u32]| {
+        let m = rim.iter().fold([0.0; 2], |acc, &v| {
+            let p = surface.vertex_domain_position(v as usize);
+            [acc[0] + p[0], acc[1] + p[1]]
+        });
+        [m[0] / rim.len() as f64, m[1] / rim.len() as f64]
+    };
+    let ca: Vec<[f64; 2]> = ra.iter().map(|r| s.apply(centre(sa, r))).collect();
+    let cb: Vec<[f64; 2]> = rb.iter().map(|r| centre(sb, r)).collect();
+    let mut candidates = vec![];
+    for (i, p) in ca.iter().enumerate() {
+        for (j, q) in cb.iter().enumerate() {
+            candidates.push(((p[0] - q[0]).hypot(p[1] - q[1]), i, j));
+        }
+    }
+    candidates.sort_by(|x, y| x.0.total_cmp(&y.0));
+    let (mut used_a, mut used_b) = (vec![false; ra.len()], vec![false; rb.len()]);
+    let mut pairs = vec![];
+    for (d, i, j) in candidates {
+        if !used_a[i] && !used_b[j] {
+            used_a[i] = true;
+            used_b[j] = true;
+            pairs.push((i, j, d));
+        }
+    }
+    // A rim is paired unambiguously when its partner is clearly closer than any other
+    // rim of B: the pairing distance below half the distance between B's rims.
+    let spread = (0..cb.len())
+        .flat_map(|i| (i + 1..cb.len()).map(move |j| (i, j)))
+        .map(|(i, j)| (cb[i][0] - cb[j][0]).hypot(cb[i][1] - cb[j][1]))
+        .fold(f64::INFINITY, f64::min);
+    if pairs.iter().any(|p| p.2 > 0.5 * spread) {
+        return if mode == HoleFeatures::On {
+            Err(MatchError::Guidance(
+                "the hole rims of A and B do not pair up after the alignment (a rim is as close to \
+                 two rims of the other surface); give landmarks or turn hole features off"
+                    .into(),
+            ))
+        } else {
+            Ok(vec![])
+        };
+    }
+    let file = |rims: &[Vec<u32>], pick: &dyn Fn(&(usize, usize, f64)) -> usize| FeatureFile {
+        features: pairs
+            .iter()
+            .enumerate()
+            .map(|(k, p)| FeatureCurve {
+                name: format!("hole:{k}"),
+                vertices: rims[pick(p)].clone(),
+                closed: true,
+            })
+            .collect(),
+    };
+    sa.add_curve_features(&file(&ra, &|p| p.0))?;
+    sb.add_curve_features(&file(&rb, &|p| p.1))?;
+    Ok(pairs)
+}
+
+/// A computed match.
+#[derive(Clone, Debug)]
+pub struct SurfaceMatch {
+    pub a: MatchSurface,
+    pub b: MatchSurface,
+    /// φ on the finest grid.
+    pub deformation: Deformation,
+    pub levels: Vec<LevelLog>,
+    pub alignment: AlignmentReport,
+    /// The position term's similarity at the end (A's ℓ units → B's ℓ units).
+    pub similarity: Similarity3,
+    pub min_det: f64,
+    pub seconds_solve: f64,
+    /// See [`MatchOptions::snap_cells`].
+    pub snap_cells: f64,
+}
+
+/// Points mapped within this many finest-grid cells of B's surface are snapped onto it
+/// ([`SurfaceMatch::correspondence`]).
+pub const SNAP_CELLS: f64 = 1.5;
+
+/// `ε_k` of level `k`.
+fn epsilon(k: usize) -> f64 {
+    2.0 * 0.5f64.powi(k as i32)
+}
+
+/// Pairs the features of A and B by name (landmarks become point features named
+/// `landmark:NAME`); returns both feature files and, for the alignment, the paired
+/// domain positions (feature centroids).
+fn paired_features(
+    a: &TriMesh,
+    b: &TriMesh,
+    g: &Guidance,
+) -> Result<(Option<FeatureFile>, Option<FeatureFile>), MatchError> {
+    let mut fa: Vec<FeatureCurve> = g.features_a.as_ref().map_or(vec![], |f| f.features.clone());
+    let mut fb: Vec<FeatureCurve> = g.features_b.as_ref().map_or(vec![], |f| f.features.clone());
+    for f in &fa {
+        if !fb.iter().any(|x| x.name == f.name) {
+            return Err(MatchError::Guidance(format!(
+                "feature '{}' is given on A but not on B; features are paired by name",
+                f.name
+            )));
+        }
+    }
+    for f in &fb {
+        if !fa.iter().any(|x| x.name == f.name) {
+            return Err(MatchError::Guidance(format!(
+                "feature '{}' is given on B but not on A; features are paired by name",
+                f.name
+            )));
+        }
+    }
+    fb.sort_by_key(|f| fa.iter().position(|x| x.name == f.name));
+    if let Some(lm) = &g.landmarks {
+        if lm.a.len() != lm.b.len() || lm.a.len() != lm.names.len() {
+            return Err(MatchError::Guidance(format!(
+                "landmarks: {} names, {} ids on A, {} on B; give one id per name on each surface",
+                lm.names.len(),
+                lm.a.len(),
+                lm.b.len()
+            )));
+        }
+        for (i, name) in lm.names.iter().enumerate() {
+            for (side, ids, mesh) in [("A", &lm.a, a), ("B", &lm.b, b)] {
+                if ids[i] as usize >= mesh.num_vertices() {
+                    return Err(MatchError::Guidance(format!(
+                        "landmark '{name}': vertex {} of {side} does not exist ({side} has {} vertices)",
+                        ids[i],
+                        mesh.num_vertices()
+                    )));
+                }
+            }
+            fa.push(FeatureCurve {
+                name: format!("landmark:{name}"),
+                vertices: vec![lm.a[i]],
+                closed: false,
+            });
+            fb.push(FeatureCurve {
+                name: format!("landmark:{name}"),
+                vertices: vec![lm.b[i]],
+                closed: false,
+            });
+        }
+    }
+    if fa.is_empty() {
+        return Ok((None, None));
+    }
+    Ok((
+        Some(FeatureFile { features: fa }),
+        Some(FeatureFile { features: fb }),
+    ))
+}
+
+/// Domain centroid of every feature of a surface.
+fn feature_centroids(s: &MatchSurface, f: &FeatureFile) -> Vec<[f64; 2]> {
+    f.features
+        .iter()
+        .map(|c| {
+            let mut m = [0.0; 2];
+            for &v in &c.vertices {
+                let p = s.vertex_domain_position(v as usize);
+                m[0] += p[0];
+                m[1] += p[1];
+            }
+            let k = c.vertices.len() as f64;
+            [m[0] / k, m[1] / k]
+        })
+        .collect()
+}
+
+/// Matches surface A onto surface B.
+pub fn match_surfaces(
+    mesh_a: &TriMesh,
+    mesh_b: &TriMesh,
+    guidance: &Guidance,
+    options: &MatchOptions,
+) -> Result<SurfaceMatch, MatchError> {
+    let (fa, fb) = paired_features(mesh_a, mesh_b, guidance)?;
+    // One length unit for both: the geometric mean of √area, so the energy's balance
+    // does not depend on the units, and the surfaces' relative size is kept.
+    let unit = (mesh_a.area() * mesh_b.area()).sqrt().sqrt();
+    if !(unit.is_finite() && unit > 0.0) {
+        return Err(MatchError::Option(
+            "a surface has zero or non-finite area".into(),
+        ));
+    }
+    let (sa, sb) = rayon::join(
+        || {
+            MatchSurface::new(
+                mesh_a,
+                fa.as_ref(),
+                options.size,
+                options.fill_holes,
+                unit,
+                options.curvature_sigma,
+            )
+        },
+        || {
+            MatchSurface::new(
+                mesh_b,
+                fb.as_ref(),
+                options.size,
+                options.fill_holes,
+                unit,
+                options.curvature_sigma,
+            )
+        },
+    );
+    let (sa, sb) = (sa?, sb?);
+    solve(sa, sb, fa.as_ref(), fb.as_ref(), options)
+}
+
+/// The multiscale solve on prepared surfaces.
+pub fn solve(
+    mut sa: MatchSurface,
+    mut sb: MatchSurface,
+    fa: Option<&FeatureFile>,
+    fb: Option<&FeatureFile>,
+    options: &MatchOptions,
+) -> Result<SurfaceMatch, MatchError> {
+    let clock = std::time::Instant::now();
+    let top = sa.num_levels() - 1;
+    if options.coarsest_level > top {
+        return Err(MatchError::Option(format!(
+            "coarsest level {} is finer than the finest grid (level {top})",
+            options.coarsest_level
+        )));
+    }
+    let k0 = options.coarsest_level;
+    if options.hole_features == HoleFeatures::On {
+        let (ha, hb) = (sa.hole_rims().len(), sb.hole_rims().len());
+        if ha != hb || ha == 0 {
+            return Err(MatchError::Guidance(format!(
+                "hole features pair the rims one to one, but A has {ha} filled holes and B has {hb}; \
+                 fill or cut the extra holes, or turn hole features off"
+            )));
+        }
+    }
+    // UVs are in mesh units and both meshes share ℓ: corresponding lengths match when
+    // ω_A is scaled by the ratio of the domain transforms.
+    let scale = sb.images.transform.scale / sa.images.transform.scale;
+    let use_features = match options.align {
+        Align::Features => {
+            if fa.is_none() {
+                return Err(MatchError::Guidance(
+                    "alignment from features needs features or landmarks".into(),
+                ));
+            }
+            true
+        }
+        Align::Auto => fa.is_some(),
+        Align::Shape | Align::None => false,
+    };
+    let (s, mut similarity, mut alignment) = if use_features {
+        let pa = feature_centroids(&sa, fa.unwrap());
+        let pb = feature_centroids(&sb, fb.unwrap());
+        let s = if pa.len() >= 2 {
+            fit_similarity_2d(&pa, &pb).ok_or_else(|| {
+                MatchError::Guidance("the features/landmarks of A all lie at one point".into())
+            })?
+        } else {
+            Similarity2::about(pa[0], 0.0, scale, pb[0])
+        };
+        let report = AlignmentReport {
+            method: "features".into(),
+            similarity: s,
+            hole_pairs: vec![],
+        };
+        (s, Similarity3::identity(), report)
+    } else if options.align == Align::None {
+        let s = Similarity2::identity();
+        let report = AlignmentReport {
+            method: "none".into(),
+            similarity: s,
+            hole_pairs: vec![],
+        };
+        (s, Similarity3::identity(), report)
+    } else {
+        shape_alignment(&sa, &sb, scale, options.align_rotations.max(1))?
+    };
+    if options.hole_features != HoleFeatures::Off {
+        alignment.hole_pairs = add_hole_features(&mut sa, &mut sb, &s, options.hole_features)?;
+    }
+    let features: Vec<usize> = (0..sa.feature_names.len()).collect();
+    let solver = Solver {
+        a: &sa,
+        b: &sb,
+        features: &features,
+        options,
+    };
+    let mut phi = Deformation::from_map(sa.level_size(k0), |p| s.apply(p));
+    let mut levels = vec![];
+    for k in k0..=top {
+        if k > k0 {
+            phi = phi.prolongate();
+        }
+        levels.push(solver.level(k, &mut phi, &mut similarity));
+    }
+    let min_det = phi.min_jacobian_determinant();
+    Ok(SurfaceMatch {
+        a: sa,
+        b: sb,
+        deformation: phi,
+        levels,
+        alignment,
+        similarity,
+        min_det,
+        seconds_solve: clock.elapsed().as_secs_f64(),
+        snap_cells: options.snap_cells,
+    })
+}
+
+/// The similarity of the planes from a rigid alignment of the surfaces in space
+/// ([`super::rigid`]): every vertex of A within the trimmed pairs' distance of B is paired
+/// with its closest vertex of B, and the least-squares similarity of their domain
+/// positions is refitted once without the pairs it explains worst (beyond three times
+/// the median residual). Also returns the rigid motion, in ℓ units, as the start of the
+/// position term's similarity.
+fn shape_alignment(
+    sa: &MatchSurface,
+    sb: &MatchSurface,
+    scale: f64,
+    rotations: usize,
+) -> Result<(Similarity2, Similarity3, AlignmentReport), MatchError> {
+    // Extra ICP starts: the rigid motions of the best similarities of the planes
+    // (a search over rotations, translations and scales of ω_A scored by the 3D fit,
+    // [`super::align`]); they reach poses that the rotations about the centroids miss
+    // when the surfaces overlap only in part.
+    let ks = 5.min(sa.num_levels() - 1);
+    let eps = epsilon(ks);
+    let level_a = sa.level_a(ks, eps, &[]);
+    let level_b = sb.level_b(ks, eps, 1.0, &[]);
+    let inside: Vec<bool> = level_a.chi.iter().map(|&c| c == 1.0).collect();
+    let (ca, _) = sa.domain_centroid_and_area();
+    let (cb, _) = sb.domain_centroid_and_area();
+    let search = AlignmentScore::new(&level_a, &level_b, &inside, false);
+    let (found, _) = search.search(ca, cb, scale, rotations, 8);
+    let unit = sa.length_unit;
+    let starts: Vec<Similarity3> = found
+        .iter()
+        .filter(|c| c.score.is_finite())
+        .map(|c| Similarity3 {
+            matrix: c.motion.matrix,
+            translation: c.motion.translation.map(|t| t * unit),
+        })
+        .collect();
+    let normals = vertex_normals(&sb.positions, &sb.triangles);
+    let rigid =
+        align_rigidly(&sa.positions, &sb.positions, &normals, &starts).ok_or_else(|| {
+            MatchError::Guidance("cannot align the surfaces in space: too few vertices".into())
+        })?;
+    let closest = ClosestPoints::new(&sb.positions);
+    let limit = (2.5 * rigid.rms).powi(2);
+    let step = (sa.positions.len() / 4000).max(1);
+    let mut pa = vec![];
+    let mut pb = vec![];
+    for v in (0..sa.positions.len()).step_by(step) {
+        let (w, d2) = closest.closest(&rigid.motion.apply(sa.positions[v]));
+        if d2 <= limit {
+            pa.push(sa.vertex_domain_position(v));
+            pb.push(sb.vertex_domain_position(w));
+        }
+    }
+    let fail =
+        || MatchError::Guidance("the surfaces do not overlap after aligning them in space".into());
+    let mut s = fit_similarity_2d(&pa, &pb).ok_or_else(fail)?;
+    let residual = |s: &Similarity2, a: &[f64; 2], b: &[f64; 2]| {
+        let y = s.apply(*a);
+        (y[0] - b[0]).hypot(y[1] - b[1])
+    };
+    let mut r: Vec<f64> = pa
+        .iter()
+        .zip(&pb)
+        .map(|(a, b)| residual(&s, a, b))
+        .collect();
+    let mut sorted = r.clone();
+    sorted.sort_by(f64::total_cmp);
+    let cut = 3.0 * sorted[sorted.len() / 2];
+    let keep: Vec<usize> = (0..r.len()).filter(|&i| r[i] <= cut).collect();
+    if keep.len() >= 3 {
+        let qa: Vec<[f64; 2]> = keep.iter().map(|&i| pa[i]).collect();
+        let qb: Vec<[f64; 2]> = keep.iter().map(|&i| pb[i]).collect();
+        s = fit_similarity_2d(&qa, &qb).ok_or_else(fail)?;
+        r = keep.iter().map(|&i| residual(&s, &pa[i], &pb[i])).collect();
+    }
+    let motion = Similarity3 {
+        matrix: rigid.motion.matrix,
+        translation: rigid.motion.translation.map(|t| t / unit),
+    };
+    let report = AlignmentReport {
+        method: format!(
+            "shape: trimmed ICP in space (RMS {:.4} mesh units), {} vertex pairs, domain residual median {:.4}",
+            rigid.rms,
+            r.len(),
+            {
+                let mut x = r.clone();
+                x.sort_by(f64::total_cmp);
+                x[x.len() / 2]
+            }
+        ),
+        similarity: s,
+        hole_pairs: vec![],
+    };
+    Ok((s, motion, report))
+}
+
+struct Solver<'s> {
+    a: &'s MatchSurface,
+    b: &'s MatchSurface,
+    features: &'s [usize],
+    options: &'s MatchOptions,
+}
+
+impl Solver<'_> {
+    fn energy(&self, k: usize, similarity: Similarity3) -> LevelEnergy {
+        let eps = epsilon(k);
+        LevelEnergy {
+            a: self.a.level_a(k, eps, self.features),
+            b: self.b.level_b(k, eps, self.options.soft, self.features),
+            epsilon: eps,
+            betas: self.options.betas,
+            alpha: self.options.alpha,
+            similarity,
+            position_band: self.options.position_band,
+            position_scale: self.options.position_scale,
+        }
+    }
+
+    /// Minimizes level `k` from `phi` (already on level k's grid).
+    fn level(&self, k: usize, phi: &mut Deformation, similarity: &mut Similarity3) -> LevelLog {
+        let mut energy = self.energy(k, *similarity);
+        let allow_scale = self.options.allow_scale;
+        let position = self.options.betas.position != 0.0;
+        let mut refit = |e: &mut LevelEnergy, phi: &Deformation| {
+            if position && let Some(s) = fit_position_similarity(e, phi, allow_scale) {
+                e.similarity = s;
+            }
+        };
+        let n = phi.size;
+        let w = self.options.sobolev_cells / (n - 1) as f64;
+        let precondition = (w > 0.0).then(|| SobolevPreconditioner::new(n, w * w));
+        let log = minimize(
+            &mut energy,
+            phi,
+            &self.options.ncg,
+            k,
+            precondition.as_ref(),
+            &mut refit,
+        );
+        *similarity = energy.similarity;
+        log
+    }
+}
+
+/// The similarity of ℝ³ that best maps A's positions onto B's matched positions,
+/// weighted by the node weights and `χ^ε`.
+fn fit_position_similarity(
+    e: &LevelEnergy,
+    phi: &Deformation,
+    allow_scale: bool,
+) -> Option<Similarity3> {
+    let n = e.size();
+    let mut p = Vec::with_capacity(n * n);
+    let mut q = Vec::with_capacity(n * n);
+    let mut w = Vec::with_capacity(n * n);
+    for k in 0..n * n {
+        let wa = e.a.weight[k] * e.a.chi[k];
+        if wa == 0.0 {
+            continue;
+        }
+        let s = e.b.field.sample(phi.at(k));
+        let c = chi(s[B_SD], e.epsilon).0;
+        if c == 0.0 {
+            continue;
+        }
+        let x = [s[B_X], s[B_X + 1], s[B_X + 2]];
+        // Iteratively reweighted: the robust penalty's weight at the current residual.
+        let y = e.similarity.apply(e.a.x[k]);
+        let r2 = (0..3).map(|i| (y[i] - x[i]).powi(2)).sum::<f64>();
+        p.push(e.a.x[k]);
+        q.push(x);
+        w.push(wa * c * robust(r2, e.position_scale).1);
+    }
+    fit_similarity_3d(&p, &q, &w, allow_scale)
+}
+
+impl SurfaceMatch {
+    /// φ(ξ) for a point ξ of ω_A.
+    pub fn map_domain(&self, xi: [f64; 2]) -> [f64; 2] {
+        self.deformation.apply(xi)
+    }
+
+    /// For every vertex of A, its matched point on B in B's mesh units (bilinear in
+    /// B's position image), or `None` where φ leaves ω_B.
+    pub fn vertex_points(&self) -> Vec<Option<[f64; 3]>> {
+        let field = self.b.finest_position_and_distance();
+        (0..self.a.uvs.len())
+            .map(|v| {
+                let xi = self.a.vertex_domain_position(v);
+                let y = self.map_domain(xi);
+                let s = field.sample(y);
+                (s[3] <= 0.0).then_some([s[0], s[1], s[2]])
+            })
+            .collect()
+    }
+
+    /// For every vertex of A, its counterpart on B (a triangle of B and barycentric
+    /// coordinates), or `None` where φ maps it outside B's surface (beyond ω_B's border
+    /// or into one of B's holes). A point that φ puts within [`SNAP_CELLS`] grid cells
+    /// of B's surface is snapped onto it: a vertex on A's rim lies exactly on ω_A's
+    /// border, and at the grid's resolution "on the border" and "just outside" are the
+    /// same answer.
+    pub fn correspondence(&self) -> Result<Vec<Option<SurfacePoint>>, MatchError> {
+        let map = super::output::PointMap::new(self)?;
+        Ok((0..self.a.uvs.len())
+            .into_par_iter()
+            .map(|v| map.map_uv(self.a.uvs[v]))
+            .collect())
+    }
+
+    /// Node positions of φ (for pictures).
+    pub fn grid_positions(&self) -> Vec<[f64; 2]> {
+        let n = self.deformation.size;
+        (0..n * n)
+            .map(|k| self.deformation.at(k))
+            .collect::<Vec<_>>()
+    }
+
+    /// Fraction of grid nodes used (for reports): ξ itself.
+    pub fn node(&self, k: usize) -> [f64; 2] {
+        node(self.deformation.size, k)
+    }
+}

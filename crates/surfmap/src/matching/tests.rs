@@ -1,0 +1,266 @@
+//! End-to-end matches of generated surfaces with a known answer: a re-triangulated,
+//! moved copy (the identity), a known smooth deformation, features pulling a
+//! misaligned start, and a crop found inside the whole. Every result must have
+//! min det Dφ > 0.
+
+use super::*;
+use crate::mesh::generate::bumpy_disc;
+use crate::mesh::{SurfacePoint, TriMesh};
+
+/// An asymmetric height field with a "nose", over the unit disc.
+fn height(x: f64, y: f64) -> f64 {
+    0.4 * x * x + 0.25 * x * y - 0.3 * y * y * y
+        + 0.2 * (3.0 * x + 1.0).sin()
+        + 0.6 * (-((x - 0.2).powi(2) + (y + 0.1).powi(2)) / 0.05).exp()
+}
+
+/// The height field on a ring triangulation with `rings` rings, each vertex then moved
+/// by `motion`.
+fn surface(rings: usize, motion: impl Fn([f64; 3]) -> [f64; 3]) -> TriMesh {
+    let mut mesh = bumpy_disc(rings, 0.0);
+    for p in &mut mesh.positions {
+        *p = motion([p[0], p[1], height(p[0], p[1])]);
+    }
+    mesh
+}
+
+fn rotation(axis: [f64; 3], angle: f64) -> [[f64; 3]; 3] {
+    let n = (axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]).sqrt();
+    let a = axis.map(|v| v / n);
+    let (s, c) = angle.sin_cos();
+    let k = |i: usize, j: usize| a[i] * a[j] * (1.0 - c);
+    [
+        [c + k(0, 0), k(0, 1) - a[2] * s, k(0, 2) + a[1] * s],
+        [k(1, 0) + a[2] * s, c + k(1, 1), k(1, 2) - a[0] * s],
+        [k(2, 0) - a[1] * s, k(2, 1) + a[0] * s, c + k(2, 2)],
+    ]
+}
+
+fn rigid(r: [[f64; 3]; 3], t: [f64; 3]) -> impl Fn([f64; 3]) -> [f64; 3] {
+    move |p| std::array::from_fn(|i| r[i][0] * p[0] + r[i][1] * p[1] + r[i][2] * p[2] + t[i])
+}
+
+fn options() -> MatchOptions {
+    MatchOptions {
+        size: 129,
+        ..Default::default()
+    }
+}
+
+/// Distances between every matched vertex's point on B and its true counterpart
+/// `truth(v)`, and the matched fraction.
+fn errors(
+    a: &TriMesh,
+    b: &TriMesh,
+    corr: &[Option<SurfacePoint>],
+    truth: impl Fn(usize) -> Option<[f64; 3]>,
+) -> (Vec<f64>, f64) {
+    let mut e = vec![];
+    let mut matched = 0;
+    let mut expected = 0;
+    for (v, found) in corr.iter().enumerate().take(a.num_vertices()) {
+        let Some(t) = truth(v) else { continue };
+        expected += 1;
+        if let Some(p) = found {
+            matched += 1;
+            let x = p.position(&b.positions, &b.triangles);
+            e.push(((0..3).map(|c| (x[c] - t[c]).powi(2)).sum::<f64>()).sqrt());
+        }
+    }
+    e.sort_by(f64::total_cmp);
+    (e, matched as f64 / expected.max(1) as f64)
+}
+
+fn quantile(sorted: &[f64], q: f64) -> f64 {
+    sorted[((sorted.len() - 1) as f64 * q).round() as usize]
+}
+
+fn run(
+    a: &TriMesh,
+    b: &TriMesh,
+    g: &Guidance,
+    o: &MatchOptions,
+) -> (SurfaceMatch, Vec<Option<SurfacePoint>>) {
+    let m = match_surfaces(a, b, g, o).unwrap();
+    assert!(m.min_det > 0.0, "min det Dφ = {}", m.min_det);
+    let (corr, folds, _) = m.checked_correspondence(a, b, true).unwrap();
+    // After dropping, no fully matched triangle folds.
+    let after = check_folds(a, b, &corr);
+    assert!(
+        after.flipped.is_empty() && after.collapsed.is_empty(),
+        "{folds:?}"
+    );
+    (m, corr)
+}
+
+/// The grid cell of the 129² grid in surface units: ω = [0,1]² holds the unit disc's
+/// flattening (diameter ≈ 2.5 with the bumps) with a margin.
+const CELL: f64 = 3.0 / 128.0;
+
+#[test]
+fn a_retriangulated_moved_copy_matches_by_the_identity() {
+    let a = surface(18, |p| p);
+    let motion = rigid(
+        rotation([0.2, 0.9, -0.3], 70f64.to_radians()),
+        [2.0, -1.0, 0.5],
+    );
+    let b = surface(23, &motion);
+    let (_, corr) = run(&a, &b, &Guidance::default(), &options());
+    let (e, matched) = errors(&a, &b, &corr, |v| Some(motion(a.positions[v])));
+    assert!(matched > 0.97, "matched {matched}");
+    let (median, p95) = (quantile(&e, 0.5), quantile(&e, 0.95));
+    assert!(
+        median < 0.5 * CELL && p95 < 2.0 * CELL,
+        "median {median} p95 {p95}"
+    );
+}
+
+#[test]
+fn a_known_smooth_deformation_is_recovered() {
+    // A smooth, mildly non-isometric deformation of space (5–10 % of stretch, shear
+    // and bend), as between two expressions of one face.
+    let deform = |p: [f64; 3]| {
+        [
+            1.05 * p[0] + 0.05 * (2.0 * p[1]).sin(),
+            p[1] + 0.04 * p[0] * p[0],
+            0.9 * p[2] + 0.1 * p[0],
+        ]
+    };
+    let a = surface(18, |p| p);
+    let b = surface(18, deform);
+    let (_, corr) = run(&a, &b, &Guidance::default(), &options());
+    // Same connectivity: vertex i of B is the image of vertex i of A.
+    let (e, matched) = errors(&a, &b, &corr, |v| Some(b.positions[v]));
+    assert!(matched > 0.95, "matched {matched}");
+    let (median, p95) = (quantile(&e, 0.5), quantile(&e, 0.95));
+    // Measured: median 1.5 cells, p95 3.4 cells (the deformation moves points by up
+    // to 0.15 = 6 cells from the best similarity).
+    assert!(
+        median < 2.0 * CELL && p95 < 4.0 * CELL,
+        "median {median} p95 {p95}"
+    );
+}
+
+#[test]
+fn features_alone_pull_a_misaligned_start_into_place() {
+    let a = surface(18, |p| p);
+    // B: the same surface turned by 25° about its axis, so the flattened domains start
+    // turned against each other.
+    let b = surface(
+        20,
+        rigid(rotation([0.0, 0.0, 1.0], 25f64.to_radians()), [0.0; 3]),
+    );
+    let nearest = |m: &TriMesh, q: [f64; 3]| {
+        (0..m.num_vertices())
+            .min_by(|&i, &j| {
+                let d = |k: usize| {
+                    (0..3)
+                        .map(|c| (m.positions[k][c] - q[c]).powi(2))
+                        .sum::<f64>()
+                };
+                d(i).total_cmp(&d(j))
+            })
+            .unwrap() as u32
+    };
+    let turn = rigid(rotation([0.0, 0.0, 1.0], 25f64.to_radians()), [0.0; 3]);
+    let spots = [[0.5, 0.0], [-0.3, 0.45], [-0.2, -0.5], [0.2, -0.1]];
+    let ids_a: Vec<u32> = spots
+        .iter()
+        .map(|s| nearest(&a, [s[0], s[1], height(s[0], s[1])]))
+        .collect();
+    let ids_b: Vec<u32> = ids_a
+        .iter()
+        .map(|&v| nearest(&b, turn(a.positions[v as usize])))
+        .collect();
+    let guidance = Guidance {
+        landmarks: Some(Landmarks {
+            names: (0..spots.len()).map(|i| format!("p{i}")).collect(),
+            a: ids_a,
+            b: ids_b,
+        }),
+        ..Default::default()
+    };
+    // No alignment and no data but the features: the feature term alone must turn φ.
+    let mut o = options();
+    o.align = Align::None;
+    o.coarsest_level = 3;
+    o.hole_features = HoleFeatures::Off;
+    o.betas = Betas {
+        bend: 0.0,
+        reg: 0.01,
+        features: 5.0,
+        position: 0.0,
+        uncovered: 0.0,
+    };
+    let (_, corr) = run(&a, &b, &guidance, &o);
+    let (e, matched) = errors(&a, &b, &corr, |v| Some(turn(a.positions[v])));
+    assert!(matched > 0.8, "matched {matched}");
+    let median = quantile(&e, 0.5);
+    assert!(median < 4.0 * CELL, "median {median}");
+}
+
+#[test]
+fn a_crop_finds_its_region_in_the_whole() {
+    let motion = rigid(
+        rotation([0.5, -0.2, 0.8], 40f64.to_radians()),
+        [0.3, 0.2, -1.0],
+    );
+    let whole = surface(22, &motion);
+    // A: the part x > −0.3 of the surface, re-triangulated (a finer ring disc, cut).
+    let full = surface(18, |p| p);
+    let keep: Vec<bool> = full.positions.iter().map(|p| p[0] > -0.3).collect();
+    let mut index = vec![u32::MAX; full.num_vertices()];
+    let mut positions = vec![];
+    for (v, p) in full.positions.iter().enumerate() {
+        if keep[v] {
+            index[v] = positions.len() as u32;
+            positions.push(*p);
+        }
+    }
+    let triangles: Vec<[u32; 3]> = full
+        .triangles
+        .iter()
+        .filter(|t| t.iter().all(|&v| keep[v as usize]))
+        .map(|t| t.map(|v| index[v as usize]))
+        .collect();
+    let a = TriMesh::new(positions, triangles);
+    let (m, corr) = run(&a, &whole, &Guidance::default(), &options());
+    let (e, matched) = errors(&a, &whole, &corr, |v| Some(motion(a.positions[v])));
+    assert!(matched > 0.95, "matched {matched}");
+    let (median, p95) = (quantile(&e, 0.5), quantile(&e, 0.95));
+    assert!(
+        median < CELL && p95 < 3.0 * CELL,
+        "median {median} p95 {p95}"
+    );
+    // Any surface point of A maps like its vertices: a triangle's centroid lands
+    // between its corners' images.
+    let map = PointMap::new(&m).unwrap();
+    let t = a.triangles.len() / 2;
+    let centre = map
+        .map(SurfacePoint {
+            triangle: t as u32,
+            barycentric: [1.0 / 3.0; 3],
+        })
+        .unwrap()
+        .position(&whole.positions, &whole.triangles);
+    let truth = motion(std::array::from_fn(|c| {
+        a.triangles[t]
+            .iter()
+            .map(|&v| a.positions[v as usize][c])
+            .sum::<f64>()
+            / 3.0
+    }));
+    let d = ((0..3).map(|c| (centre[c] - truth[c]).powi(2)).sum::<f64>()).sqrt();
+    assert!(d < 2.0 * CELL, "centroid off by {d}");
+}
+
+/// Matching needs one UV per vertex over a disc: a closed surface is not cut open along
+/// seams (as `flatten` would by default) but refused with the flattening's reason.
+#[test]
+fn a_closed_surface_is_refused_not_cut() {
+    let disc = surface(6, |p| p);
+    let sphere = crate::mesh::generate::sphere(2);
+    let err = match_surfaces(&sphere, &disc, &Guidance::default(), &options()).unwrap_err();
+    let message = err.to_string();
+    assert!(message.contains("closed"), "{message}");
+}
