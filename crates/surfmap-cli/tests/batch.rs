@@ -1,7 +1,8 @@
 //! `surfmap flatten A B … -o DIR/`: the batch writes per mesh what the single-mesh
 //! command writes, lists every bad mesh with its reason in `summary.csv` without
-//! stopping, gives the same results on any number of threads, and refuses options that
-//! name one file.
+//! stopping, cuts surfaces that are not discs open as the single-mesh command does,
+//! gives the same results on any number of threads, and refuses options that name one
+//! file.
 
 mod common;
 use common::*;
@@ -22,11 +23,18 @@ fn inputs(dir: &Path) -> (Vec<PathBuf>, Vec<PathBuf>) {
     surfmap::write_mesh(&good[2], &bumpy_disc(5, 0.0)).unwrap();
     let bad = vec![
         dir.join("truncated.off"),
-        dir.join("closed.obj"),
+        dir.join("two.obj"),
         dir.join("missing.obj"),
     ];
     std::fs::write(&bad[0], "OFF\n3 1 0\n0 0 0\n").unwrap();
-    surfmap::write_mesh(&bad[1], &surfmap::mesh::generate::octahedron()).unwrap();
+    // Two separate squares: no fill or cut makes one disc of them.
+    let square = surfmap::mesh::generate::unit_square();
+    let mut two = square.clone();
+    two.positions
+        .extend(square.positions.iter().map(|p| [p[0] + 3.0, p[1], p[2]]));
+    two.triangles
+        .extend(square.triangles.iter().map(|t| t.map(|i| i + 4)));
+    surfmap::write_mesh(&bad[1], &two).unwrap();
     (good, bad)
 }
 
@@ -64,6 +72,19 @@ fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
     records.pop(); // after the last line break
     let header = records.remove(0);
     (header, records)
+}
+
+/// The largest coordinate difference between two lists of UVs.
+fn max_abs_diff(a: &[[f64; 2]], b: &[[f64; 2]]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    a.iter()
+        .zip(b)
+        .flat_map(|(p, q)| [(p[0] - q[0]).abs(), (p[1] - q[1]).abs()])
+        .fold(0.0, f64::max)
+}
+
+fn read_json(path: &Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap()
 }
 
 fn vertex_uvs(path: &Path) -> Vec<[f64; 2]> {
@@ -108,17 +129,10 @@ fn a_batch_flattens_the_good_meshes_and_lists_the_bad_ones() {
             .unwrap();
         assert!(run.status.success());
         let (a, b) = (vertex_uvs(&obj), vertex_uvs(&single));
-        let max_diff = a
-            .iter()
-            .zip(&b)
-            .flat_map(|(p, q)| [(p[0] - q[0]).abs(), (p[1] - q[1]).abs()])
-            .fold(0.0, f64::max);
+        let max_diff = max_abs_diff(&a, &b);
         assert!(max_diff <= 1e-12, "{name}: {max_diff}");
-        let batch_report: serde_json::Value =
-            serde_json::from_slice(&std::fs::read(out.join(format!("{name}.json"))).unwrap())
-                .unwrap();
-        let single_report: serde_json::Value =
-            serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+        let batch_report = read_json(&out.join(format!("{name}.json")));
+        let single_report = read_json(&report);
         for key in ["iterations", "energy", "measures", "start", "input_defects"] {
             assert_eq!(batch_report[key], single_report[key], "{name}: {key}");
         }
@@ -144,7 +158,11 @@ fn a_batch_flattens_the_good_meshes_and_lists_the_bad_ones() {
         let message = String::from_utf8_lossy(&single.stderr);
         assert_eq!(format!("error: {error}\n"), message);
     }
-    assert!(rows[4][col("error")].contains("needs exactly one boundary loop"));
+    assert!(
+        rows[4][col("error")].contains("components"),
+        "{}",
+        rows[4][col("error")]
+    );
     // Nothing written for a failed mesh.
     let mut written: Vec<String> = std::fs::read_dir(&out)
         .unwrap()
@@ -180,11 +198,7 @@ fn one_thread_and_two_give_the_same_maps() {
     for name in ["disc", "disc-2", "flat"] {
         let one = vertex_uvs(&dir.join("j1").join(format!("{name}.obj")));
         let two = vertex_uvs(&dir.join("j2").join(format!("{name}.obj")));
-        let max_diff = one
-            .iter()
-            .zip(&two)
-            .flat_map(|(p, q)| [(p[0] - q[0]).abs(), (p[1] - q[1]).abs()])
-            .fold(0.0, f64::max);
+        let max_diff = max_abs_diff(&one, &two);
         assert!(max_diff <= 1e-12, "{name}: {max_diff}");
     }
 }
@@ -223,10 +237,95 @@ fn options_that_name_one_file_are_refused_in_a_batch() {
     let run = batch(&good, &out, &["--report", "r.json"]);
     assert_eq!(run.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&run.stderr).contains("NAME.json"));
+    let run = batch(&good, &out, &["--seams", "seams.obj"]);
+    assert!(String::from_utf8_lossy(&run.stderr).contains("NAME.seams.obj"));
     let run = batch(&good, &out, &["--pictures", "p"]);
     assert!(String::from_utf8_lossy(&run.stderr).contains("--pictures is for one mesh"));
     let run = batch(&good, &dir.join("flat.obj").display().to_string(), &[]);
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert!(stderr.contains("end it with /"), "{stderr}");
     assert!(!dir.join("o").exists());
+}
+
+/// Closed and higher-genus meshes in a batch are cut open as `surfmap flatten MESH -o X
+/// --seams S --report R` cuts them: the same per-corner UVs, seams and plan; a disc in
+/// the same batch writes no seams.
+#[test]
+fn a_batch_cuts_surfaces_that_are_not_discs_as_one_mesh_does() {
+    let dir = temp_dir("batch-cut");
+    let inputs = [
+        dir.join("sphere.obj"),
+        dir.join("torus.obj"),
+        dir.join("disc.obj"),
+    ];
+    surfmap::write_mesh(&inputs[0], &surfmap::mesh::generate::sphere(2)).unwrap();
+    surfmap::write_mesh(&inputs[1], &surfmap::mesh::generate::torus(1.0, 0.4, 16, 8)).unwrap();
+    surfmap::write_mesh(&inputs[2], &bumpy_disc(6, 0.4)).unwrap();
+    let out = dir.join("out");
+    let seams = dir.join("seams");
+    let run = batch(
+        &inputs,
+        &format!("{}/", out.display()),
+        &["--seams", &format!("{}/", seams.display())],
+    );
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    for (input, name) in inputs[..2].iter().zip(["sphere", "torus"]) {
+        let single = dir.join(format!("single-{name}.obj"));
+        let single_seams = dir.join(format!("single-{name}.seams.obj"));
+        let report = dir.join(format!("single-{name}.json"));
+        let run = surfmap()
+            .arg("flatten")
+            .arg(input)
+            .arg("-o")
+            .arg(&single)
+            .arg("--seams")
+            .arg(&single_seams)
+            .arg("--report")
+            .arg(&report)
+            .output()
+            .unwrap();
+        assert!(run.status.success());
+        let corner_uvs = |path: &Path| match read_mesh(path).unwrap().mesh.uvs {
+            Some(surfmap::Uvs::PerCorner { coords, indices }) => (coords, indices),
+            other => panic!("{name}: per-corner UVs expected, got {other:?}"),
+        };
+        let ((a, ia), (b, ib)) = (
+            corner_uvs(&out.join(format!("{name}.obj"))),
+            corner_uvs(&single),
+        );
+        assert_eq!(ia, ib, "{name}");
+        let max_diff = max_abs_diff(&a, &b);
+        assert!(max_diff <= 1e-12, "{name}: {max_diff}");
+        assert_eq!(
+            std::fs::read(seams.join(format!("{name}.seams.obj"))).unwrap(),
+            std::fs::read(&single_seams).unwrap(),
+            "{name}"
+        );
+        let batch_report = read_json(&out.join(format!("{name}.json")));
+        let single_report = read_json(&report);
+        assert!(
+            batch_report["plan"]
+                .as_str()
+                .unwrap()
+                .starts_with("cut open along seams"),
+            "{name}: {}",
+            batch_report["plan"]
+        );
+        assert_eq!(batch_report["guarantee"], "bijective", "{name}");
+        for key in ["plan", "seams", "guarantee", "barrier", "measures"] {
+            assert_eq!(batch_report[key], single_report[key], "{name}: {key}");
+        }
+    }
+    assert!(!seams.join("disc.seams.obj").exists());
+    assert!(
+        read_mesh(&out.join("disc.obj"))
+            .unwrap()
+            .mesh
+            .vertex_uvs()
+            .is_some()
+    );
 }

@@ -87,13 +87,10 @@ fn every_disc_mesh_flattens_without_flips_at_both_presets() {
 }
 
 #[test]
-fn non_disc_inputs_get_a_clear_error() {
+fn what_cannot_be_cut_into_a_disc_gets_a_clear_error() {
     let Some(data) = shared_data() else { return };
     let dir = temp_dir("flatten-nondisc");
     for (file, says) in [
-        ("bunny.off", "closed"),
-        ("punctured_torus.obj", "genus 1"),
-        ("holes.off", "found 7 boundary loops"),
         ("mask_cone.off", "--keep-largest"),
         ("moebius.obj", "not orientable"),
         ("beetle_messy.obj", "shared by more than two faces"),
@@ -117,6 +114,163 @@ fn non_disc_inputs_get_a_clear_error() {
     );
     assert!(String::from_utf8_lossy(&run.stderr).contains("repair: kept one component"));
     assert!(min_signed_uv_area(&out).0 > 0.0);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Signed area of every UV triangle of an OBJ with per-corner `vt`, and whether the
+/// corners' UVs are split exactly along the seams written by `--seams`.
+fn check_cut_output(out: &Path, seams: &Path, input: &surfmap::TriMesh) -> f64 {
+    let back = read_mesh(out).expect("our own output reads back").mesh;
+    assert_eq!(
+        back.triangles, input.triangles,
+        "the input's faces, in order"
+    );
+    let Some(surfmap::Uvs::PerCorner { coords, indices }) = &back.uvs else {
+        panic!("per-corner UVs expected")
+    };
+    let mut min = f64::INFINITY;
+    for t in indices {
+        let [a, b, c] = t.map(|v| coords[v as usize]);
+        min = min.min(0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])));
+    }
+    // The seams as written: every vertex, `l a b` lines; an edge's two faces share the
+    // UVs of its ends exactly when it is no seam.
+    let text = std::fs::read_to_string(seams).unwrap();
+    let mut seam_edges: Vec<[u32; 2]> = text
+        .lines()
+        .filter_map(|l| l.strip_prefix("l "))
+        .map(|l| {
+            let v: Vec<u32> = l
+                .split_whitespace()
+                .map(|x| x.parse::<u32>().unwrap() - 1)
+                .collect();
+            [v[0].min(v[1]), v[0].max(v[1])]
+        })
+        .collect();
+    seam_edges.sort_unstable();
+    assert!(!seam_edges.is_empty());
+    let topology = surfmap::Topology::new(input);
+    for (e, &[a, b]) in topology.edges.iter().enumerate() {
+        let &[f, g] = topology.faces_of_edge(e) else {
+            continue;
+        };
+        let uv = |t: u32, v: u32| {
+            let k = input.triangles[t as usize]
+                .iter()
+                .position(|&w| w == v)
+                .unwrap();
+            indices[t as usize][k]
+        };
+        let joined = uv(f, a) == uv(g, a) && uv(f, b) == uv(g, b);
+        assert_eq!(
+            joined,
+            seam_edges.binary_search(&[a, b]).is_err(),
+            "edge ({a}, {b})"
+        );
+    }
+    min
+}
+
+#[test]
+fn closed_and_higher_genus_meshes_are_cut_open_by_default() {
+    let Some(data) = shared_data() else { return };
+    let dir = temp_dir("flatten-cut");
+    for (file, says) in [
+        ("sphere.obj", "cut open along seams (closed, genus 0)"),
+        (
+            "punctured_torus.obj",
+            "cut open along seams (genus 1, 1 boundary loop)",
+        ),
+    ] {
+        let out = dir.join("cut.obj");
+        let seams = dir.join("seams.obj");
+        let report = dir.join("r.json");
+        let run = flatten(
+            &data.join(file),
+            &[
+                "--seams",
+                seams.to_str().unwrap(),
+                "--report",
+                report.to_str().unwrap(),
+            ],
+            &out,
+        );
+        assert!(
+            run.status.success(),
+            "{file}: {}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let summary = String::from_utf8_lossy(&run.stdout);
+        assert!(summary.contains(says), "{file}: {summary}");
+        let input = read_mesh(&data.join(file)).unwrap().mesh;
+        assert!(check_cut_output(&out, &seams, &input) > 0.0, "{file}");
+        let r: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+        assert_eq!(r["plan"], says, "{file}");
+        assert!(r["seams"]["length"].as_f64().unwrap() > 0.0, "{file}");
+        assert_eq!(r["measures"]["charts"], 1, "{file}");
+        assert_eq!(r["flipped_triangles"], 0, "{file}");
+        // The seams written round-trip through --cut-along: the same cut.
+        let again = dir.join("again.obj");
+        let seams2 = dir.join("seams2.obj");
+        let run = flatten(
+            &data.join(file),
+            &[
+                "--cut-along",
+                seams.to_str().unwrap(),
+                "--seams",
+                seams2.to_str().unwrap(),
+            ],
+            &again,
+        );
+        assert!(
+            run.status.success(),
+            "{file}: {}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        assert!(String::from_utf8_lossy(&run.stdout).contains("along the given seams"));
+        assert_eq!(
+            std::fs::read(&seams).unwrap(),
+            std::fs::read(&seams2).unwrap()
+        );
+    }
+    // Holes: filled by default, cut open with --cut-holes.
+    let holes = data.join("holes.off");
+    let run = flatten(&holes, &[], &dir.join("filled.obj"));
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(String::from_utf8_lossy(&run.stderr).contains("filled 6 holes"));
+    assert!(min_signed_uv_area(&dir.join("filled.obj")).0 > 0.0);
+    let seams = dir.join("hole-seams.obj");
+    let run = flatten(
+        &holes,
+        &["--cut-holes", "--seams", seams.to_str().unwrap()],
+        &dir.join("cut-holes.obj"),
+    );
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(String::from_utf8_lossy(&run.stdout).contains("(7 boundary loops)"));
+    let input = read_mesh(&holes).unwrap().mesh;
+    assert!(check_cut_output(&dir.join("cut-holes.obj"), &seams, &input) > 0.0);
+    // Bad seams are refused with the reason.
+    std::fs::write(dir.join("bad.txt"), "0 1\n2 x\n").unwrap();
+    let run = flatten(
+        &data.join("sphere.obj"),
+        &["--cut-along", dir.join("bad.txt").to_str().unwrap()],
+        &dir.join("x.obj"),
+    );
+    assert_eq!(run.status.code(), Some(1));
+    assert!(
+        String::from_utf8_lossy(&run.stderr).contains("bad.txt:2"),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

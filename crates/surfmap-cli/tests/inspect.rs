@@ -110,6 +110,25 @@ fn inspect_json_agrees_with_manifest_on_every_mesh() {
         );
         let is_disc = f["boundary_loops"] == 1 && f["genus"] == 0;
         assert_eq!(r["disc"].as_bool().unwrap(), is_disc, "{name}: disc");
+        // What flatten will do: every connected, orientable, manifold mesh is flattened
+        // (holes filled, closed surfaces and handles cut open), the others refused.
+        let loops = f["boundary_loops"].as_u64().unwrap();
+        let cuttable = f["components"] == 1
+            && f["genus"].is_u64()
+            && f["nonmanifold_vertices"] == 0
+            && f["faces_to_flip_for_consistency"] == 0;
+        let plan = r["flatten"].as_str().unwrap();
+        let holes = |n: u64| format!("fill {} hole{}", n - 1, if n == 2 { "" } else { "s" });
+        let handles = |g: u64| format!("cut open along seams (genus {g}, 1 boundary loop)");
+        let expected = match (cuttable, loops, f["genus"].as_u64()) {
+            (true, 1, Some(0)) => "disc as is".to_string(),
+            (true, 0, Some(g)) => format!("cut open along seams (closed, genus {g})"),
+            (true, n, Some(0)) => holes(n),
+            (true, 1, Some(g)) => handles(g),
+            (true, n, Some(g)) => format!("{}, then {}", holes(n), handles(g)),
+            _ => "refused".to_string(),
+        };
+        assert_eq!(plan, expected, "{name}: what flatten will do");
         if is_disc {
             assert!(
                 r["defects"]

@@ -40,11 +40,13 @@ fn python_remedy(kind: DefectKind) -> Option<&'static str> {
             "pass fill_holes=True to fill all but the longest for the flattening (they stay \
              open in the map), or cut from each hole to the outer boundary."
         }
-        DefectKind::NoFaces
-        | DefectKind::NonManifoldVertices
-        | DefectKind::NonOrientable
-        | DefectKind::ClosedSurface
-        | DefectKind::PositiveGenus => return None,
+        DefectKind::ClosedSurface | DefectKind::PositiveGenus => {
+            "surfmap.flatten returns one UV per vertex and does not cut: cut it open first, \
+             or run `surfmap flatten` on the command line, which cuts it along seams."
+        }
+        DefectKind::NoFaces | DefectKind::NonManifoldVertices | DefectKind::NonOrientable => {
+            return None;
+        }
     })
 }
 

@@ -5,7 +5,7 @@ use numpy::PyArray2;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use surfmap::{Alpha, CoarseLevel, Energy, FlattenOptions, FlattenReport, Multilevel, Start};
+use surfmap::{Alpha, CoarseLevel, Cut, Energy, FlattenOptions, FlattenReport, Multilevel, Start};
 
 use crate::advice::{defect_message, option_message};
 use crate::arrays;
@@ -182,9 +182,12 @@ impl FlattenArgs {
             "mean_value" => Start::MeanValue,
             _ => Start::Auto { multilevel },
         };
+        // The arrays returned and the OBJ written have one UV per vertex: never cut
+        // (a surface that is not a disc, once holes are filled if asked, is refused).
         let mut opts = FlattenOptions::new(energy)
             .with_start(start)
-            .with_fill_holes(self.fill_holes);
+            .with_fill_holes(self.fill_holes)
+            .with_cut(Cut::Never);
         opts.newton.max_iterations = self.max_iters;
         opts.newton.tolerance = self.tolerance;
         opts.newton.armijo_c = self.armijo_c;
@@ -212,6 +215,9 @@ impl FlattenArgs {
 /// dictionary of ``surfmap flatten --report`` (start, iterations, energy, measures, the
 /// Newton log, …; ``input`` is None). The solve releases the GIL, so threads flatten
 /// meshes in parallel.
+///
+/// The surface is never cut open along seams (the UVs are one per vertex): a closed
+/// surface or one with handles raises; ``surfmap flatten`` on the command line cuts it.
 ///
 /// Raises ``MeshError`` when the mesh is not a disc (``err.defects`` lists why, each
 /// with its repair), ``ValueError`` for bad arrays or options, ``SolverError`` when the

@@ -101,7 +101,10 @@ pub fn geometry_images<'py>(
     let uvs = match UV {
         Some(uv) => arrays::uvs(uv, "UV", mesh.num_vertices())?,
         None => {
-            let balanced = FlattenOptions::default().with_fill_holes(fill_holes);
+            // Geometry images need one UV per vertex over a disc: never cut.
+            let balanced = FlattenOptions::default()
+                .with_fill_holes(fill_holes)
+                .with_cut(surfmap::Cut::Never);
             py.detach(|| surfmap::flatten(&mesh, &balanced))
                 .map_err(flatten_error)?
                 .uvs

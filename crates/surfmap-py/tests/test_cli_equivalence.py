@@ -51,7 +51,7 @@ def compare_with_cli(cli, tmp_path, mesh_path, flags, options):
     assert without_times(report, drop) == without_times(cli_report, drop)
     for d, c in zip(report["input_defects"], cli_report["input_defects"]):
         if d["kind"] == "several_boundary_loops":
-            assert "fill_holes=True" in d["message"] and "--fill-holes" in c["message"]
+            assert "fill_holes=True" in d["message"] and "--cut-holes" in c["message"]
     return report
 
 
@@ -95,7 +95,7 @@ def test_inspect_matches_the_command_line(cli, data):
             same = ("kind", "count", "examples", "blocks_flattening")
             assert {k: d[k] for k in same} == {k: c[k] for k in same}
             if d["kind"] == "several_boundary_loops":
-                assert "fill_holes" in d["message"] and "--fill-holes" in c["message"]
+                assert "fill_holes" in d["message"] and "--cut-holes" in c["message"]
         # Arrays hold triangles (a quad of the file is two faces here) and no UVs.
         assert info["faces"] == info["triangles"] == cli_info["triangles"]
         assert info["has_uvs"] is False

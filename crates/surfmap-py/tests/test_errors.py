@@ -192,3 +192,14 @@ def test_file_errors(tmp_path):
         surfmap.write_obj(tmp_path / "missing_dir" / "m.obj", V, F)
     # A failed write leaves nothing behind.
     assert os.listdir(tmp_path) == ["bad.off"]
+
+
+def test_a_closed_surface_is_refused_not_cut(data):
+    """flatten returns one UV per vertex, so it never cuts: a closed surface is refused
+    with a remedy that says so (the command line cuts it along seams)."""
+    V, F = surfmap.read_mesh(data / "sphere.obj")
+    assert surfmap.inspect(V, F)["flatten_cuts"]  # what `surfmap flatten` would do
+    with pytest.raises(surfmap.MeshError) as e:
+        surfmap.flatten(V, F)
+    assert [d["kind"] for d in e.value.defects] == ["closed_surface"]
+    assert "does not cut" in str(e.value) and "--" not in str(e.value)

@@ -120,9 +120,10 @@ pub use mesh::{
     BoundaryLoop, Disc, IndexError, NotADisc, PointLocator, SurfacePoint, Topology, TriMesh, Uvs,
 };
 pub use param::flatten::{
-    CoarseLevel, FlattenError, FlattenOptions, Flattening, IterationLog, Multilevel,
-    NewtonSettings, Start, StartMap, StopReason, flatten, flatten_with_progress,
+    Bijective, CoarseLevel, Cut, FlattenError, FlattenOptions, Flattening, Guarantee, IterationLog,
+    Multilevel, NewtonSettings, Seams, Start, StartMap, StopReason, flatten, flatten_with_progress,
 };
 pub use param::normalize_uvs;
+pub use param::plan::{Plan, plan};
 pub use raster::{GeometryImages, GeometryImagesOptions};
 pub use report::{FlattenReport, InspectReport};

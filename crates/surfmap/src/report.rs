@@ -15,7 +15,9 @@ use serde::Serialize;
 use crate::measure::{DistortionReport, MeasureError, MeasureOptions};
 use crate::mesh::validate::{Defect, DefectKind, validate};
 use crate::param::flatten::{MultilevelReport, StartMap};
-use crate::{Flattening, IterationLog, StopReason, Topology, TriMesh};
+use crate::{
+    FlattenOptions, Flattening, Guarantee, IterationLog, Seams, StopReason, Topology, TriMesh,
+};
 
 /// How a front end words a defect: problem and remedy in one sentence. The library's own
 /// wording is [`Defect::message`].
@@ -99,6 +101,13 @@ pub struct InspectReport {
     pub manifold: bool,
     pub orientable: bool,
     pub disc: bool,
+    /// What [`crate::flatten`] does with the mesh by default ([`crate::plan`]): `disc
+    /// as is`, `fill N holes`, `cut open along seams (why)`, or `refused` (see the
+    /// defects).
+    pub flatten: String,
+    /// Holes `flatten` fills, and whether it cuts the surface open (default options).
+    pub flatten_fills_holes: usize,
+    pub flatten_cuts: bool,
     pub has_uvs: bool,
     pub bbox_min: Option<[f64; 3]>,
     pub bbox_max: Option<[f64; 3]>,
@@ -150,6 +159,8 @@ impl InspectReport {
             .collect();
         loop_lengths.sort_unstable_by(|a, b| b.cmp(a));
         let bbox = mesh.bounding_box();
+        let plan =
+            crate::param::plan::plan_with_topology(mesh, &topo, &FlattenOptions::default()).ok();
         Self {
             file: source.file.map(|p| p.display().to_string()),
             format: source.format.map(|f| format!("{f:?}")),
@@ -165,6 +176,11 @@ impl InspectReport {
             manifold: topo.is_manifold(),
             orientable: topo.orientable,
             disc: topo.is_disc(),
+            flatten: plan
+                .as_ref()
+                .map_or_else(|| "refused".to_string(), |p| p.describe()),
+            flatten_fills_holes: plan.as_ref().map_or(0, |p| p.holes_to_fill),
+            flatten_cuts: plan.as_ref().is_some_and(|p| p.cut.is_some()),
             has_uvs: mesh.uvs.is_some(),
             bbox_min: bbox.map(|b| b.0),
             bbox_max: bbox.map(|b| b.1),
@@ -182,6 +198,11 @@ pub struct FlattenReport<'a> {
     pub input: Option<String>,
     pub vertices: usize,
     pub triangles: usize,
+    /// What was done before the solve: `disc as is`, `fill N holes`, `cut open along
+    /// seams (…)`.
+    pub plan: String,
+    /// The seams when the surface was cut: why, the edges (vertex pairs), their length.
+    pub seams: Option<&'a Seams>,
     /// Initial map used: `lscm`, `mean_value`, `given` or `multilevel`.
     pub start: StartMap,
     /// The multilevel start's coarse level, re-insertion and timings (when tried).
@@ -197,6 +218,11 @@ pub struct FlattenReport<'a> {
     pub continuation: &'a [[f64; 3]],
     /// Flipped triangles of the output, counted on the output (always 0).
     pub flipped_triangles: usize,
+    /// `bijective` (flip-free, boundary crossing-free: injective) or
+    /// `locally_injective` (flip-free only), checked on the result.
+    pub guarantee: Guarantee,
+    /// Whether the boundary barrier was used ([`crate::FlattenOptions::bijective`]).
+    pub barrier: bool,
     /// Holes filled for the solve ([`crate::FlattenOptions::fill_holes`]).
     pub holes_filled: usize,
     /// Symmetric Dirichlet energy, area-weighted mean (isometry = 4).
@@ -204,6 +230,7 @@ pub struct FlattenReport<'a> {
     pub boundary_overlap: serde_json::Value,
     pub measures: DistortionReport,
     pub input_defects: Vec<ReportedDefect>,
+    pub time_prepare_s: f64,
     pub time_start_s: f64,
     pub time_newton_s: f64,
     pub time_total_s: f64,
@@ -212,18 +239,18 @@ pub struct FlattenReport<'a> {
 
 impl<'a> FlattenReport<'a> {
     /// The report of `r`, the flattening of `mesh` (read from `input`, if from a file):
-    /// measures the map ([`crate::distortion_report_per_vertex`], default options) and
-    /// lists the input's defects worded by `wording`.
+    /// measures the map ([`crate::distortion_report`] on its corner UVs, default
+    /// options) and lists the input's defects worded by `wording`.
     pub fn measure(
         input: Option<&Path>,
         mesh: &TriMesh,
         r: &'a Flattening,
         wording: DefectWording,
     ) -> Result<Self, MeasureError> {
-        let measures = crate::distortion_report_per_vertex(
+        let measures = crate::distortion_report(
             &mesh.positions,
             &mesh.triangles,
-            &r.uvs,
+            &r.corner_uvs(&mesh.triangles),
             &MeasureOptions::default(),
         )?;
         let defects = ReportedDefect::all(mesh, &Topology::new(mesh), wording);
@@ -231,6 +258,8 @@ impl<'a> FlattenReport<'a> {
             input: input.map(|p| p.display().to_string()),
             vertices: mesh.positions.len(),
             triangles: mesh.triangles.len(),
+            plan: r.plan.describe(),
+            seams: r.seams.as_ref(),
             start: r.start,
             multilevel: r.multilevel.as_ref(),
             lscm_flipped_triangles: r.lscm_flipped,
@@ -241,11 +270,14 @@ impl<'a> FlattenReport<'a> {
             energy: r.energy,
             continuation: &r.continuation,
             flipped_triangles: measures.flipped_triangles,
+            guarantee: r.guarantee,
+            barrier: r.barrier,
             holes_filled: r.holes_filled,
             symmetric_dirichlet: measures.symmetric_dirichlet,
             boundary_overlap: serde_json::to_value(&measures.boundary_overlap).unwrap_or_default(),
             measures,
             input_defects: defects,
+            time_prepare_s: r.time_prepare,
             time_start_s: r.time_start,
             time_newton_s: r.time_newton,
             time_total_s: r.time_total,
@@ -311,6 +343,31 @@ mod tests {
         let json = serde_json::to_value(&report).unwrap();
         assert_eq!(json["input"], serde_json::Value::Null);
         assert_eq!(json["boundary_overlap"]["self_intersecting"], false);
+        assert_eq!(json["plan"], "disc as is");
+        assert_eq!(json["seams"], serde_json::Value::Null);
+        assert_eq!(json["guarantee"], "bijective");
+    }
+
+    /// A surface cut open is measured on its per-corner UVs: the same numbers as a
+    /// measurement of the corners, and the seams are reported.
+    #[test]
+    fn flatten_report_of_a_cut_surface_measures_its_corners() {
+        let mesh = generate::sphere(1);
+        let r = flatten(&mesh, &FlattenOptions::default()).unwrap();
+        let seams = r.seams.as_ref().expect("a sphere is cut open");
+        let report = FlattenReport::measure(None, &mesh, &r, Defect::message).unwrap();
+        assert_eq!(report.plan, "cut open along seams (closed, genus 0)");
+        assert_eq!(report.seams.map(|s| s.edges.len()), Some(seams.edges.len()));
+        assert_eq!(report.flipped_triangles, 0);
+        let again = crate::distortion_report(
+            &mesh.positions,
+            &mesh.triangles,
+            &r.corner_uvs(&mesh.triangles),
+            &MeasureOptions::default(),
+        )
+        .unwrap();
+        assert_eq!(report.symmetric_dirichlet, again.symmetric_dirichlet);
+        assert!(report.symmetric_dirichlet.is_finite());
     }
 
     /// Counts and topology of a known surface (a square of two triangles and a closed
@@ -327,6 +384,8 @@ mod tests {
         assert_eq!(r.area, 1.0);
         assert_eq!(r.bbox_max, Some([1.0, 1.0, 0.0]));
         assert!(r.defects.is_empty() && r.file.is_none() && r.format.is_none());
+        assert_eq!(r.flatten, "disc as is");
+        assert_eq!((r.flatten_fills_holes, r.flatten_cuts), (0, false));
 
         let closed = generate::octahedron();
         let r = InspectReport::new(MeshSource::ARRAYS, &closed, |d| format!("[{:?}]", d.kind));
@@ -340,5 +399,24 @@ mod tests {
             .expect("a closed surface is reported");
         assert_eq!(closed_surface.message, "[ClosedSurface]");
         assert!(closed_surface.blocks_flattening);
+        // Blocking the disc map as it is, but `flatten` cuts it open.
+        assert_eq!(r.flatten, "cut open along seams (closed, genus 0)");
+        assert_eq!((r.flatten_fills_holes, r.flatten_cuts), (0, true));
+
+        let handles = generate::holed_plate(2, 1);
+        let r = InspectReport::new(MeshSource::ARRAYS, &handles, Defect::message);
+        assert!(r.flatten.starts_with("cut open along seams") && r.flatten.contains("genus 2"));
+        assert_eq!((r.flatten_fills_holes, r.flatten_cuts), (0, true));
+        let mut two = generate::unit_square();
+        two.positions.extend(
+            generate::unit_square()
+                .positions
+                .iter()
+                .map(|p| [p[0] + 3.0, p[1], p[2]]),
+        );
+        two.triangles.extend([[4, 5, 6], [4, 6, 7]]);
+        let r = InspectReport::new(MeshSource::ARRAYS, &two, Defect::message);
+        assert_eq!(r.flatten, "refused");
+        assert_eq!((r.flatten_fills_holes, r.flatten_cuts), (0, false));
     }
 }

@@ -26,14 +26,15 @@ fn flag_remedy(kind: DefectKind) -> Option<&'static str> {
         }
         DefectKind::InconsistentOrientation => "Use --reorient.",
         DefectKind::SeveralBoundaryLoops => {
-            "use --fill-holes to fill all but the longest for the flattening (they stay open \
-             in the output), or cut from each hole to the outer boundary."
+            "surfmap flatten fills all but the longest for the solve (they stay open in the \
+             output), or, with --cut-holes, joins them to the outer boundary by seams."
         }
-        DefectKind::NoFaces
-        | DefectKind::NonManifoldVertices
-        | DefectKind::NonOrientable
-        | DefectKind::ClosedSurface
-        | DefectKind::PositiveGenus => return None,
+        DefectKind::ClosedSurface | DefectKind::PositiveGenus => {
+            "surfmap flatten cuts it open along seams (or along yours: --cut-along)."
+        }
+        DefectKind::NoFaces | DefectKind::NonManifoldVertices | DefectKind::NonOrientable => {
+            return None;
+        }
     })
 }
 

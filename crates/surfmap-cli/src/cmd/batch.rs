@@ -1,7 +1,8 @@
 //! `surfmap flatten A B … -o DIR/`: many meshes flattened in parallel with a progress
 //! bar. Each mesh gets `DIR/NAME.obj` and its report `DIR/NAME.json`; a mesh that
 //! cannot be read or flattened is reported and skipped; `DIR/summary.csv` lists every
-//! mesh, failures with their reason ([`surfmap::batch`]).
+//! mesh, failures with their reason ([`surfmap::batch`]). With `--seams FOLDER/`, each
+//! mesh cut open along seams also gets `FOLDER/NAME.seams.obj`.
 
 use std::io::IsTerminal;
 use std::path::Path;
@@ -13,7 +14,7 @@ use surfmap::batch::{self, BatchRow};
 use surfmap::{FlattenOptions, FlattenReport, flatten_with_progress};
 
 use super::advice::{defect_message, flatten_error};
-use super::flatten::{Args, options, write_json, write_output};
+use super::flatten::{Args, flatten_options, write_json, write_output, write_seams};
 use super::load_mesh;
 
 /// Whether the command is a batch: several inputs, or an output folder (ending in `/`
@@ -44,9 +45,18 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     if args.pictures.is_some() {
         bail!("--pictures is for one mesh; flatten that mesh on its own to draw its pictures");
     }
-    let opts = options(&args.solver, args.fill_holes)?;
-    std::fs::create_dir_all(dir)
-        .map_err(|e| anyhow::anyhow!("cannot create {}: {e}", dir.display()))?;
+    if let Some(seams) = &args.seams
+        && !names_folder(seams)
+    {
+        bail!(
+            "--seams names one file; for a batch give a folder (ending in /, e.g. --seams seams/), which receives NAME.seams.obj per cut mesh"
+        );
+    }
+    let opts = flatten_options(args)?;
+    for folder in std::iter::once(dir).chain(&args.seams) {
+        std::fs::create_dir_all(folder)
+            .map_err(|e| anyhow::anyhow!("cannot create {}: {e}", folder.display()))?;
+    }
     let names = batch::output_names(&args.inputs);
     let bar = if args.quiet || !std::io::stderr().is_terminal() {
         ProgressBar::hidden()
@@ -119,6 +129,9 @@ fn flatten_one(
             .map_err(|e| e.context(format!("cannot flatten {}", input.display())))?;
         let obj = dir.join(format!("{name}.obj"));
         write_output(args, &obj, &mesh, &r)?;
+        if let (Some(folder), Some(seams)) = (&args.seams, &r.seams) {
+            write_seams(&folder.join(format!("{name}.seams.obj")), &mesh, seams)?;
+        }
         let report = FlattenReport::measure(Some(input), &mesh, &r, defect_message)?;
         let json = dir.join(format!("{name}.json"));
         write_json(&json, &report)?;

@@ -48,7 +48,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     ] {
         let opts = FlattenOptions::new(alpha);
         let r = super::flatten::flatten_mesh(&mesh, &opts, false)?;
-        let out = super::flatten::output_mesh(&mesh, &r.uvs, false);
+        let out = super::flatten::output_mesh(&mesh, &r, false, false);
         let obj = dir.join(format!("{name}.obj"));
         write_obj(&obj, &out, None)?;
         written.push(obj);

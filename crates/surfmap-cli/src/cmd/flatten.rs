@@ -1,4 +1,7 @@
-//! `surfmap flatten IN -o OUT.obj`: flip-free flattening of a disc-topology mesh;
+//! `surfmap flatten IN -o OUT.obj`: flip-free flattening of any connected, orientable,
+//! manifold mesh: a disc as it is, holes filled for the solve (or cut open with
+//! `--cut-holes`), closed and higher-genus surfaces cut open along seams (per-corner
+//! `vt` in the OBJ).
 //! `surfmap flatten A B … -o DIR/`: many meshes in parallel ([`super::batch`]).
 
 use super::advice::{defect_message, flatten_error, option_message};
@@ -9,11 +12,11 @@ use std::io::IsTerminal;
 use std::path::Path;
 use std::path::PathBuf;
 use surfmap::fsutil::write_atomically;
-use surfmap::measure::{Measure, corner_uvs_from_vertex_uvs, per_triangle_measure};
+use surfmap::measure::{Measure, per_triangle_measure};
 use surfmap::render;
 use surfmap::{
-    Alpha, CoarseLevel, Energy, FlattenOptions, FlattenReport, Flattening, Multilevel, Start,
-    TriMesh, Uvs, flatten_with_progress, write_obj,
+    Alpha, Bijective, CoarseLevel, Cut, Energy, FlattenOptions, FlattenReport, Flattening,
+    Guarantee, Multilevel, Seams, Start, TriMesh, Uvs, flatten_with_progress, write_obj,
 };
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
@@ -50,6 +53,16 @@ pub enum StartChoice {
 }
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum BijectiveChoice {
+    /// Solve again with the boundary barrier when the result's boundary overlaps itself.
+    Auto,
+    /// Always solve with the boundary barrier.
+    Always,
+    /// Never: flip-free only; the boundary may overlap itself.
+    Off,
+}
+
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
 pub enum MultilevelChoice {
     /// For meshes of 15k faces and more.
     Auto,
@@ -59,13 +72,14 @@ pub enum MultilevelChoice {
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Input meshes (OBJ, OFF or PLY) with disc topology. Several inputs are flattened
-    /// in parallel into the folder -o (a batch: a bad mesh is reported and skipped).
+    /// Input meshes (OBJ, OFF or PLY): connected, orientable, manifold (a disc, a disc
+    /// with holes, a closed surface, handles). Several inputs are flattened in parallel
+    /// into the folder -o (a batch: a bad mesh is reported and skipped).
     #[arg(required = true, num_args = 1..)]
     pub inputs: Vec<PathBuf>,
-    /// Output OBJ with texture coordinates (`vt`); for a batch a folder (ending in `/`,
-    /// or existing), which receives NAME.obj and the report NAME.json per mesh and
-    /// summary.csv.
+    /// Output OBJ with texture coordinates (`vt`; per corner, split along the seams,
+    /// when the surface was cut); for a batch a folder (ending in `/`, or existing),
+    /// which receives NAME.obj and the report NAME.json per mesh and summary.csv.
     #[arg(short, long)]
     pub output: PathBuf,
     /// Batch: meshes flattened at the same time; 0 = one per core. The batch runs on
@@ -95,8 +109,26 @@ pub struct Args {
     pub quiet: bool,
     /// Fill every boundary loop but the longest (eyes, mouth, scan holes) with a fan for
     /// the flattening; the output keeps the original faces, holes stay open in the UVs.
-    #[arg(long)]
+    /// This is the default; the flag is kept for scripts.
+    #[arg(long, conflicts_with = "cut_holes")]
     pub fill_holes: bool,
+    /// Open the holes with seams to the outer boundary instead of filling them.
+    #[arg(long)]
+    pub cut_holes: bool,
+    /// Keep the boundary from overlapping itself (a bijective map) with a boundary
+    /// barrier: when the unconstrained result overlaps (auto), always, or never.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub bijective: BijectiveChoice,
+    /// Cut along these seams instead of the automatic cut graph: an OBJ with `l` lines
+    /// (as `--seams` writes; 1-based vertex indices), or a text file with one edge per
+    /// line, two 0-based vertex indices (`#` starts a comment).
+    #[arg(long, value_name = "EDGES")]
+    pub cut_along: Option<PathBuf>,
+    /// Write the seams (the cut edges) as an OBJ: the input's vertices and one `l` line
+    /// per seam edge (nothing is written when the surface was not cut). In a batch,
+    /// give a folder (ending in `/`): it receives NAME.seams.obj per cut mesh.
+    #[arg(long, value_name = "SEAMS.obj")]
+    pub seams: Option<PathBuf>,
     #[command(flatten)]
     pub repair: RepairArgs,
 }
@@ -201,13 +233,32 @@ pub fn options(args: &SolverArgs, fill_holes: bool) -> anyhow::Result<FlattenOpt
     };
     let mut opts = FlattenOptions::new(energy)
         .with_start(start)
-        .with_fill_holes(fill_holes);
+        .with_fill_holes(fill_holes)
+        // One UV per vertex for every command but `flatten` (`flatten_options`).
+        .with_cut(Cut::Never);
     opts.newton.max_iterations = args.max_iters;
     opts.newton.tolerance = args.tolerance;
     opts.newton.armijo_c = args.armijo_c;
     opts.validate()
         .map_err(|e| anyhow::anyhow!(option_message(&e)))?;
     Ok(opts)
+}
+
+/// The options of `surfmap flatten` (one mesh or a batch): the solver's, with the holes
+/// filled unless `--cut-holes`, surfaces that are not discs cut open (automatically or
+/// along `--cut-along`), and the `--bijective` mode.
+pub fn flatten_options(args: &Args) -> anyhow::Result<FlattenOptions> {
+    let cut = match &args.cut_along {
+        Some(path) => Cut::Along(read_seams(path)?),
+        None => Cut::Auto,
+    };
+    Ok(options(&args.solver, !args.cut_holes)?
+        .with_cut(cut)
+        .with_bijective(match args.bijective {
+            BijectiveChoice::Auto => Bijective::WhenOverlapping,
+            BijectiveChoice::Always => Bijective::Always,
+            BijectiveChoice::Off => Bijective::Off,
+        }))
 }
 
 /// Runs the flattening with a progress spinner on a terminal; errors name the flags
@@ -247,17 +298,97 @@ pub fn flatten_mesh(
     Ok(result)
 }
 
-/// The mesh to write: the input with per-vertex UVs, or the flat mesh itself.
-pub fn output_mesh(mesh: &TriMesh, uvs: &[[f64; 2]], uv_as_positions: bool) -> TriMesh {
-    TriMesh {
-        positions: if uv_as_positions {
-            uvs.iter().map(|p| [p[0], p[1], 0.0]).collect()
-        } else {
-            mesh.positions.clone()
-        },
-        triangles: mesh.triangles.clone(),
-        uvs: Some(Uvs::PerVertex(uvs.to_vec())),
+/// The mesh to write: the input with its texture coordinates (per vertex, or per corner
+/// when it was cut), or the flat mesh itself (cut open along the seams).
+pub fn output_mesh(
+    mesh: &TriMesh,
+    result: &Flattening,
+    normalize: bool,
+    uv_as_positions: bool,
+) -> TriMesh {
+    let uvs = result.texture_coordinates(normalize);
+    if !uv_as_positions {
+        return TriMesh {
+            uvs: Some(uvs),
+            ..TriMesh::new(mesh.positions.clone(), mesh.triangles.clone())
+        };
     }
+    let (coords, triangles) = match uvs {
+        Uvs::PerVertex(coords) => (coords, mesh.triangles.clone()),
+        Uvs::PerCorner { coords, indices } => (coords, indices),
+    };
+    TriMesh {
+        positions: coords.iter().map(|p| [p[0], p[1], 0.0]).collect(),
+        triangles,
+        uvs: Some(Uvs::PerVertex(coords)),
+    }
+}
+
+/// Reads seams for `--cut-along`: OBJ `l` lines (1-based, consecutive pairs of a
+/// polyline), or lines of two 0-based vertex indices.
+pub fn read_seams(path: &Path) -> anyhow::Result<Vec<[u32; 2]>> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("cannot read seams from {}", path.display()))?;
+    let obj = text.lines().any(|l| l.trim_start().starts_with("l "));
+    let mut seams = Vec::new();
+    for (number, line) in text.lines().enumerate() {
+        let line = line.split('#').next().unwrap_or("").trim();
+        let bad = || {
+            anyhow::anyhow!(
+                "{}:{}: expected {}, got {line:?}",
+                path.display(),
+                number + 1,
+                if obj {
+                    "`l A B …` with 1-based vertex indices"
+                } else {
+                    "two 0-based vertex indices"
+                }
+            )
+        };
+        let fields: Vec<&str> = line.split_whitespace().collect();
+        if obj {
+            if fields.first() != Some(&"l") {
+                continue;
+            }
+            let vertices: Vec<u32> = fields[1..]
+                .iter()
+                .map(|f| f.split('/').next().unwrap_or("").parse::<u32>())
+                .collect::<Result<_, _>>()
+                .map_err(|_| bad())?;
+            if vertices.len() < 2 || vertices.contains(&0) {
+                return Err(bad());
+            }
+            seams.extend(vertices.windows(2).map(|w| [w[0] - 1, w[1] - 1]));
+        } else if !fields.is_empty() {
+            match fields[..] {
+                [a, b] => {
+                    seams.push([a.parse().map_err(|_| bad())?, b.parse().map_err(|_| bad())?])
+                }
+                _ => return Err(bad()),
+            }
+        }
+    }
+    Ok(seams)
+}
+
+/// Writes the seams as an OBJ: every vertex of the input, one `l` line per seam edge.
+pub fn write_seams(path: &Path, mesh: &TriMesh, seams: &Seams) -> anyhow::Result<()> {
+    write_atomically(path, |w| {
+        writeln!(
+            w,
+            "# seams of surfmap flatten: {} edges, length {}",
+            seams.edges.len(),
+            seams.length
+        )?;
+        for p in &mesh.positions {
+            writeln!(w, "v {} {} {}", p[0], p[1], p[2])?;
+        }
+        for [a, b] in &seams.edges {
+            writeln!(w, "l {} {}", a + 1, b + 1)?;
+        }
+        Ok(())
+    })
+    .with_context(|| format!("cannot write {}", path.display()))
 }
 
 /// The map written: the UVs (in `[0, 1]²` with `--normalize`) on the mesh, or the flat
@@ -268,12 +399,7 @@ pub fn write_output(
     mesh: &TriMesh,
     r: &Flattening,
 ) -> anyhow::Result<()> {
-    let uvs = if args.normalize {
-        r.normalized_uvs()
-    } else {
-        r.uvs.clone()
-    };
-    let out = output_mesh(mesh, &uvs, args.uv_as_positions);
+    let out = output_mesh(mesh, r, args.normalize, args.uv_as_positions);
     let material = args
         .texture
         .as_ref()
@@ -288,7 +414,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let input = &args.inputs[0];
     let file = load_mesh(input)?;
-    let opts = options(&args.solver, args.fill_holes)?;
+    let opts = flatten_options(&args)?;
     let mesh = args.repair.apply(file.mesh, args.quiet)?;
     let result = flatten_mesh(&mesh, &opts, args.quiet)
         .with_context(|| format!("cannot flatten {}", input.display()))?;
@@ -297,6 +423,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         // Measured on the written map (its own scale; the measures normalize area).
         let report = FlattenReport::measure(Some(input), &mesh, &result, defect_message)?;
         write_json(path, &report)?;
+    }
+    if let (Some(path), Some(seams)) = (&args.seams, &result.seams) {
+        write_seams(path, &mesh, seams)?;
     }
     if let Some(dir) = &args.pictures {
         let written = write_pictures(dir, &mesh, &result)?;
@@ -315,8 +444,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             eprintln!("note: multilevel start abandoned ({reason}); used the single-level start");
         }
         outln!(
-            "{}: start {}{}, {} iterations, {}, energy {:.6}, flipped triangles {}, {:.3} s → {}",
+            "{}: {}start {}{}, {} iterations, {}, energy {:.6}, flipped triangles {}{}, {:.3} s → {}",
             input.display(),
+            match &result.seams {
+                None => String::new(),
+                Some(s) => format!(
+                    "{} ({} seam edges, length {:.4}), ",
+                    result.plan.describe(),
+                    s.edges.len(),
+                    s.length
+                ),
+            },
             result.start_description(),
             match result.warm_start_iterations {
                 0 => String::new(),
@@ -326,6 +464,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             convergence(result.converged),
             result.energy,
             result.flipped_triangles,
+            match (result.guarantee, result.barrier) {
+                (Guarantee::LocallyInjective, _) => format!(
+                    ", boundary overlaps itself ({} crossings; see --bijective)",
+                    result.boundary_crossings
+                ),
+                (Guarantee::Bijective, true) => ", no overlap (boundary barrier)".to_string(),
+                (Guarantee::Bijective, false) => String::new(),
+            },
             result.time_total,
             args.output.display()
         );
@@ -344,7 +490,7 @@ pub fn write_json(path: &Path, value: &impl serde::Serialize) -> anyhow::Result<
 /// the convergence plot into `dir`; returns the paths written.
 pub fn write_pictures(dir: &Path, mesh: &TriMesh, r: &Flattening) -> anyhow::Result<Vec<PathBuf>> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    let corners = corner_uvs_from_vertex_uvs(&mesh.triangles, &r.uvs)?;
+    let corners = r.corner_uvs(&mesh.triangles);
     let angle = per_triangle_measure(&mesh.positions, &mesh.triangles, &corners, Measure::Angle)?;
     let mut written = Vec::new();
     let mut save = |name: &str, img: render::RgbImage| -> anyhow::Result<()> {

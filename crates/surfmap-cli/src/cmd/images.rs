@@ -105,7 +105,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         bail!("the mesh has no texture coordinates, so the texture cannot be sampled");
     }
 
-    let balanced = FlattenOptions::default().with_fill_holes(args.fill_holes);
+    // Geometry images need one UV per vertex over a disc: no cut, holes filled only on request.
+    let balanced = FlattenOptions::default()
+        .with_fill_holes(args.fill_holes)
+        .with_cut(surfmap::Cut::Never);
     let flat = flatten_mesh(&mesh, &balanced, args.quiet)
         .with_context(|| format!("cannot flatten {}", args.mesh.display()))?;
     if !args.quiet {

@@ -1,4 +1,6 @@
-//! `surfmap inspect MESH [--json]`: counts, bounding box, area, topology and defects.
+//! `surfmap inspect MESH [--json]`: counts, bounding box, area, topology, defects, and
+//! what `flatten` will do with the mesh (as it is, fill holes, cut open, or refuse) and
+//! why.
 
 use super::advice::defect_message;
 use super::load_mesh;
@@ -64,12 +66,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "NOT orientable"
         },
     );
+    outln!("  disc       {}", if r.disc { "yes" } else { "no" });
     outln!(
-        "  disc       {}",
-        if r.disc {
-            "yes: ready to flatten"
-        } else {
-            "no: see the defects below"
+        "  flatten    {}",
+        match r.flatten.as_str() {
+            "refused" => "refused: repair the defects marked below first".to_string(),
+            "disc as is" => "the disc as it is".to_string(),
+            plan if r.flatten_cuts && r.flatten_fills_holes == 0 && r.boundary_loops > 1 => {
+                format!("{plan}: the holes are joined to the outer boundary")
+            }
+            plan if r.flatten_cuts =>
+                format!("{plan}: a disc map needs one boundary loop and no handle"),
+            plan => format!(
+                "{plan} for the solve (they stay open in the map; --cut-holes opens them with seams instead)"
+            ),
         }
     );
     if r.defects.is_empty() {

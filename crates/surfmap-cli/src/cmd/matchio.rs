@@ -42,7 +42,10 @@ pub fn load_match(
 /// A chart of `mesh` to carry points through: its balanced flattening (holes filled for
 /// the solve).
 pub fn chart_of(mesh: &TriMesh, name: &Path, quiet: bool) -> anyhow::Result<Chart> {
-    let options = FlattenOptions::default().with_fill_holes(true);
+    // A chart is one UV per vertex over a disc: never cut.
+    let options = FlattenOptions::default()
+        .with_fill_holes(true)
+        .with_cut(surfmap::Cut::Never);
     let flat = super::flatten::flatten_mesh(mesh, &options, true)
         .with_context(|| format!("cannot flatten {} for its chart", name.display()))?;
     if !quiet {

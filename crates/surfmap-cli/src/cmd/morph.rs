@@ -90,7 +90,9 @@ pub fn write_stills(
                 None => {
                     let flat = super::flatten::flatten_mesh(
                         a,
-                        &surfmap::FlattenOptions::default().with_fill_holes(true),
+                        &surfmap::FlattenOptions::default()
+                            .with_fill_holes(true)
+                            .with_cut(surfmap::Cut::Never),
                         quiet,
                     )?;
                     Uvs::PerVertex(place_in_unit_square(&flat.uvs, 0.0))

@@ -43,7 +43,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let mut maps = Vec::new();
     for alpha in &alphas {
-        let opts = FlattenOptions::new(*alpha);
+        // The panels draw one UV per vertex: never cut.
+        let opts = FlattenOptions::new(*alpha).with_cut(surfmap::Cut::Never);
         let r = super::flatten::flatten_mesh(&mesh, &opts, false)
             .with_context(|| format!("cannot flatten {}", args.input.display()))?;
         let a = alpha.alphas();

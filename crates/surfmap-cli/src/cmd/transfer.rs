@@ -230,7 +230,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             None => {
                 let flat = super::flatten::flatten_mesh(
                     a,
-                    &surfmap::FlattenOptions::default().with_fill_holes(true),
+                    &surfmap::FlattenOptions::default()
+                        .with_fill_holes(true)
+                        .with_cut(surfmap::Cut::Never),
                     args.quiet,
                 )?;
                 Uvs::PerVertex(surfmap::apps::texture::place_in_unit_square(

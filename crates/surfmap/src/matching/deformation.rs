@@ -1,7 +1,7 @@
 //! The matching deformation φ on the grid of one level (thesis §3.2.4, NOTES §2b).
 //!
 //! φ = id + u with one displacement `u_p ∈ ℝ²` per node of the `n × n` grid over
-//! ω = [0,1]², interpolated by P1 finite elements on the grid triangulated with one
+//! ω = [0, 1]², interpolated by P1 finite elements on the grid triangulated with one
 //! diagonal per cell: cell `(i, j)` (corners `p00 = (i, j)`, `p01 = (i, j+1)`,
 //! `p10 = (i+1, j)`, `p11 = (i+1, j+1)`, row `i` along ξ₁) is split into the lower
 //! triangle `(p00, p01, p10)` and the upper triangle `(p11, p10, p01)`, both

@@ -38,7 +38,7 @@ impl std::fmt::Debug for SobolevPreconditioner {
 }
 
 impl SobolevPreconditioner {
-    /// For an `n × n` grid over ω = [0,1]² (`h = 1/(n − 1)`) and `λ ≥ 0` (domain units²).
+    /// For an `n × n` grid over ω = [0, 1]² (`h = 1/(n − 1)`) and `λ ≥ 0` (domain units²).
     pub fn new(size: usize, lambda: f64) -> Self {
         let n = size;
         let h = 1.0 / (n - 1) as f64;

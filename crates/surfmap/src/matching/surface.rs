@@ -8,7 +8,7 @@ use super::energy::{B_CHANNELS, LevelA, LevelB, TriangleA, chi, eta, theta};
 use crate::grid::pyramid::gaussian_filter;
 use crate::grid::{Grid, Pyramid, harmonic_extension};
 use crate::mesh::TriMesh;
-use crate::param::flatten::{FlattenOptions, flatten};
+use crate::param::flatten::{Cut, FlattenOptions, flatten};
 use crate::raster::{
     FeatureFile, FeatureSource, GeometryImages, GeometryImagesOptions, SurfaceScale,
 };
@@ -60,7 +60,11 @@ impl MatchSurface {
         curvature_sigma: f64,
     ) -> Result<Self, MatchError> {
         let clock = std::time::Instant::now();
-        let flat = flatten(mesh, &FlattenOptions::default().with_fill_holes(fill_holes))?;
+        // Geometry images need one UV per vertex over a disc: never cut.
+        let options = FlattenOptions::default()
+            .with_fill_holes(fill_holes)
+            .with_cut(Cut::Never);
+        let flat = flatten(mesh, &options)?;
         let flatten_time = clock.elapsed().as_secs_f64();
         let clock = std::time::Instant::now();
         let source = match features {

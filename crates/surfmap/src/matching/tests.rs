@@ -242,3 +242,14 @@ fn a_crop_finds_its_region_in_the_whole() {
     let d = ((0..3).map(|c| (centre[c] - truth[c]).powi(2)).sum::<f64>()).sqrt();
     assert!(d < 2.0 * CELL, "centroid off by {d}");
 }
+
+/// Matching needs one UV per vertex over a disc: a closed surface is not cut open along
+/// seams (as `flatten` would by default) but refused with the flattening's reason.
+#[test]
+fn a_closed_surface_is_refused_not_cut() {
+    let disc = surface(6, |p| p);
+    let sphere = crate::mesh::generate::sphere(2);
+    let err = match_surfaces(&sphere, &disc, &Guidance::default(), &options()).unwrap_err();
+    let message = err.to_string();
+    assert!(message.contains("closed"), "{message}");
+}

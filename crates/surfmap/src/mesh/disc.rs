@@ -71,18 +71,9 @@ impl<'m> Disc<'m> {
     /// A topology of another mesh is caught only when the triangle counts differ.
     pub fn with_topology(mesh: &'m TriMesh, topology: Topology) -> Result<Self, NotADisc> {
         mesh.check_indices()?;
-        let finite = mesh
-            .positions
-            .iter()
-            .all(|p| p.iter().all(|x| x.is_finite()));
-        let proper = mesh
-            .triangles
-            .iter()
-            .all(|&[a, b, c]| a != b && b != c && a != c);
         let belongs = topology.face_edges.len() == mesh.triangles.len();
         if !(belongs
-            && finite
-            && proper
+            && mesh.finite_and_proper()
             && topology.is_disc()
             && topology.inconsistent_edges.is_empty())
         {

@@ -1,8 +1,10 @@
 //! Deterministic generated meshes for tests, examples and benchmarks.
 //!
 //! Every generator returns a [`TriMesh`] with counter-clockwise triangles (normals
-//! pointing to +z for the planar and bumpy discs, outward for the cap and the cylinder)
-//! and is a disc topologically. Same arguments, same mesh, bit for bit.
+//! pointing to +z for the planar and bumpy discs, outward for the cap, the cylinder and
+//! the closed surfaces). The discs are discs topologically; the closed surfaces
+//! ([`octahedron`], [`sphere`], [`torus`], [`holed_plate`]) are for what has to be cut
+//! first. Same arguments, same mesh, bit for bit.
 //!
 //! Vertex order: discs and caps are built ring by ring from the center (vertex 0), so
 //! the last ring is the boundary; grids are row-major.
@@ -48,6 +50,103 @@ pub fn octahedron() -> TriMesh {
     )
 }
 
+/// The unit sphere: the [`octahedron`] subdivided `levels` times at edge midpoints,
+/// every vertex pushed onto the sphere (`8·4^levels` triangles, genus 0, closed).
+pub fn sphere(levels: usize) -> TriMesh {
+    let mut mesh = octahedron();
+    for _ in 0..levels {
+        mesh = super::subdivide::subdivide_midpoint(&mesh);
+    }
+    for p in &mut mesh.positions {
+        let r = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+        *p = p.map(|x| x / r);
+    }
+    mesh
+}
+
+/// The torus of tube radius `minor` around a circle of radius `major > minor` in the
+/// xy plane: `n` steps around the z axis, `m` around the tube (both ≥ 3); vertex
+/// `(i, j)` at angle `2πi/n` around the axis and `2πj/m` around the tube has index
+/// `i·m + j`. Closed, genus 1.
+pub fn torus(major: f64, minor: f64, n: usize, m: usize) -> TriMesh {
+    let (n, m) = (n.max(3), m.max(3));
+    let mut positions = Vec::with_capacity(n * m);
+    for i in 0..n {
+        let u = TAU * i as f64 / n as f64;
+        for j in 0..m {
+            let v = TAU * j as f64 / m as f64;
+            let r = major + minor * v.cos();
+            positions.push([r * u.cos(), r * u.sin(), minor * v.sin()]);
+        }
+    }
+    let triangles = quad_triangles(n, m, |i, j| ((i % n) * m + j % m) as u32);
+    TriMesh::new(positions, triangles)
+}
+
+/// The surface of a plate of `(2·holes + 1) × 3 × 1` unit cubes with `holes` square
+/// holes through it (cube `(2k + 1, 1)` left out for `k < holes`): a closed surface of
+/// genus `holes` with flat faces and right-angled creases, every cube face split into
+/// `subdivisions × subdivisions` squares of two triangles. Closed, manifold, outward.
+pub fn holed_plate(holes: usize, subdivisions: usize) -> TriMesh {
+    let s = subdivisions.max(1);
+    let (nx, ny) = (2 * holes + 1, 3);
+    let filled = |x: i64, y: i64, z: i64| -> bool {
+        (0..nx as i64).contains(&x) && (0..ny).contains(&y) && z == 0 && !(y == 1 && x % 2 == 1)
+    };
+    let mut index = std::collections::HashMap::new();
+    let mut positions = Vec::new();
+    let mut vertex = |p: [i64; 3]| -> u32 {
+        *index.entry(p).or_insert_with(|| {
+            positions.push(p.map(|c| c as f64 / s as f64));
+            (positions.len() - 1) as u32
+        })
+    };
+    let mut triangles = Vec::new();
+    for x in 0..nx as i64 {
+        for y in 0..ny {
+            if !filled(x, y, 0) {
+                continue;
+            }
+            for axis in 0..3 {
+                for side in [0i64, 1] {
+                    let mut n = [x, y, 0];
+                    n[axis] += 2 * side - 1;
+                    if filled(n[0], n[1], n[2]) {
+                        continue;
+                    }
+                    // The face's two in-plane axes, ordered so that (a, b, outward)
+                    // is right-handed.
+                    let (a, b) = if side == 1 {
+                        ((axis + 1) % 3, (axis + 2) % 3)
+                    } else {
+                        ((axis + 2) % 3, (axis + 1) % 3)
+                    };
+                    let corner = |i: i64, j: i64| {
+                        let mut p = [x * s as i64, y * s as i64, 0];
+                        p[axis] += side * s as i64;
+                        p[a] += i;
+                        p[b] += j;
+                        p
+                    };
+                    for i in 0..s as i64 {
+                        for j in 0..s as i64 {
+                            let q = [
+                                vertex(corner(i, j)),
+                                vertex(corner(i + 1, j)),
+                                vertex(corner(i + 1, j + 1)),
+                                vertex(corner(i, j + 1)),
+                            ];
+                            triangles.push([q[0], q[1], q[2]]);
+                            triangles.push([q[0], q[2], q[3]]);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    TriMesh::new(positions, triangles)
+}
+
 /// Planar `n × n` grid of squares on `[0, 1]² × {0}`: `(n + 1)²` vertices, vertex
 /// `(i, j)` (row `j`, column `i`) at `(i/n, j/n, 0)` has index `j·(n + 1) + i`. Each
 /// square is split along the diagonal from `(i, j)` to `(i + 1, j + 1)`. `n ≥ 1`
@@ -66,7 +165,13 @@ pub fn grid_disc(n: usize) -> TriMesh {
 /// Triangles of a row-major `(cols + 1) × (rows + 1)` vertex grid, counter-clockwise
 /// when column index grows along x and row index along y.
 fn grid_triangles(cols: usize, rows: usize) -> Vec<[u32; 3]> {
-    let id = |i: usize, j: usize| (j * (cols + 1) + i) as u32;
+    quad_triangles(cols, rows, |i, j| (j * (cols + 1) + i) as u32)
+}
+
+/// Two triangles `(a, b, c)`, `(a, c, d)` per quad `(i, j)`, `i < cols`, `j < rows`,
+/// with corners `a = id(i, j)`, `b = id(i + 1, j)`, `c = id(i + 1, j + 1)`,
+/// `d = id(i, j + 1)`, rows outermost.
+fn quad_triangles(cols: usize, rows: usize, id: impl Fn(usize, usize) -> u32) -> Vec<[u32; 3]> {
     let mut triangles = Vec::with_capacity(2 * cols * rows);
     for j in 0..rows {
         for i in 0..cols {
@@ -269,6 +374,47 @@ mod tests {
             );
         }
         disc_boundary(&mesh.triangles).expect("one boundary loop")
+    }
+
+    /// Signed volume enclosed by a closed mesh, `Σ a·(b × c)/6` (positive when outward).
+    fn enclosed_volume(mesh: &TriMesh) -> f64 {
+        (0..mesh.num_triangles())
+            .map(|t| {
+                let [a, b, c] = mesh.triangle_positions(t);
+                dot(a, cross(b, c)) / 6.0
+            })
+            .sum()
+    }
+
+    #[test]
+    fn closed_surfaces_have_their_genus_and_enclose_their_volume() {
+        use crate::mesh::Topology;
+        let check = |mesh: &TriMesh, genus: u32, volume: f64, tolerance: f64| {
+            let topo = Topology::new(mesh);
+            assert!(topo.is_manifold() && topo.inconsistent_edges.is_empty());
+            assert_eq!(topo.boundary_loops.len(), 0);
+            assert_eq!(topo.genus(), Some(genus));
+            let v = enclosed_volume(mesh);
+            assert!((v - volume).abs() <= tolerance * volume, "{v} vs {volume}");
+        };
+        // Inscribed polyhedra: the volume converges to the smooth one from below.
+        check(&sphere(4), 0, 4.0 / 3.0 * std::f64::consts::PI, 0.02);
+        let (big, small) = (1.0, 0.4);
+        check(
+            &torus(big, small, 64, 32),
+            1,
+            2.0 * std::f64::consts::PI.powi(2) * big * small * small,
+            0.01,
+        );
+        // Unit cubes, exactly: 3 rows of 2h + 1 minus the h holes.
+        for h in 1..=3 {
+            check(
+                &holed_plate(h, 2),
+                h as u32,
+                (3 * (2 * h + 1) - h) as f64,
+                1e-12,
+            );
+        }
     }
 
     #[test]

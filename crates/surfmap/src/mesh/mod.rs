@@ -3,6 +3,7 @@
 //! decimation; points on a mesh ([`SurfacePoint`]) and their location in a flattening
 //! ([`PointLocator`]).
 
+pub mod cut;
 pub mod decimate;
 pub mod disc;
 pub mod generate;
@@ -138,6 +139,17 @@ impl TriMesh {
     /// Every triangle's vertex indices are below the vertex count ([`check_indices`]).
     pub fn check_indices(&self) -> Result<(), IndexError> {
         check_indices(&self.triangles, self.positions.len())
+    }
+
+    /// Every position is finite and no triangle repeats a vertex.
+    pub fn finite_and_proper(&self) -> bool {
+        self.positions
+            .iter()
+            .all(|p| p.iter().all(|x| x.is_finite()))
+            && self
+                .triangles
+                .iter()
+                .all(|&[a, b, c]| a != b && b != c && a != c)
     }
 
     /// Per-vertex UVs, when the mesh carries them per vertex (or per corner with

@@ -359,7 +359,7 @@ pub fn validate(mesh: &TriMesh, topo: &Topology) -> Vec<Defect> {
                     "the surface is closed (no boundary, genus {}); a disc map needs exactly one boundary loop.",
                     topo.genus().map_or("?".into(), |g| g.to_string())
                 ),
-                "Cut it open first (e.g. remove a cap or cut along a seam).",
+                "`flatten` cuts it open along seams by default (`FlattenOptions::cut`, `mesh::cut`).",
                 true,
             );
         }
@@ -369,7 +369,7 @@ pub fn validate(mesh: &TriMesh, topo: &Topology) -> Vec<Defect> {
                 g as usize,
                 vec![],
                 format!("the surface has genus {g} (handles); a disc has genus 0."),
-                "Cut each handle open (2·genus cuts) before flattening.",
+                "`flatten` cuts every handle open along seams by default (`FlattenOptions::cut`, `mesh::cut`).",
                 true,
             );
         }
@@ -399,8 +399,9 @@ pub fn validate(mesh: &TriMesh, topo: &Topology) -> Vec<Defect> {
                     .join(", "),
                 if loops > EXAMPLES { ", …" } else { "" }
             ),
-            "set `FlattenOptions::fill_holes` (or call `repair::fill_holes`) to fill all but the longest \
-             for the flattening (they stay open in the map), or cut from each hole to the outer boundary.",
+            "`flatten` fills all but the longest for the solve by default (`FlattenOptions::fill_holes`, \
+             `repair::fill_holes`; they stay open in the map), or, with that off, joins them to the outer \
+             boundary by seams (`Cut::Auto`).",
             true,
         );
     }

@@ -9,16 +9,20 @@
 //! α, automatic start, ARAP warm start) suit most meshes.
 
 use super::arap::ArapStep;
+use super::barrier::BoundaryBarrier;
 use super::element::{RestTriangleError, rest_triangles};
 use super::flip_free::max_flip_free_step;
 use super::newton::NewtonSolver;
 pub use super::newton::{IterationLog, NewtonSettings, NewtonTimings, StopReason};
+pub use super::plan::{Cut, CutReason, Seams};
+use super::plan::{Plan, map_back, plan_with_topology, prepare};
 use super::{InitialMapError, count_flipped, lscm, signed_uv_area, tutte};
 use crate::energy::Energy;
 use crate::linsolve::{SolveError, VertexOrdering};
+use crate::mesh::cut::CutError;
 use crate::mesh::disc::list_defects;
 use crate::mesh::validate::Defect;
-use crate::mesh::{Disc, IndexError, NotADisc, TriMesh};
+use crate::mesh::{Disc, IndexError, NotADisc, Topology, TriMesh, Uvs};
 use serde::Serialize;
 use std::time::Instant;
 
@@ -168,6 +172,35 @@ pub struct MultilevelReport {
     pub abandoned: Option<String>,
 }
 
+/// When the flattening keeps the boundary from overlapping itself with the boundary
+/// barrier ([`super::barrier`]; Smith & Schaefer 2015): a flip-free map of a disc is
+/// injective exactly when its boundary does not cross itself.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Bijective {
+    /// Never: the result is flip-free (locally injective); its boundary may overlap
+    /// itself ([`Flattening::boundary_crossings`] says whether it does).
+    Off,
+    /// Solve as with `Off`; if the boundary of the result crosses itself, solve again
+    /// with the barrier from a crossing-free start. Costs nothing where there is no
+    /// overlap, and the result is the same as with `Off` there.
+    #[default]
+    WhenOverlapping,
+    /// Always solve with the barrier, from a crossing-free start (LSCM if it is
+    /// flip-free and crossing-free, else mean-value coordinates onto a circle).
+    Always,
+}
+
+/// What the result is guaranteed to be (checked on the result, not assumed).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Guarantee {
+    /// Flip-free, and the boundary does not cross itself: the map is injective.
+    Bijective,
+    /// Flip-free, but the boundary crosses itself ([`Flattening::boundary_crossings`]):
+    /// locally injective only.
+    LocallyInjective,
+}
+
 /// Options of [`flatten`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct FlattenOptions {
@@ -184,8 +217,15 @@ pub struct FlattenOptions {
     pub newton: NewtonSettings,
     /// Fill every boundary loop but the longest (eyes, mouth, scan holes) with a fan
     /// for the solve ([`crate::mesh::repair::fill_holes`]); the result has UVs for the
-    /// original vertices only, so the holes stay open in the map.
+    /// original vertices only, so the holes stay open in the map. Default: on; off, the
+    /// holes are joined to the outer boundary by seams instead (with [`Cut::Auto`]).
     pub fill_holes: bool,
+    /// How a surface that is not a disc (closed, with handles, or with holes not
+    /// filled) is cut open along seams ([`super::plan`]; default: [`Cut::Auto`]).
+    pub cut: Cut,
+    /// Whether the boundary is kept from overlapping itself (default:
+    /// [`Bijective::WhenOverlapping`]).
+    pub bijective: Bijective,
 }
 
 impl Default for FlattenOptions {
@@ -195,7 +235,9 @@ impl Default for FlattenOptions {
             start: Start::default(),
             warm_start: true,
             newton: NewtonSettings::default(),
-            fill_holes: false,
+            fill_holes: true,
+            cut: Cut::Auto,
+            bijective: Bijective::default(),
         }
     }
 }
@@ -217,6 +259,16 @@ impl FlattenOptions {
     /// These options with holes filled for the solve (or not).
     pub fn with_fill_holes(self, fill_holes: bool) -> Self {
         Self { fill_holes, ..self }
+    }
+
+    /// These options with the cut `cut`.
+    pub fn with_cut(self, cut: Cut) -> Self {
+        Self { cut, ..self }
+    }
+
+    /// These options with the bijective mode `bijective`.
+    pub fn with_bijective(self, bijective: Bijective) -> Self {
+        Self { bijective, ..self }
     }
 
     /// Checks the numeric settings (called by [`flatten`]).
@@ -258,9 +310,15 @@ pub enum OptionError {
 /// Result of a flattening.
 #[derive(Clone, Debug, Serialize)]
 pub struct Flattening {
-    /// One UV per vertex, in the mesh's length units (an isometry keeps lengths).
-    /// Vertices used by no triangle are at the origin.
+    /// The UVs, in the mesh's length units (an isometry keeps lengths): one per vertex
+    /// (vertices used by no triangle at the origin), or, when the surface was cut
+    /// ([`Self::seams`]), one per UV vertex of the cut map, indexed per corner by
+    /// [`Seams::uv_triangles`]. [`Self::texture_coordinates`] gives either as [`Uvs`].
     pub uvs: Vec<[f64; 2]>,
+    /// What was done before the solve: a disc as is, holes filled, or cut open.
+    pub plan: Plan,
+    /// The seams when the surface was cut open (then [`Self::uvs`] are per UV vertex).
+    pub seams: Option<Seams>,
     pub start: StartMap,
     /// Triangles LSCM flipped or degenerated (0 when LSCM was used).
     pub lscm_flipped: usize,
@@ -275,12 +333,23 @@ pub struct Flattening {
     /// Flipped or degenerate triangles in the output, counted on the output: always 0
     /// for a returned flattening (a non-zero count is an error instead).
     pub flipped_triangles: usize,
+    /// Pairs of boundary edges of the solved disc (after filling and cutting) that
+    /// cross or touch, checked on the result: 0 means the map is injective.
+    pub boundary_crossings: usize,
+    /// What the result is guaranteed to be (from the check above).
+    pub guarantee: Guarantee,
+    /// Whether the boundary barrier was used: with [`Bijective::Always`], or because
+    /// the unconstrained result overlapped ([`Bijective::WhenOverlapping`]; then
+    /// [`Self::iterations`] and the log are those of the barrier solve, and the times
+    /// include both).
+    pub barrier: bool,
     /// Holes filled for the solve ([`FlattenOptions::fill_holes`]).
     pub holes_filled: usize,
     /// α values of the continuation stages actually solved (empty without continuation).
     pub continuation: Vec<[f64; 3]>,
     pub log: Vec<IterationLog>,
-    /// Seconds: initial map, Newton (all stages), total.
+    /// Seconds: filling holes and cutting, initial map, Newton (all stages), total.
+    pub time_prepare: f64,
     pub time_start: f64,
     pub time_newton: f64,
     pub time_total: f64,
@@ -314,6 +383,32 @@ impl Flattening {
         let mut uvs = self.uvs.clone();
         super::normalize_uvs(&mut uvs);
         uvs
+    }
+
+    /// The texture coordinates of the input mesh: per vertex, or per corner when the
+    /// surface was cut; in `[0, 1]²` when `normalized` ([`Self::normalized_uvs`]).
+    pub fn texture_coordinates(&self, normalized: bool) -> Uvs {
+        let coords = if normalized {
+            self.normalized_uvs()
+        } else {
+            self.uvs.clone()
+        };
+        match &self.seams {
+            None => Uvs::PerVertex(coords),
+            Some(seams) => Uvs::PerCorner {
+                coords,
+                indices: seams.uv_triangles.clone(),
+            },
+        }
+    }
+
+    /// The UV triangle of every input triangle, corner by corner.
+    pub fn corner_uvs(&self, triangles: &[[u32; 3]]) -> Vec<[[f64; 2]; 3]> {
+        let indices = self.seams.as_ref().map_or(triangles, |s| &s.uv_triangles);
+        indices
+            .iter()
+            .map(|t| t.map(|v| self.uvs[v as usize]))
+            .collect()
     }
 }
 
@@ -351,6 +446,12 @@ pub enum FlattenError {
         "a given start map has no UVs for the {0} filled holes; fill them yourself (`repair::fill_holes`) and give UVs for the filled mesh, or use `Start::Auto`"
     )]
     GivenStartWithFilledHoles(usize),
+    #[error(
+        "a given start map has one UV per vertex, but the surface is cut open along seams ({0}); cut it yourself (`mesh::cut`) and give UVs for the opened mesh, or use `Start::Auto`"
+    )]
+    GivenStartWithCut(String),
+    #[error(transparent)]
+    Cut(#[from] CutError),
     #[error("internal error: the result has {0} flipped triangles; please report this mesh")]
     FlippedResult(usize),
 }
@@ -379,34 +480,50 @@ pub fn flatten_with_progress(
     options: &FlattenOptions,
     progress: &mut dyn FnMut(&IterationLog),
 ) -> Result<Flattening, FlattenError> {
+    let clock = Instant::now();
     options.validate()?;
     mesh.check_indices()?;
-    if options.fill_holes {
-        let (filled, holes) = crate::mesh::repair::fill_holes(mesh);
-        if holes > 0 {
-            if matches!(options.start, Start::Given(_)) {
-                return Err(FlattenError::GivenStartWithFilledHoles(holes));
-            }
-            // The fill's vertices come after the original ones: dropping them leaves
-            // the UVs of `mesh`, with its holes open in the map.
-            let mut result = flatten_used(&filled, options, progress)?;
-            result.uvs.truncate(mesh.positions.len());
-            result.holes_filled = holes;
-            return Ok(result);
-        }
+    let topology = Topology::new(mesh);
+    let mut plan = plan_with_topology(mesh, &topology, options)?;
+    if plan.is_disc_as_is() {
+        let mut result = flatten_used(mesh, Some(topology), options, progress)?;
+        result.plan = plan;
+        result.time_total = clock.elapsed().as_secs_f64();
+        return Ok(result);
     }
-    flatten_used(mesh, options, progress)
+    drop(topology);
+    if matches!(options.start, Start::Given(_)) {
+        return Err(match plan.cut {
+            None => FlattenError::GivenStartWithFilledHoles(plan.holes_to_fill),
+            Some(_) => FlattenError::GivenStartWithCut(plan.describe()),
+        });
+    }
+    // The fill's vertices come after the original ones and the cut's copies after
+    // those: mapping back drops them (the holes stay open in the map).
+    let prepared = prepare(mesh, &mut plan, options)?;
+    let time_prepare = clock.elapsed().as_secs_f64();
+    let mut result = flatten_used(&prepared.mesh, None, options, progress)?;
+    let (uvs, seams) = map_back(mesh, prepared, &plan, std::mem::take(&mut result.uvs));
+    result.uvs = uvs;
+    result.seams = seams;
+    result.holes_filled = plan.holes_to_fill;
+    result.plan = plan;
+    result.time_prepare = time_prepare;
+    result.time_total = clock.elapsed().as_secs_f64();
+    Ok(result)
 }
 
 /// The flattening of the vertices used by a triangle; the others are put at the origin.
+/// `topology`: that of `mesh`, if already derived.
 fn flatten_used(
     mesh: &TriMesh,
+    topology: Option<Topology>,
     options: &FlattenOptions,
     progress: &mut dyn FnMut(&IterationLog),
 ) -> Result<Flattening, FlattenError> {
     let (compact, old_of_new) = without_unreferenced(mesh);
     let Some(compact) = compact else {
-        return flatten_disc(mesh, options, progress);
+        return flatten_disc(mesh, topology, options, progress);
     };
     let mut compact_options = options.clone();
     if let Start::Given(given) = &options.start {
@@ -414,7 +531,7 @@ fn flatten_used(
         compact_options.start =
             Start::Given(old_of_new.iter().map(|&v| given[v as usize]).collect());
     }
-    let mut result = flatten_disc(&compact, &compact_options, progress)?;
+    let mut result = flatten_disc(&compact, None, &compact_options, progress)?;
     let mut uvs = vec![[0.0, 0.0]; mesh.positions.len()];
     for (new, &old) in old_of_new.iter().enumerate() {
         uvs[old as usize] = result.uvs[new];
@@ -423,14 +540,57 @@ fn flatten_used(
     Ok(result)
 }
 
-/// The flattening of a mesh whose vertices are all used.
+/// The flattening of a mesh whose vertices are all used (`topology`: its topology, if
+/// already derived).
 fn flatten_disc(
     mesh: &TriMesh,
+    topology: Option<Topology>,
     options: &FlattenOptions,
     progress: &mut dyn FnMut(&IterationLog),
 ) -> Result<Flattening, FlattenError> {
     let clock = Instant::now();
-    let disc = Disc::new(mesh)?;
+    let disc = match topology {
+        Some(topology) => Disc::with_topology(mesh, topology)?,
+        None => Disc::new(mesh)?,
+    };
+    let first = solve_disc(
+        mesh,
+        &disc,
+        options,
+        progress,
+        options.bijective == Bijective::Always,
+    )?;
+    if first.boundary_crossings == 0 || options.bijective != Bijective::WhenOverlapping {
+        return Ok(first);
+    }
+    // The unconstrained map overlaps itself: solve again with the boundary barrier.
+    let mut second = solve_disc(mesh, &disc, options, progress, true)?;
+    second.time_start += first.time_start + first.time_newton;
+    second.time_total = clock.elapsed().as_secs_f64();
+    Ok(second)
+}
+
+/// Number of pairs of boundary edges of the map `uv` without a common endpoint that
+/// cross or touch (`boundary`: the loop in order).
+fn boundary_crossings(uv: &[[f64; 2]], boundary: &[u32]) -> usize {
+    let n = boundary.len();
+    let segments: Vec<[[f64; 2]; 2]> = (0..n)
+        .map(|i| [uv[boundary[i] as usize], uv[boundary[(i + 1) % n] as usize]])
+        .collect();
+    crate::measure::overlap::count_segment_crossings(&segments).0
+}
+
+/// One solve of [`flatten_disc`]: with the boundary barrier when `barrier` (from a
+/// crossing-free start, without the multilevel start, and with ARAP warm-start steps
+/// from a mean-value start kept short of any boundary contact).
+fn solve_disc(
+    mesh: &TriMesh,
+    disc: &Disc,
+    options: &FlattenOptions,
+    progress: &mut dyn FnMut(&IterationLog),
+    barrier: bool,
+) -> Result<Flattening, FlattenError> {
+    let clock = Instant::now();
     // Scale normalization: work on the surface scaled to unit area, so energies and
     // tolerances are scale-free; the UVs are scaled back at the end.
     let area = mesh.area();
@@ -462,26 +622,34 @@ fn flatten_disc(
     let mut multilevel = None;
     // LSCM, with the mean-value fallback when `fallback` (else LSCM as it is).
     let mut lscm_start = |fallback: bool| -> Result<(Vec<[f64; 2]>, StartMap), FlattenError> {
-        let mut uv = lscm::lscm(&positions, &disc)?.uv;
+        let mut uv = lscm::lscm(&positions, disc)?.uv;
         lscm_flipped = admissible(&mut uv);
-        if lscm_flipped == 0 || !fallback {
+        // With the barrier, the start must not overlap itself either.
+        let usable = lscm_flipped == 0 && (!barrier || boundary_crossings(&uv, boundary) == 0);
+        if usable || !fallback {
             Ok((uv, StartMap::Lscm))
         } else {
-            Ok((tutte::mean_value(&positions, &disc)?, StartMap::MeanValue))
+            Ok((tutte::mean_value(&positions, disc)?, StartMap::MeanValue))
         }
     };
     let (mut uv, start) = match &options.start {
         Start::Given(given) => {
             check_given_length(given, mesh)?;
-            (given.clone(), StartMap::Given)
+            let mut uv = given.clone();
+            if barrier && (admissible(&mut uv) > 0 || boundary_crossings(&uv, boundary) > 0) {
+                (tutte::mean_value(&positions, disc)?, StartMap::MeanValue)
+            } else {
+                (given.clone(), StartMap::Given)
+            }
         }
-        Start::MeanValue => (tutte::mean_value(&positions, &disc)?, StartMap::MeanValue),
-        Start::Lscm => lscm_start(false)?,
+        Start::MeanValue => (tutte::mean_value(&positions, disc)?, StartMap::MeanValue),
+        Start::Lscm => lscm_start(barrier)?,
+        Start::Auto { .. } if barrier => lscm_start(true)?,
         Start::Auto { multilevel: choice } => {
             let coarse = choice.coarse_level(mesh.triangles.len());
             let (uv, report) = match coarse {
                 Some(coarse) => {
-                    let (uv, report) = multilevel_start(mesh, &disc, options, coarse);
+                    let (uv, report) = multilevel_start(mesh, disc, options, coarse);
                     (uv, Some(report))
                 }
                 None => (None, None),
@@ -538,7 +706,14 @@ fn flatten_disc(
     } else {
         options.energy
     };
-    if options.warm_start && start != StartMap::Multilevel {
+    // With the barrier, only a mean-value start (a circle, far from the minimum) is warm
+    // started (measured: from LSCM it costs Newton iterations), and no warm-start step
+    // may bring the boundary into contact.
+    if options.warm_start
+        && start != StartMap::Multilevel
+        && (!barrier || start == StartMap::MeanValue)
+    {
+        let contact = barrier.then(|| BoundaryBarrier::new(boundary, &uv));
         let first_energy = match objective.continuation_start() {
             Some(from) => Energy::litke(from),
             None => objective,
@@ -559,7 +734,11 @@ fn flatten_disc(
             for ((d, t), u) in direction.iter_mut().zip(&target).zip(&uv) {
                 *d = [t[0] - u[0], t[1] - u[1]];
             }
-            let mut step = 1.0f64.min(0.9 * max_flip_free_step(&uv, &mesh.triangles, &direction));
+            let mut bound = max_flip_free_step(&uv, &mesh.triangles, &direction);
+            if let Some(contact) = &contact {
+                bound = bound.min(contact.max_step(&uv, &direction, bound.min(1.0)));
+            }
+            let mut step = 1.0f64.min(0.9 * bound);
             let mut accepted = None;
             for _ in 0..6 {
                 for ((tr, u), d) in trial.iter_mut().zip(&uv).zip(&direction) {
@@ -592,6 +771,9 @@ fn flatten_disc(
         &[(p0, 0), (p0, 1), (p1, 1)],
         Some(&vertex_ordering),
     )?;
+    if barrier {
+        solver.set_barrier(BoundaryBarrier::new(boundary, &uv));
+    }
     let mut log = Vec::new();
     let mut record = |entry: IterationLog| {
         progress(&entry);
@@ -652,9 +834,15 @@ fn flatten_disc(
     if flipped > 0 {
         return Err(FlattenError::FlippedResult(flipped));
     }
+    let crossings = boundary_crossings(&uv, boundary);
     let uvs = uv.iter().map(|p| [p[0] * scale, p[1] * scale]).collect();
     Ok(Flattening {
         uvs,
+        plan: Plan {
+            holes_to_fill: 0,
+            cut: None,
+        },
+        seams: None,
         start,
         lscm_flipped,
         warm_start_iterations,
@@ -663,9 +851,17 @@ fn flatten_disc(
         stop_reason: stop,
         energy,
         flipped_triangles: flipped,
+        boundary_crossings: crossings,
+        guarantee: if crossings == 0 {
+            Guarantee::Bijective
+        } else {
+            Guarantee::LocallyInjective
+        },
+        barrier,
         holes_filled: 0,
         continuation,
         log,
+        time_prepare: 0.0,
         time_start,
         time_newton,
         time_total: clock.elapsed().as_secs_f64(),
@@ -710,7 +906,8 @@ fn multilevel_start(
             start: Start::Auto {
                 multilevel: Multilevel::Never,
             },
-            fill_holes: false,
+            // Only a start: the full mesh's solve checks (and prevents) overlap.
+            bijective: Bijective::Off,
             ..options.clone()
         };
         let flat = flatten(&coarse, &coarse_options).map_err(|e| format!("coarse mesh: {e}"))?;
@@ -951,9 +1148,14 @@ mod tests {
     #[test]
     fn holes_are_filled_for_the_solve_and_stay_open_in_the_map() {
         let mesh = disc_with_two_holes();
-        let err = flatten(&mesh, &FlattenOptions::default()).unwrap_err();
+        let never = FlattenOptions::default()
+            .with_fill_holes(false)
+            .with_cut(Cut::Never);
+        let err = flatten(&mesh, &never).unwrap_err();
         assert!(err.to_string().contains("fill_holes"), "{err}");
-        let map = flatten(&mesh, &FlattenOptions::default().with_fill_holes(true)).unwrap();
+        let map = flatten(&mesh, &FlattenOptions::default()).unwrap();
+        assert_eq!(map.plan.describe(), "fill 2 holes");
+        assert!(map.seams.is_none());
         assert_eq!(map.holes_filled, 2);
         assert_eq!(map.uvs.len(), mesh.positions.len());
         assert_eq!(count_flipped(&map.uvs, &mesh.triangles), 0);

@@ -4,6 +4,7 @@
 
 #[doc(hidden)]
 pub mod arap;
+pub mod barrier;
 #[doc(hidden)]
 pub mod element;
 pub mod flatten;
@@ -12,6 +13,7 @@ pub mod lscm;
 pub mod multilevel;
 #[doc(hidden)]
 pub mod newton;
+pub mod plan;
 pub mod tutte;
 
 use crate::linsolve::SolveError;

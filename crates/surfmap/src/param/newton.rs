@@ -23,6 +23,7 @@
 //! the energy is invariant under rigid motions, so this changes nothing but the
 //! output's placement, and keeps the Cholesky factorization well-posed.
 
+use super::barrier::BoundaryBarrier;
 use super::element::{self, RestTriangle};
 use super::flip_free::max_flip_free_step;
 use crate::energy::Density;
@@ -106,6 +107,9 @@ pub struct NewtonSolver<'m> {
     direction: Vec<[f64; 2]>,
     trial: Vec<[f64; 2]>,
     best: Vec<[f64; 2]>,
+    /// The boundary barrier of the bijective mode ([`super::barrier`]), and the value
+    /// slots of every vertex's own 2×2 block (`[uu, vu, vv]`, `u32::MAX` where pinned).
+    barrier: Option<(BoundaryBarrier, Vec<[u32; 3]>)>,
     /// Where the time went, accumulated over all calls of [`Self::minimize`].
     pub timings: NewtonTimings,
 }
@@ -139,6 +143,13 @@ enum HessianKind {
     /// No Hessian: the gradient only (the matrix values are left as they are).
     None,
 }
+
+/// Relative stopping threshold with a boundary barrier: `λ²/2 ≤ 10⁻⁶·E` (the energy
+/// is then within about that fraction of the minimum).
+const BARRIER_RELATIVE_TOLERANCE: f64 = 1e-6;
+
+/// Largest step tried with a boundary barrier (the contact search's reach).
+const BARRIER_STEP_CAP: f64 = 16.0;
 
 /// Armijo constant for exact-Hessian steps (see the line search).
 const EXACT_ARMIJO_C: f64 = 1e-4;
@@ -224,11 +235,47 @@ impl<'m> NewtonSolver<'m> {
             direction: vec![[0.0; 2]; nv],
             trial: vec![[0.0; 2]; nv],
             best: vec![[0.0; 2]; nv],
+            barrier: None,
             timings: NewtonTimings {
                 symbolic: symbolic_time,
                 ..Default::default()
             },
         })
+    }
+
+    /// Adds the boundary barrier `barrier` to the energy, and its contact bound to the
+    /// line search (the bijective mode, [`super::barrier`]).
+    pub fn set_barrier(&mut self, barrier: BoundaryBarrier) {
+        let mut blocks = vec![[u32::MAX; 3]; self.direction.len()];
+        // Local pairs (2k, 2k), (2k + 1, 2k), (2k + 1, 2k + 1) of corner k.
+        let index = |i: usize, j: usize| LOWER_PAIRS.iter().position(|&p| p == (i, j)).unwrap();
+        for (t, tri) in self.triangles.iter().enumerate() {
+            for (k, &v) in tri.iter().enumerate() {
+                blocks[v as usize] = [
+                    self.slots[t][index(2 * k, 2 * k)],
+                    self.slots[t][index(2 * k + 1, 2 * k)],
+                    self.slots[t][index(2 * k + 1, 2 * k + 1)],
+                ];
+            }
+        }
+        self.barrier = Some((barrier, blocks));
+    }
+
+    /// The stopping threshold on `λ²/2`: the settings' tolerance, or with the barrier
+    /// (whose Hessian is approximated, so convergence is linear near contacts) at least
+    /// [`BARRIER_RELATIVE_TOLERANCE`] of the energy.
+    fn tolerance(&self, settings: &NewtonSettings, energy: f64) -> f64 {
+        match self.barrier {
+            Some(_) => settings
+                .tolerance
+                .max(BARRIER_RELATIVE_TOLERANCE * energy.abs()),
+            None => settings.tolerance,
+        }
+    }
+
+    /// The barrier energy at `uv` (0 without a barrier).
+    fn barrier_energy(&self, uv: &[[f64; 2]]) -> f64 {
+        self.barrier.as_ref().map_or(0.0, |(b, _)| b.energy(uv))
     }
 
     #[inline]
@@ -287,7 +334,7 @@ impl<'m> NewtonSolver<'m> {
         clock: Instant,
         log: &mut dyn FnMut(IterationLog),
     ) -> Result<(StopReason, usize, f64), SolveError> {
-        let mut energy = self.energy(uv, density);
+        let mut energy = self.energy(uv, density) + self.barrier_energy(uv);
         log(IterationLog {
             iteration: 0,
             stage,
@@ -323,7 +370,8 @@ impl<'m> NewtonSolver<'m> {
                     .sum::<f64>();
                 self.timings.assemble += (t1 - t0).as_secs_f64();
                 self.timings.solve += t1.elapsed().as_secs_f64();
-                if estimate.is_finite() && 0.5 * estimate.abs() <= settings.tolerance {
+                if estimate.is_finite() && 0.5 * estimate.abs() <= self.tolerance(settings, energy)
+                {
                     return Ok((StopReason::Converged, it - 1, energy));
                 }
             }
@@ -378,7 +426,7 @@ impl<'m> NewtonSolver<'m> {
                 // the gradient vanished to rounding: we are at the minimum.
                 return Ok((StopReason::Converged, it - 1, energy));
             }
-            if 0.5 * decrement <= settings.tolerance {
+            if 0.5 * decrement <= self.tolerance(settings, energy) {
                 return Ok((StopReason::Converged, it - 1, energy));
             }
             for (v, d) in self.direction.iter_mut().enumerate() {
@@ -387,7 +435,13 @@ impl<'m> NewtonSolver<'m> {
                 }
             }
             let t_search = Instant::now();
-            let t_max = max_flip_free_step(uv, self.triangles, &self.direction);
+            let mut t_max = max_flip_free_step(uv, self.triangles, &self.direction);
+            if let Some((barrier, _)) = &self.barrier {
+                // No step past the first boundary contact; the contact search covers
+                // steps up to a cap (the doubling below stays under it).
+                let cap = t_max.min(BARRIER_STEP_CAP);
+                t_max = cap.min(barrier.max_step(uv, &self.direction, cap));
+            }
             // Start at the full Newton step, or 90% of the way to the first flip.
             let mut step = 1.0f64.min(0.9 * t_max);
             let slope = -decrement; // ∇Eᵀp
@@ -410,7 +464,7 @@ impl<'m> NewtonSolver<'m> {
                 for (tr, (u, d)) in self.trial.iter_mut().zip(uv.iter().zip(&self.direction)) {
                     *tr = [u[0] + step * d[0], u[1] + step * d[1]];
                 }
-                let e = self.energy(&self.trial, density);
+                let e = self.energy(&self.trial, density) + self.barrier_energy(&self.trial);
                 // Sufficient decrease (thesis fig. 3.3), but never an increase.
                 if e.is_finite() && e < energy && e <= energy + armijo_c * step * slope + slack {
                     accepted = Some(e);
@@ -445,7 +499,7 @@ impl<'m> NewtonSolver<'m> {
                     for (tr, (u, d)) in self.trial.iter_mut().zip(uv.iter().zip(&self.direction)) {
                         *tr = [u[0] + t * d[0], u[1] + t * d[1]];
                     }
-                    let e = self.energy(&self.trial, density);
+                    let e = self.energy(&self.trial, density) + self.barrier_energy(&self.trial);
                     if e.is_nan() || e >= e_new {
                         break;
                     }
@@ -531,6 +585,28 @@ impl<'m> NewtonSolver<'m> {
                     self.gradient[k as usize] += g[i];
                 }
             }
+        }
+        if let Some((barrier, blocks)) = &self.barrier {
+            let (dof, gradient) = (&self.dof, &mut self.gradient);
+            barrier.add_derivatives(
+                uv,
+                &mut |v, g| {
+                    for (c, gc) in g.iter().enumerate() {
+                        if let Some(k) = dof.get(2 * v as usize + c) {
+                            gradient[k as usize] += gc;
+                        }
+                    }
+                },
+                &mut |v, h| {
+                    if let Some(values) = values.as_deref_mut() {
+                        for (&s, hc) in blocks[v as usize].iter().zip(h) {
+                            if s != u32::MAX {
+                                values[s as usize] += hc;
+                            }
+                        }
+                    }
+                },
+            );
         }
     }
 }

@@ -1,0 +1,80 @@
+//! Every closed, holed and higher-genus mesh of the shared data (up to ~10k faces, to
+//! keep the suite quick) flattens by default to a valid map: one chart, flip-free, and,
+//! checked by the measure code independently of the solver, overlap-free.
+
+use surfmap::measure::charts::chart_labels;
+use surfmap::measure::overlap::boundary_overlap;
+use surfmap::param::signed_uv_area;
+use surfmap::{Bijective, FlattenOptions, Guarantee, TriMesh, flatten, read_mesh};
+
+/// Flattens `mesh` with `options` and returns the map's boundary overlap area (after
+/// checking one UV triangle per input triangle, all counter-clockwise, one chart).
+fn flatten_checked(name: &str, mesh: &TriMesh, options: &FlattenOptions) -> (f64, Guarantee) {
+    let map = flatten(mesh, options).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let corners = map.corner_uvs(&mesh.triangles);
+    assert_eq!(corners.len(), mesh.triangles.len(), "{name}");
+    let flipped = corners
+        .iter()
+        .filter(|c| signed_uv_area(**c) <= 0.0)
+        .count();
+    assert_eq!(flipped, 0, "{name}: flipped triangles");
+    let (_, charts) = chart_labels(&mesh.triangles, &corners);
+    assert_eq!(charts, 1, "{name}");
+    let overlap = boundary_overlap(&mesh.triangles, &corners);
+    assert!(overlap.complete, "{name}");
+    // The solver's own check agrees with the measure's.
+    assert_eq!(
+        map.guarantee == Guarantee::Bijective,
+        !overlap.self_intersecting,
+        "{name}: {overlap:?}"
+    );
+    (overlap.overlap_area, map.guarantee)
+}
+
+#[test]
+fn closed_holed_and_higher_genus_meshes_flatten_overlap_free() {
+    let Some(dir) = surfmap::testing::shared_data() else {
+        return;
+    };
+    for (file, fill_holes) in [
+        ("sphere.obj", true),
+        ("bunny.off", true),
+        ("max_planck.obj", true),
+        ("three_holes.off", true),
+        ("punctured_torus.obj", true),
+        ("elephant_holes.off", true),
+        ("halftunnel.off", true),
+        ("halftunnel.off", false),
+        ("holes.off", true),
+        ("holes.off", false),
+    ] {
+        let mesh = read_mesh(&dir.join(file)).unwrap().mesh;
+        let name = format!("{file} (fill holes: {fill_holes})");
+        let options = FlattenOptions::default().with_fill_holes(fill_holes);
+        let (overlap, guarantee) = flatten_checked(&name, &mesh, &options);
+        assert_eq!(overlap, 0.0, "{name}");
+        assert_eq!(guarantee, Guarantee::Bijective, "{name}");
+    }
+}
+
+#[test]
+fn a_boundary_that_overlaps_without_the_barrier_does_not_with_it() {
+    let Some(dir) = surfmap::testing::shared_data() else {
+        return;
+    };
+    // The genus-3 surface, cut open: the free boundary folds over itself unconstrained.
+    let mesh = read_mesh(&dir.join("three_holes.off")).unwrap().mesh;
+    let off = FlattenOptions::default().with_bijective(Bijective::Off);
+    let (overlap, guarantee) = flatten_checked("three_holes off", &mesh, &off);
+    assert!(overlap > 0.0);
+    assert_eq!(guarantee, Guarantee::LocallyInjective);
+    for mode in [Bijective::WhenOverlapping, Bijective::Always] {
+        let options = FlattenOptions::default().with_bijective(mode);
+        let (overlap, guarantee) = flatten_checked("three_holes barrier", &mesh, &options);
+        assert_eq!(
+            (overlap, guarantee),
+            (0.0, Guarantee::Bijective),
+            "{mode:?}"
+        );
+    }
+}
