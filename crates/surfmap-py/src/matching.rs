@@ -1,26 +1,125 @@
-//! Surface matching (thesis §3.2) from Python: the place for `surfmap.match`, to be
-//! bound when the library's matcher lands. Nothing is registered yet.
-//!
-//! The intended shape, in the manner of the rest of this crate (numpy in, numpy out,
-//! the GIL released for the solve, library errors mapped by `crate::errors`):
-//!
-//! ```text
-//! m = surfmap.match(VA, FA, VB, FB, landmarks=[(a0, b0), …], **options)
-//! m.correspondence   # (n_A, 4) float64: [triangle of B, b0, b1, b2]; triangle −1 = unmatched
-//! m.map(points)      # (k, 3) points on A (or SurfacePoints) → their images on B
-//! m.report           # dict, the JSON the command line writes
-//! ```
-//!
-//! To add it: a `#[pyclass] SurfaceMatch` holding the library's match, a `#[pyfunction]
-//! r#match` (Python's `match` is a soft keyword, a valid function name), both added in
-//! [`register`]; then their stubs in `python/surfmap/_surfmap.pyi` and the re-export in
-//! `python/surfmap/__init__.py` (a placeholder comment in each), and a test in `tests/`
-//! (`tests/test_docs.py` already requires a stub and a docstring example for every
-//! function the module registers).
+//! `match(VA, FA, VB, FB, …)`: surface matching (thesis §2.2, §3.2) from Python — the
+//! library's `surfmap::matching::match_surfaces` with the fold check of `surfmap match`,
+//! numpy in, numpy out, the GIL released for the solve.
 
+use numpy::IntoPyArray;
+use numpy::ndarray::Array2;
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use surfmap::matching::{
+    Align, Guidance, Landmarks, MatchError, MatchOptions, match_surfaces, output,
+};
 
-/// Adds the matching functions and classes to the module (none yet).
-pub fn register(_m: &Bound<'_, PyModule>) -> PyResult<()> {
+use crate::arrays;
+use crate::convert::to_dict;
+use crate::errors::{SolverError, flatten_error};
+
+fn match_error(e: MatchError) -> PyErr {
+    match e {
+        MatchError::Flatten(f) => flatten_error(f),
+        MatchError::Guidance(_) | MatchError::Option(_) | MatchError::Grid(_) => {
+            PyValueError::new_err(e.to_string())
+        }
+        _ => SolverError::new_err(e.to_string()),
+    }
+}
+
+/// `{"names": [...], "A": [...], "B": [...]}` → landmarks.
+fn landmarks(d: &Bound<'_, PyDict>) -> PyResult<Landmarks> {
+    let get = |k: &str| {
+        d.get_item(k)?.ok_or_else(|| {
+            PyValueError::new_err(format!(
+                "landmarks: missing key '{k}'; give {{\"names\": [...], \"A\": [vertex ids of A], \"B\": [vertex ids of B]}}"
+            ))
+        })
+    };
+    Ok(Landmarks {
+        names: get("names")?.extract()?,
+        a: get("A")?.extract()?,
+        b: get("B")?.extract()?,
+    })
+}
+
+/// Matches surface A onto surface B: a smooth, fold-free correspondence found by
+/// multiscale registration of their geometry images (``surfmap match``; thesis §2.2).
+///
+/// ``VA``, ``VB``: (n, 3) float arrays; ``FA``, ``FB``: (m, 3) integer arrays (discs,
+/// holes filled for the solve). ``landmarks``: optional ``{"names": [...], "A": [vertex
+/// ids of A], "B": [vertex ids of B]}``. ``size``: finest grid (2^k + 1). ``align``:
+/// ``"auto"`` (landmarks when given, else the shapes in space), ``"features"``,
+/// ``"shape"`` or ``"none"``. ``keep_folds``: keep the vertices of image triangles that
+/// turn over or collapse in space (by default they are unmatched).
+///
+/// Returns ``(correspondence, report)``: an (n_A, 4) float64 array of rows ``[triangle
+/// of B, b0, b1, b2]`` (triangle −1 where A's vertex has no counterpart) — the command
+/// line's ``correspondence.npy`` — and the dictionary of its ``match.json``.
+///
+/// >>> import numpy as np, surfmap
+/// >>> n = 17
+/// >>> x, y = np.meshgrid(np.linspace(-1, 1, n), np.linspace(-1, 1, n))
+/// >>> V = np.c_[x.ravel(), y.ravel(), 0.3 * np.exp(-2 * ((x - 0.3)**2 + y**2)).ravel() + 0.1 * x.ravel() * y.ravel()]
+/// >>> i = np.arange(n * (n - 1)).reshape(n - 1, n)[:, :-1].ravel()
+/// >>> F = np.r_[np.c_[i, i + 1, i + n + 1], np.c_[i, i + n + 1, i + n]]
+/// >>> c, s = np.cos(0.4), np.sin(0.4)
+/// >>> VB = V @ np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]]).T + [2.0, 0.0, 1.0]
+/// >>> C, report = surfmap.match(V, F, VB, F, size=65)
+/// >>> C.shape, report["min_det"] > 0, report["matched_fraction_a"] > 0.9
+/// ((289, 4), True, True)
+#[pyfunction]
+#[pyo3(name = "match", signature = (VA, FA, VB, FB, *, landmarks=None, size=257, align="auto", keep_folds=false))]
+#[allow(non_snake_case, clippy::too_many_arguments)]
+pub fn match_meshes<'py>(
+    py: Python<'py>,
+    VA: &Bound<'py, PyAny>,
+    FA: &Bound<'py, PyAny>,
+    VB: &Bound<'py, PyAny>,
+    FB: &Bound<'py, PyAny>,
+    landmarks: Option<&Bound<'py, PyDict>>,
+    size: usize,
+    align: &str,
+    keep_folds: bool,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>)> {
+    surfmap::grid::grid_level(size).map_err(|e| PyValueError::new_err(format!("size: {e}")))?;
+    let a = arrays::mesh(VA, FA)?;
+    let b = arrays::mesh(VB, FB)?;
+    let options = MatchOptions {
+        size,
+        drop_folds: !keep_folds,
+        align: match align {
+            "auto" => Align::Auto,
+            "features" => Align::Features,
+            "shape" => Align::Shape,
+            "none" => Align::None,
+            other => {
+                return Err(PyValueError::new_err(format!(
+                    "align must be 'auto', 'features', 'shape' or 'none', got '{other}'"
+                )));
+            }
+        },
+        ..Default::default()
+    };
+    let guidance = Guidance {
+        landmarks: landmarks.map(self::landmarks).transpose()?,
+        ..Default::default()
+    };
+    let (corr, report) = py
+        .detach(|| -> Result<_, MatchError> {
+            let m = match_surfaces(&a, &b, &guidance, &options)?;
+            let (corr, folds, dropped) = m.checked_correspondence(&a, &b, options.drop_folds)?;
+            let report = m.report(&corr, &folds, dropped, &options);
+            Ok((corr, report))
+        })
+        .map_err(match_error)?;
+    let rows = Array2::from_shape_vec((corr.len(), 4), output::correspondence_rows(&corr))
+        .expect("four values per vertex")
+        .into_pyarray(py)
+        .into_any();
+    Ok((rows, to_dict(py, &report)?))
+}
+
+/// Adds the matching functions to the module.
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(match_meshes, m)?)?;
     Ok(())
 }

@@ -35,16 +35,13 @@ from ._surfmap import (
     flatten_file,
     geometry_images,
     inspect,
+    match,
     measure,
     output_names,
     read_mesh,
     repair,
     write_obj,
 )
-
-# Matching goes here when it is bound (src/matching.rs says how): import `match` and
-# `SurfaceMatch` from ._surfmap above and list them in __all__ (the docstring-example and
-# stub tests then cover them).
 
 __all__ = [
     "BATCH_COLUMNS",
@@ -56,6 +53,7 @@ __all__ = [
     "flatten_many",
     "geometry_images",
     "inspect",
+    "match",
     "measure",
     "output_names",
     "read_mesh",

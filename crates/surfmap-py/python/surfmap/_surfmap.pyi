@@ -95,5 +95,14 @@ def _flatten_many(
     **options: Any,
 ) -> List[Row]: ...
 
-# Matching (surfmap.match, the SurfaceMatch class with .correspondence and .map) goes
-# here when it is bound: see src/matching.rs.
+def match(
+    VA: FloatArray,
+    FA: IndexArray,
+    VB: FloatArray,
+    FB: IndexArray,
+    *,
+    landmarks: Optional[Dict[str, Any]] = None,
+    size: int = 257,
+    align: str = "auto",
+    keep_folds: bool = False,
+) -> Tuple[FloatArray, Report]: ...
