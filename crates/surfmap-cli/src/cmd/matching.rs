@@ -163,8 +163,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         matched.checked_correspondence(&mesh_a, &mesh_b, options.drop_folds)?;
     let report = matched.report(&corr, &folds, dropped, &options);
     // Pictures are drawn before anything is written: an error leaves no partial folder.
+    let placed = output::a_on_b(&mesh_a, &mesh_b, &matched, &corr);
     let drawn = if args.pictures {
-        let placed = output::a_on_b(&mesh_a, &mesh_b, &matched, &corr);
         vec![
             (
                 "checker_carried.png",
@@ -179,7 +179,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     } else {
         vec![]
     };
-    let mut written = write_match_folder(&args.output, &mesh_a, &mesh_b, &matched, &corr, &report)
+    let mut written = write_match_folder(&args.output, &matched, &corr, &placed, &report)
         .with_context(|| format!("cannot write the match into {}", args.output.display()))?;
     for (name, img) in &drawn {
         let path = args.output.join(name);

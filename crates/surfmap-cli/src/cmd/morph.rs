@@ -85,19 +85,7 @@ pub fn write_stills(
         }
         None => {
             // A checkerboard through A's texture coordinates, or through its flattening.
-            let uvs = match &a.uvs {
-                Some(u) => u.clone(),
-                None => {
-                    let flat = super::flatten::flatten_mesh(
-                        a,
-                        &surfmap::FlattenOptions::default()
-                            .with_fill_holes(true)
-                            .with_cut(surfmap::Cut::Never),
-                        quiet,
-                    )?;
-                    Uvs::PerVertex(place_in_unit_square(&flat.uvs, 0.0))
-                }
-            };
+            let uvs = uvs_or_flattening(a, 0.0, quiet)?;
             (corner_uvs(&uvs, &a.triangles)?, StillColour::Checker(12))
         }
     };
@@ -107,6 +95,19 @@ pub fn write_stills(
 
 /// The PNG bytes of a texture file, for embedding (glTF embeds PNG or JPEG; this tool
 /// reads PNG).
+/// The mesh's own texture coordinates, or else a flattening (holes filled, never cut:
+/// one UV per vertex) placed in the unit square with `margin`.
+pub fn uvs_or_flattening(mesh: &TriMesh, margin: f64, quiet: bool) -> anyhow::Result<Uvs> {
+    if let Some(u) = &mesh.uvs {
+        return Ok(u.clone());
+    }
+    let options = surfmap::FlattenOptions::default()
+        .with_fill_holes(true)
+        .with_cut(surfmap::Cut::Never);
+    let flat = super::flatten::flatten_mesh(mesh, &options, quiet)?;
+    Ok(Uvs::PerVertex(place_in_unit_square(&flat.uvs, margin)))
+}
+
 pub fn png_bytes(path: &Path) -> anyhow::Result<Vec<u8>> {
     let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
     if !bytes.starts_with(b"\x89PNG") {

@@ -225,21 +225,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 )
             })?;
         let texture_b = read_texture(&texture_path)?;
-        let uvs_a = match &a.uvs {
-            Some(u) => u.clone(),
-            None => {
-                let flat = super::flatten::flatten_mesh(
-                    a,
-                    &surfmap::FlattenOptions::default()
-                        .with_fill_holes(true)
-                        .with_cut(surfmap::Cut::Never),
-                    args.quiet,
-                )?;
-                Uvs::PerVertex(surfmap::apps::texture::place_in_unit_square(
-                    &flat.uvs, 0.02,
-                ))
-            }
-        };
+        let uvs_a = super::morph::uvs_or_flattening(a, 0.02, args.quiet)?;
         let chart = chart_of(b, &args.b, args.quiet)?;
         let t = transfer_texture(
             &a.triangles,

@@ -9,9 +9,9 @@ use super::AppError;
 use crate::mesh::SurfacePoint;
 use crate::raster::npy::{read_npy_f64, save_npy};
 
-/// File names inside a match folder.
-pub const CORRESPONDENCE_FILE: &str = "correspondence.npy";
-pub const INFO_FILE: &str = "match.json";
+/// File names inside a match folder and the row encoding: the matcher's
+/// ([`crate::matching::output`]), which writes the folders these functions read.
+pub use crate::matching::output::{CORRESPONDENCE_FILE, INFO_FILE, correspondence_rows};
 
 /// A match folder's contents.
 #[derive(Clone, Debug, PartialEq)]
@@ -20,22 +20,6 @@ pub struct MatchFolder {
     pub correspondence: Vec<Option<SurfacePoint>>,
     /// `match.json` (`Null` when the folder has none).
     pub info: serde_json::Value,
-}
-
-/// The correspondence encoded as rows `[triangle, b0, b1, b2]`, `−1` rows for `None`.
-pub fn correspondence_rows(points: &[Option<SurfacePoint>]) -> Vec<f64> {
-    points
-        .iter()
-        .flat_map(|p| match p {
-            Some(p) => [
-                p.triangle as f64,
-                p.barycentric[0],
-                p.barycentric[1],
-                p.barycentric[2],
-            ],
-            None => [-1.0, 0.0, 0.0, 0.0],
-        })
-        .collect()
 }
 
 /// Decodes rows `[triangle, b0, b1, b2]` (negative or NaN triangle: unmatched). A

@@ -334,6 +334,10 @@ impl SurfaceMatch {
     }
 }
 
+/// File names inside a match folder (read back by [`crate::apps::match_folder`]).
+pub const CORRESPONDENCE_FILE: &str = "correspondence.npy";
+pub const INFO_FILE: &str = "match.json";
+
 /// The correspondence as rows `[triangle of B, b0, b1, b2]` (triangle −1 and zeros
 /// where unmatched), row-major (n_A, 4).
 pub fn correspondence_rows(correspondence: &[Option<SurfacePoint>]) -> Vec<f64> {
@@ -385,14 +389,14 @@ pub fn a_on_b(
 /// Writes the match folder: `correspondence.npy` (float64 (n_A, 4)),
 /// `correspondence.csv` (`vertex,triangle,b0,b1,b2`), `A_on_B.obj`, `deformation.npy`
 /// (float64 (n, n, 2): φ at the grid nodes, in ω_B) and `match.json` (the report).
-/// Every file is written to a temporary name and renamed into place; the folder is
+/// `placed` is A on B from [`a_on_b`] (computed once by the caller, who may also draw
+/// it). Every file is written to a temporary name and renamed into place; the folder is
 /// created if missing. Returns the paths written.
 pub fn write_match_folder(
     dir: &Path,
-    mesh_a: &TriMesh,
-    mesh_b: &TriMesh,
     matched: &SurfaceMatch,
     correspondence: &[Option<SurfacePoint>],
+    placed: &TriMesh,
     report: &MatchReport,
 ) -> Result<Vec<std::path::PathBuf>, MatchError> {
     let io = |what: &str, e: &dyn std::fmt::Display| MatchError::Output(format!("{what}: {e}"));
@@ -402,7 +406,6 @@ pub fn write_match_folder(
     let rows = correspondence_rows(correspondence);
     let n = matched.deformation.size;
     let phi: Vec<f64> = matched.grid_positions().iter().flat_map(|p| *p).collect();
-    let placed = a_on_b(mesh_a, mesh_b, matched, correspondence);
     let json =
         serde_json::to_string_pretty(report).map_err(|e| io("cannot encode the report", &e))?;
     let mut csv = String::with_capacity(correspondence.len() * 48);
@@ -417,7 +420,7 @@ pub fn write_match_folder(
         written.push(path);
         Ok::<(), MatchError>(())
     };
-    file("correspondence.npy", &mut |p| {
+    file(CORRESPONDENCE_FILE, &mut |p| {
         save_npy(p, &[correspondence.len(), 4], &rows)
             .map_err(|e| io(&format!("cannot write {}", p.display()), &e))
     })?;
@@ -426,13 +429,13 @@ pub fn write_match_folder(
             .map_err(|e| io(&format!("cannot write {}", p.display()), &e))
     })?;
     file("A_on_B.obj", &mut |p| {
-        crate::mesh::io::write_obj(p, &placed, None)
+        crate::mesh::io::write_obj(p, placed, None)
             .map_err(|e| io(&format!("cannot write {}", p.display()), &e))
     })?;
     file("deformation.npy", &mut |p| {
         save_npy(p, &[n, n, 2], &phi).map_err(|e| io(&format!("cannot write {}", p.display()), &e))
     })?;
-    file("match.json", &mut |p| {
+    file(INFO_FILE, &mut |p| {
         write_atomically(p, |w| w.write_all(json.as_bytes()))
             .map_err(|e| io(&format!("cannot write {}", p.display()), &e))
     })?;
