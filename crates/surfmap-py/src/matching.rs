@@ -49,7 +49,9 @@ fn landmarks(d: &Bound<'_, PyDict>) -> PyResult<Landmarks> {
 /// ids of A], "B": [vertex ids of B]}``. ``size``: finest grid (2^k + 1). ``align``:
 /// ``"auto"`` (landmarks when given, else the shapes in space), ``"features"``,
 /// ``"shape"`` or ``"none"``. ``keep_folds``: keep the vertices of image triangles that
-/// turn over or collapse in space (by default they are unmatched).
+/// turn over or collapse in space (by default they are unmatched). ``complete_rings``:
+/// rings of vertices next to the matched region completed from their matched neighbours
+/// where φ just misses B (0: leave them unmatched).
 ///
 /// Returns ``(correspondence, report)``: an (n_A, 4) float64 array of rows ``[triangle
 /// of B, b0, b1, b2]`` (triangle −1 where A's vertex has no counterpart) — the command
@@ -67,7 +69,7 @@ fn landmarks(d: &Bound<'_, PyDict>) -> PyResult<Landmarks> {
 /// >>> C.shape, report["min_det"] > 0, report["matched_fraction_a"] > 0.9
 /// ((289, 4), True, True)
 #[pyfunction]
-#[pyo3(name = "match", signature = (VA, FA, VB, FB, *, landmarks=None, size=257, align="auto", keep_folds=false))]
+#[pyo3(name = "match", signature = (VA, FA, VB, FB, *, landmarks=None, size=257, align="auto", keep_folds=false, complete_rings=4))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub fn match_meshes<'py>(
     py: Python<'py>,
@@ -79,6 +81,7 @@ pub fn match_meshes<'py>(
     size: usize,
     align: &str,
     keep_folds: bool,
+    complete_rings: usize,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>)> {
     surfmap::grid::grid_level(size).map_err(|e| PyValueError::new_err(format!("size: {e}")))?;
     let a = arrays::mesh(VA, FA)?;
@@ -86,6 +89,7 @@ pub fn match_meshes<'py>(
     let options = MatchOptions {
         size,
         drop_folds: !keep_folds,
+        complete_rings,
         align: match align {
             "auto" => Align::Auto,
             "features" => Align::Features,
@@ -106,9 +110,9 @@ pub fn match_meshes<'py>(
     let (corr, report) = py
         .detach(|| -> Result<_, MatchError> {
             let m = match_surfaces(&a, &b, &guidance, &options)?;
-            let (corr, folds, dropped) = m.checked_correspondence(&a, &b, options.drop_folds)?;
-            let report = m.report(&corr, &folds, dropped, &options);
-            Ok((corr, report))
+            let checked = m.checked_correspondence(&a, &b, options.drop_folds)?;
+            let report = m.report(&checked, &options);
+            Ok((checked.points, report))
         })
         .map_err(match_error)?;
     let rows = Array2::from_shape_vec((corr.len(), 4), output::correspondence_rows(&corr))

@@ -8,7 +8,7 @@
 //! `cargo run --release -p surfmap --example library`
 
 use surfmap::mesh::validate::DefectKind;
-use surfmap::{Alpha, FlattenError, FlattenOptions, MeasureOptions, TriMesh, Uvs};
+use surfmap::{Alpha, Cut, FlattenError, FlattenOptions, MeasureOptions, TriMesh, Uvs};
 
 /// A bumpy square patch of `n × n` quads (two triangles each) with three holes: strips
 /// of quads removed (two eyes, one mouth). A strip one quad high leaves no vertex
@@ -52,9 +52,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         mesh.num_triangles()
     );
 
-    // As it is, the patch is not a disc: the error lists every defect with its remedy.
+    // As it is, the patch is not a disc: asked neither to fill its holes nor to cut it
+    // open, the flattening refuses it, and the error lists every defect with its remedy.
     let options = FlattenOptions::new(Alpha::balanced());
-    match surfmap::flatten(&mesh, &options) {
+    let as_is = options.clone().with_fill_holes(false).with_cut(Cut::Never);
+    match surfmap::flatten(&mesh, &as_is) {
         Err(FlattenError::NotADisc(defects)) => {
             for d in &defects {
                 println!("refused: {}", d.message());
@@ -68,9 +70,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         other => panic!("expected a refusal, got {other:?}"),
     }
 
-    // Filled for the solve, the holes stay open in the map (UVs for the patch's own
-    // vertices only).
-    let map = surfmap::flatten(&mesh, &options.with_fill_holes(true))?;
+    // By default the holes are filled for the solve and stay open in the map (UVs for
+    // the patch's own vertices only).
+    let map = surfmap::flatten(&mesh, &options)?;
     assert_eq!(map.uvs.len(), mesh.num_vertices());
     println!(
         "flattened: {} holes filled, start {}, {} warm-start steps, {} Newton iterations, {}, energy {:.6} per unit area, {} flipped triangles, {:.3} s",
@@ -173,7 +175,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ..Default::default()
     };
     let m = surfmap::matching::match_surfaces(&out, &moved, &Default::default(), &options)?;
-    let (correspondence, folds, dropped) = m.checked_correspondence(&out, &moved, true)?;
+    let checked = m.checked_correspondence(&out, &moved, true)?;
+    let (correspondence, folds, dropped) = (checked.points, checked.folds, checked.dropped);
     let errors: Vec<f64> = correspondence
         .iter()
         .enumerate()

@@ -38,6 +38,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 "tau" => options.position_scale = f(),
                 "hsig" => options.curvature_sigma = f(),
                 "snap" => options.snap_cells = f(),
+                "rings" => options.complete_rings = f() as usize,
+                "ctol" => options.complete_tolerance.elsewhere = f(),
+                "htol" => options.complete_tolerance.hole_rim = f(),
                 "holes" => {
                     options.hole_features = match v {
                         "auto" => surfmap::matching::HoleFeatures::Auto,
@@ -103,7 +106,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         matched,
         pts.len()
     );
-    let (corr, _, _) = m.checked_correspondence(&a, &b, options.drop_folds)?;
+    let checked = m.checked_correspondence(&a, &b, options.drop_folds)?;
+    println!(
+        "completed {:?}, dropped {}",
+        checked.completion, checked.dropped
+    );
+    let corr = checked.points;
     let data = surfmap::matching::output::correspondence_rows(&corr);
     save_npy(Path::new(out), &[corr.len(), 4], &data)?;
     if let Ok(dir) = std::env::var("PROBE_DUMP") {

@@ -76,6 +76,11 @@ pub struct Args {
     /// (by default they are reported unmatched).
     #[arg(long)]
     pub keep_folds: bool,
+    /// Rings of vertices next to the matched region that may be completed from their
+    /// matched neighbours where φ just misses B (its rim, the fill of its holes);
+    /// 0 reports them unmatched.
+    #[arg(long, value_name = "N", default_value_t = surfmap::matching::complete::COMPLETE_RINGS)]
+    pub complete_rings: usize,
     /// Also draw pictures: checkerboard carried across, deformed grid, energy staircase.
     #[arg(long)]
     pub pictures: bool,
@@ -103,6 +108,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         size: args.size,
         fill_holes: !args.no_fill_holes,
         drop_folds: !args.keep_folds,
+        complete_rings: args.complete_rings,
         align: match args.align {
             AlignArg::Auto => Align::Auto,
             AlignArg::Features => Align::Features,
@@ -159,9 +165,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             args.b.display()
         )
     })?;
-    let (corr, folds, dropped) =
-        matched.checked_correspondence(&mesh_a, &mesh_b, options.drop_folds)?;
-    let report = matched.report(&corr, &folds, dropped, &options);
+    let checked = matched.checked_correspondence(&mesh_a, &mesh_b, options.drop_folds)?;
+    let report = matched.report(&checked, &options);
+    let corr = checked.points;
     // Pictures are drawn before anything is written: an error leaves no partial folder.
     let placed = output::a_on_b(&mesh_a, &mesh_b, &matched, &corr);
     let drawn = if args.pictures {
@@ -192,7 +198,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             (a, b) => format!(", holes filled for the solve A {a} B {b}"),
         };
         outln!(
-            "match: {} levels up to {n}², {} iterations, energy {:.4e}, min det Dφ {:.3}, matched {:.1}% of A ({} of {}), {:.1}% of B covered{filled}, {} vertices unmatched for folds ({} flipped, {} collapsed), alignment {}, {:.2} s",
+            "match: {} levels up to {n}², {} iterations, energy {:.4e}, min det Dφ {:.3}, matched {:.1}% of A ({} of {}, {} completed at rims), {:.1}% of B covered{filled}, {} vertices unmatched for folds ({} flipped, {} collapsed), alignment {}, {:.2} s",
             report.levels.len(),
             report.iterations,
             report.energy,
@@ -200,6 +206,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             100.0 * report.matched_fraction_a,
             report.matched_vertices_a,
             report.vertices_a,
+            report.completed_vertices,
             100.0 * report.covered_fraction_b,
             report.dropped_vertices,
             report.flipped_triangles,

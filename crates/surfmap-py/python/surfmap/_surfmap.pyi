@@ -105,4 +105,5 @@ def match(
     size: int = 257,
     align: str = "auto",
     keep_folds: bool = False,
+    complete_rings: int = 4,
 ) -> Tuple[FloatArray, Report]: ...

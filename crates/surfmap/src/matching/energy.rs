@@ -153,6 +153,15 @@ impl Similarity3 {
             m[r][0] * x[0] + m[r][1] * x[1] + m[r][2] * x[2] + self.translation[r]
         })
     }
+
+    /// The scale `s` of `M = s·R`: `|det M|^(1/3)`.
+    pub fn scale(&self) -> f64 {
+        let m = &self.matrix;
+        let det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+        det.abs().cbrt()
+    }
 }
 
 /// The energy of one level: A's and B's images at the level's scale, ε, β, α.

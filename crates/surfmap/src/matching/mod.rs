@@ -10,6 +10,7 @@
 //! space, maps points and writes the match folder; [`pictures`] draws it.
 
 pub mod align;
+pub mod complete;
 pub mod deformation;
 pub mod energy;
 pub mod ncg;

@@ -17,6 +17,7 @@ use std::path::Path;
 use rayon::prelude::*;
 use serde::Serialize;
 
+use super::complete::{Completion, complete_correspondence};
 use super::solve::{MatchOptions, SurfaceMatch};
 use super::{LevelLog, MatchError};
 use crate::fsutil::write_atomically;
@@ -53,48 +54,77 @@ fn norm(u: [f64; 3]) -> f64 {
     (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt()
 }
 
-/// Flipped and collapsed image triangles of A on B under `correspondence` (one entry
-/// per vertex of A). The image of triangle `(i, j, k)` is the triangle through the
-/// three matched points `p_i, p_j, p_k` of B; with `n = (p_j − p_i) × (p_k − p_i)` it
-/// is *collapsed* when `|n|/2 < COLLAPSE_RATIO · area_A(t) · area(B)/area(A)` and
-/// otherwise *flipped* when `n · (N_B(t_i) + N_B(t_j) + N_B(t_k)) < 0`, `N_B(t)` the
-/// unit normal of the triangle of B that hosts each point.
-pub fn check_folds(a: &TriMesh, b: &TriMesh, correspondence: &[Option<SurfacePoint>]) -> FoldCheck {
-    let ratio = b.area() / a.area();
+/// How an image triangle of A on B sits: as it should, turned over, or collapsed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageFold {
+    None,
+    Flipped,
+    Collapsed,
+}
+
+/// The fold test of one triangle `tri` of A whose vertices are matched to `points` of B:
+/// with `n = (p_j − p_i) × (p_k − p_i)` the image is *collapsed* when
+/// `|n|/2 < COLLAPSE_RATIO · area_A(t) · area_ratio` (`area_ratio = area(B)/area(A)`) and
+/// otherwise *flipped* when `n · (N_B(t_i) + N_B(t_j) + N_B(t_k)) < 0`, `N_B(t)` the unit
+/// normal of the triangle of B that hosts each point.
+pub fn image_fold(
+    a: &TriMesh,
+    b: &TriMesh,
+    area_ratio: f64,
+    tri: [u32; 3],
+    points: [SurfacePoint; 3],
+) -> ImageFold {
     let normal_b = |t: u32| {
         let [p, q, r] = b.triangles[t as usize].map(|i| b.positions[i as usize]);
         let n = cross(sub(q, p), sub(r, p));
         let l = norm(n);
         if l > 0.0 { n.map(|c| c / l) } else { n }
     };
-    let results: Vec<(u32, u8)> = a
+    let x = points.map(|s| s.position(&b.positions, &b.triangles));
+    let n = cross(sub(x[1], x[0]), sub(x[2], x[0]));
+    let [u, v, w] = tri.map(|i| a.positions[i as usize]);
+    let area_a = 0.5 * norm(cross(sub(v, u), sub(w, u)));
+    if 0.5 * norm(n) < COLLAPSE_RATIO * area_a * area_ratio {
+        return ImageFold::Collapsed;
+    }
+    let reference = points
+        .map(|s| normal_b(s.triangle))
+        .into_iter()
+        .fold([0.0; 3], |s, m| [s[0] + m[0], s[1] + m[1], s[2] + m[2]]);
+    if n[0] * reference[0] + n[1] * reference[1] + n[2] * reference[2] < 0.0 {
+        ImageFold::Flipped
+    } else {
+        ImageFold::None
+    }
+}
+
+/// Flipped and collapsed image triangles of A on B under `correspondence` (one entry
+/// per vertex of A): [`image_fold`] of every triangle with three matched vertices.
+pub fn check_folds(a: &TriMesh, b: &TriMesh, correspondence: &[Option<SurfacePoint>]) -> FoldCheck {
+    let ratio = b.area() / a.area();
+    let results: Vec<(u32, ImageFold)> = a
         .triangles
         .par_iter()
         .enumerate()
-        .filter_map(|(t, tri)| {
+        .filter_map(|(t, &tri)| {
             let pts = tri.map(|v| correspondence.get(v as usize).copied().flatten());
             let [Some(p0), Some(p1), Some(p2)] = pts else {
                 return None;
             };
-            let x = [p0, p1, p2].map(|s| s.position(&b.positions, &b.triangles));
-            let n = cross(sub(x[1], x[0]), sub(x[2], x[0]));
-            let [u, v, w] = tri.map(|i| a.positions[i as usize]);
-            let area_a = 0.5 * norm(cross(sub(v, u), sub(w, u)));
-            if 0.5 * norm(n) < COLLAPSE_RATIO * area_a * ratio {
-                return Some((t as u32, 2));
-            }
-            let reference = [p0, p1, p2]
-                .map(|s| normal_b(s.triangle))
-                .into_iter()
-                .fold([0.0; 3], |s, m| [s[0] + m[0], s[1] + m[1], s[2] + m[2]]);
-            let d = n[0] * reference[0] + n[1] * reference[1] + n[2] * reference[2];
-            Some((t as u32, if d < 0.0 { 1 } else { 0 }))
+            Some((t as u32, image_fold(a, b, ratio, tri, [p0, p1, p2])))
         })
         .collect();
+    let of = |kind: ImageFold| {
+        results
+            .iter()
+            .filter(|r| r.1 == kind)
+            .map(|r| r.0)
+            .collect()
+    };
     FoldCheck {
         matched_triangles: results.len(),
-        flipped: results.iter().filter(|r| r.1 == 1).map(|r| r.0).collect(),
-        collapsed: results.iter().filter(|r| r.1 == 2).map(|r| r.0).collect(),
+        flipped: of(ImageFold::Flipped),
+        collapsed: of(ImageFold::Collapsed),
     }
 }
 
@@ -249,6 +279,9 @@ pub struct MatchReport {
     pub collapsed_triangles: usize,
     /// Vertices reported unmatched because a triangle around them folded.
     pub dropped_vertices: usize,
+    /// Vertices matched by rim completion from their neighbours
+    /// ([`super::complete`]; included in `matched_vertices_a`).
+    pub completed_vertices: usize,
     pub alignment: super::AlignmentReport,
     /// The rigid motion (with scale) of the position term at the end, A's length units
     /// to B's (both in the shared unit ℓ).
@@ -264,34 +297,63 @@ pub struct MatchReport {
     pub options: MatchOptions,
 }
 
+/// A per-vertex correspondence after the checks of [`SurfaceMatch::checked_correspondence`].
+#[derive(Clone, Debug)]
+pub struct CheckedCorrespondence {
+    /// One entry per vertex of A: its counterpart on B, or `None`.
+    pub points: Vec<Option<SurfacePoint>>,
+    /// Folded image triangles of φ's own correspondence, before anything was dropped.
+    pub folds: FoldCheck,
+    /// Vertices reported unmatched because a triangle around them folded (φ's folds and
+    /// any that completion made).
+    pub dropped: usize,
+    /// What rim completion added ([`super::complete`]).
+    pub completion: Completion,
+}
+
 impl SurfaceMatch {
-    /// The per-vertex correspondence with the fold check applied per `options`
-    /// (vertices of folded image triangles unmatched when `drop_folds`).
+    /// The per-vertex correspondence, checked: φ's correspondence
+    /// ([`SurfaceMatch::correspondence`]); when `drop`, the vertices of folded image
+    /// triangles unmatched ([`drop_folds`]); then, unless
+    /// [`MatchOptions::complete_rings`] is 0, unmatched vertices next to matched ones
+    /// completed from their neighbours ([`complete_correspondence`]) and the fold check
+    /// run again on the result.
     pub fn checked_correspondence(
         &self,
         mesh_a: &TriMesh,
         mesh_b: &TriMesh,
         drop: bool,
-    ) -> Result<(Vec<Option<SurfacePoint>>, FoldCheck, usize), MatchError> {
-        let mut corr = self.correspondence()?;
-        let folds = check_folds(mesh_a, mesh_b, &corr);
-        let dropped = if drop {
-            drop_folds(mesh_a, &folds, &mut corr)
+    ) -> Result<CheckedCorrespondence, MatchError> {
+        let mut points = self.correspondence()?;
+        let folds = check_folds(mesh_a, mesh_b, &points);
+        let mut dropped = if drop {
+            drop_folds(mesh_a, &folds, &mut points)
         } else {
             0
         };
-        Ok((corr, folds, dropped))
+        let completion = complete_correspondence(
+            mesh_a,
+            mesh_b,
+            &mut points,
+            self.complete_rings,
+            self.complete_tolerance,
+        );
+        if drop && completion.completed > 0 {
+            dropped += drop_folds(mesh_a, &check_folds(mesh_a, mesh_b, &points), &mut points);
+        }
+        Ok(CheckedCorrespondence {
+            points,
+            folds,
+            dropped,
+            completion,
+        })
     }
 
     /// The report of `match.json` for a correspondence from
     /// [`SurfaceMatch::checked_correspondence`].
-    pub fn report(
-        &self,
-        correspondence: &[Option<SurfacePoint>],
-        folds: &FoldCheck,
-        dropped: usize,
-        options: &MatchOptions,
-    ) -> MatchReport {
+    pub fn report(&self, checked: &CheckedCorrespondence, options: &MatchOptions) -> MatchReport {
+        let correspondence = &checked.points;
+        let folds = &checked.folds;
         let matched = correspondence.iter().filter(|p| p.is_some()).count();
         let mut covered = 0.0;
         let mut area_b = 0.0;
@@ -318,7 +380,8 @@ impl SurfaceMatch {
             min_det: self.min_det,
             flipped_triangles: folds.flipped.len(),
             collapsed_triangles: folds.collapsed.len(),
-            dropped_vertices: dropped,
+            dropped_vertices: checked.dropped,
+            completed_vertices: checked.completion.completed,
             alignment: self.alignment.clone(),
             similarity: self.similarity,
             length_unit: self.a.length_unit,

@@ -46,6 +46,15 @@ impl ClosestPoints {
         let nn = self.tree.nearest_one::<SquaredEuclidean>(p);
         (nn.item as usize, nn.distance)
     }
+
+    /// Indices of the `k` closest points, closest first.
+    pub fn closest_n(&self, p: &[f64; 3], k: usize) -> impl Iterator<Item = usize> {
+        let k = std::num::NonZeroUsize::new(k.max(1)).expect("k ≥ 1");
+        self.tree
+            .nearest_n::<SquaredEuclidean>(p, k)
+            .into_iter()
+            .map(|n| n.item as usize)
+    }
 }
 
 /// The 24 rotations of the cube (signed permutation matrices with determinant +1).

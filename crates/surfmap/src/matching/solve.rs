@@ -106,6 +106,12 @@ pub struct MatchOptions {
     /// Report the vertices of image triangles that turn over or collapse in space as
     /// unmatched rather than wrong ([`super::output::check_folds`]).
     pub drop_folds: bool,
+    /// Rings of unmatched vertices next to matched ones that rim completion may match
+    /// from their neighbours ([`super::complete`]); 0 turns it off.
+    pub complete_rings: usize,
+    /// Largest distance (fraction of the vertex's mean edge length) from a completed
+    /// vertex's predicted point to B ([`super::complete::COMPLETE_TOLERANCE`]).
+    pub complete_tolerance: super::complete::Tolerance,
 }
 
 impl Default for MatchOptions {
@@ -134,6 +140,8 @@ impl Default for MatchOptions {
             snap_cells: SNAP_CELLS,
             position_scale: 0.0,
             drop_folds: true,
+            complete_rings: super::complete::COMPLETE_RINGS,
+            complete_tolerance: super::complete::COMPLETE_TOLERANCE,
         }
     }
 }
@@ -257,6 +265,10 @@ pub struct SurfaceMatch {
     pub seconds_solve: f64,
     /// See [`MatchOptions::snap_cells`].
     pub snap_cells: f64,
+    /// See [`MatchOptions::complete_rings`].
+    pub complete_rings: usize,
+    /// See [`MatchOptions::complete_tolerance`].
+    pub complete_tolerance: super::complete::Tolerance,
 }
 
 /// Points mapped within this many finest-grid cells of B's surface are snapped onto it
@@ -491,6 +503,8 @@ pub fn solve(
         min_det,
         seconds_solve: clock.elapsed().as_secs_f64(),
         snap_cells: options.snap_cells,
+        complete_rings: options.complete_rings,
+        complete_tolerance: options.complete_tolerance,
     })
 }
 

@@ -72,7 +72,8 @@ fn run(
 ) -> (SurfaceMatch, Vec<Option<SurfacePoint>>) {
     let m = match_surfaces(a, b, g, o).unwrap();
     assert!(m.min_det > 0.0, "min det Dφ = {}", m.min_det);
-    let (corr, folds, _) = m.checked_correspondence(a, b, true).unwrap();
+    let checked = m.checked_correspondence(a, b, true).unwrap();
+    let (corr, folds) = (checked.points, checked.folds);
     // After dropping, no fully matched triangle folds.
     let after = check_folds(a, b, &corr);
     assert!(

@@ -1,0 +1,571 @@
+//! Completing a correspondence where φ just misses B: the rims.
+//!
+//! φ is found on a grid, so along the outer rim of ω_B and along B's filled holes (eyes,
+//! mouth) a vertex of A whose counterpart lies on B's rim is often carried a few grid
+//! cells past it — off ω_B, or into the fill of a hole, which is not B's surface — and
+//! comes back unmatched; so do the vertices [`super::output::drop_folds`] gives up. Those
+//! vertices have matched neighbours, and the neighbours say where they belong.
+//!
+//! **Rule.** Let `S` be the similarity (rotation, scale, translation) that best carries
+//! the matched vertices of A onto their counterparts (`min Σ |S(x_A(v)) − x_B(v)|²`,
+//! [`fit_similarity_3d`]), and `o(v) = x_B(v) − S(x_A(v))` the non-rigid offset of a
+//! matched vertex. An unmatched vertex `u` with matched neighbours `N(u)` is predicted at
+//!
+//! `p(u) = S(x_A(u)) + Σ_{n∈N(u)} wₙ o(n) / Σ wₙ`,   `wₙ = 1/|x_A(u) − x_A(n)|`,
+//!
+//! and matched to the closest point `q` of B's surface if `|p(u) − q| ≤ τ · s · ē(u)`,
+//! `s` the scale of `S`, `ē(u)` the mean length of `u`'s edges in A and `τ`
+//! [`COMPLETE_TOLERANCE`]: 1.5 when `q` is on the rim of one of B's holes (holes are
+//! matched to holes, so A's vertices around a hole have counterparts around B's), ¼
+//! elsewhere. Rounds repeat from the new front (at most `rings` rings). A vertex beyond
+//! B's outer rim — a part of A that B does not have — is predicted about one edge past
+//! the rim, farther than `ē/4` from B, and stays unmatched; so partial correspondence
+//! survives (measured in BENCHMARKS.md, "Matching": false matches).
+//! Candidates are taken closest first, and one that would turn over or collapse an image
+//! triangle ([`image_fold`]) with the vertices matched so far is left unmatched.
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use super::output::{ImageFold, image_fold};
+use super::rigid::ClosestPoints;
+use super::similarity::fit_similarity_3d;
+use crate::mesh::{SurfacePoint, Topology, TriMesh};
+
+/// Default number of rings grown from the matched region.
+pub const COMPLETE_RINGS: usize = 4;
+
+/// Largest distance from a predicted point to B's surface, as a fraction of the vertex's
+/// mean edge length (scaled to B).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Tolerance {
+    /// When the closest point is on the rim of one of B's holes (every boundary loop but
+    /// the longest, which [`crate::mesh::repair`] fills for the flattening): the holes
+    /// are matched to A's (eyes to eyes), so the vertices around A's hole have their
+    /// counterparts around B's, and φ, solved on the filled surfaces, carries them into
+    /// the fill by up to a few grid cells.
+    pub hole_rim: f64,
+    /// Elsewhere — on B's outer rim or inside B. On the outer rim A may simply extend
+    /// beyond B (partial overlap), and a vertex one ring past the rim misses it by about
+    /// one edge: so a quarter of an edge.
+    pub elsewhere: f64,
+}
+
+pub const COMPLETE_TOLERANCE: Tolerance = Tolerance {
+    hole_rim: 1.5,
+    elsewhere: 0.25,
+};
+
+/// The edges and vertices of a mesh's hole rims: every boundary loop but the longest (3D
+/// length; the loop the flattening keeps, [`crate::mesh::repair`] fills the others).
+struct Rims {
+    vertices: Vec<bool>,
+    edges: std::collections::HashSet<[u32; 2]>,
+}
+
+impl Rims {
+    fn new(mesh: &TriMesh) -> Self {
+        let length = |l: &[u32]| -> f64 {
+            (0..l.len())
+                .map(|k| {
+                    let p = DVec3::from_array(mesh.positions[l[k] as usize]);
+                    p.distance(DVec3::from_array(
+                        mesh.positions[l[(k + 1) % l.len()] as usize],
+                    ))
+                })
+                .sum()
+        };
+        let loops = Topology::new(mesh).boundary_loops;
+        let mut vertices = vec![false; mesh.positions.len()];
+        let mut edges = std::collections::HashSet::new();
+        let outer = (0..loops.len())
+            .max_by(|&x, &y| length(&loops[x].vertices).total_cmp(&length(&loops[y].vertices)));
+        for (_, hole) in loops.iter().enumerate().filter(|(k, _)| Some(*k) != outer) {
+            let l = &hole.vertices;
+            for k in 0..l.len() {
+                let (u, v) = (l[k], l[(k + 1) % l.len()]);
+                vertices[u as usize] = true;
+                edges.insert([u.min(v), u.max(v)]);
+            }
+        }
+        Self { vertices, edges }
+    }
+
+    /// Whether a surface point lies on a hole's rim (on one of its vertices or edges).
+    fn on_hole_rim(&self, mesh: &TriMesh, p: SurfacePoint) -> bool {
+        let tri = mesh.triangles[p.triangle as usize];
+        let on: Vec<u32> = (0..3)
+            .filter(|&k| p.barycentric[k] > 1e-9)
+            .map(|k| tri[k])
+            .collect();
+        match on[..] {
+            [v] => self.vertices[v as usize],
+            [u, v] => self.edges.contains(&[u.min(v), u.max(v)]),
+            _ => false,
+        }
+    }
+}
+
+/// Blends `t` of the predicted point toward the umbrella position tried in turn.
+const UMBRELLA_STEPS: [f64; 3] = [0.0, 0.5, 1.0];
+
+/// What completion did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Completion {
+    /// Vertices of A matched by completion.
+    pub completed: usize,
+    /// Rounds that matched at least one vertex.
+    pub rounds: usize,
+}
+
+/// The closest point of a triangle `(a, b, c)` to `p`, as barycentric coordinates
+/// (Ericson, *Real-Time Collision Detection*, §5.1.5: Voronoi regions of the vertices,
+/// then of the edges, else the face).
+pub fn closest_point_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> [f64; 3] {
+    let ab = b - a;
+    let ac = c - a;
+    let ap = p - a;
+    let d1 = ab.dot(ap);
+    let d2 = ac.dot(ap);
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return [1.0, 0.0, 0.0];
+    }
+    let bp = p - b;
+    let d3 = ab.dot(bp);
+    let d4 = ac.dot(bp);
+    if d3 >= 0.0 && d4 <= d3 {
+        return [0.0, 1.0, 0.0];
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let v = d1 / (d1 - d3);
+        return [1.0 - v, v, 0.0];
+    }
+    let cp = p - c;
+    let d5 = ab.dot(cp);
+    let d6 = ac.dot(cp);
+    if d6 >= 0.0 && d5 <= d6 {
+        return [0.0, 0.0, 1.0];
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let w = d2 / (d2 - d6);
+        return [1.0 - w, 0.0, w];
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return [0.0, 1.0 - w, w];
+    }
+    let denom = 1.0 / (va + vb + vc);
+    let v = vb * denom;
+    let w = vc * denom;
+    [1.0 - v - w, v, w]
+}
+
+/// Triangles around each vertex as CSR arrays `(start, list)`: the triangles of vertex
+/// `v` are `list[start[v]..start[v + 1]]`.
+pub fn vertex_triangles(triangles: &[[u32; 3]], num_vertices: usize) -> (Vec<u32>, Vec<u32>) {
+    let mut start = vec![0u32; num_vertices + 1];
+    for t in triangles {
+        for &v in t {
+            start[v as usize + 1] += 1;
+        }
+    }
+    for v in 0..num_vertices {
+        start[v + 1] += start[v];
+    }
+    let mut fill = start.clone();
+    let mut list = vec![0u32; 3 * triangles.len()];
+    for (t, tri) in triangles.iter().enumerate() {
+        for &v in tri {
+            list[fill[v as usize] as usize] = t as u32;
+            fill[v as usize] += 1;
+        }
+    }
+    (start, list)
+}
+
+/// Closest points on a triangle mesh: the triangles around the `K` nearest vertices
+/// (k-d tree) are searched — exact for the meshes we match, whose triangles are not much
+/// longer than their neighbours' spacing.
+pub struct SurfaceProjector<'a> {
+    mesh: &'a TriMesh,
+    vertices: ClosestPoints,
+    /// CSR vertex → triangles.
+    start: Vec<u32>,
+    triangles: Vec<u32>,
+}
+
+impl<'a> SurfaceProjector<'a> {
+    const K: usize = 6;
+
+    pub fn new(mesh: &'a TriMesh) -> Self {
+        let (start, triangles) = vertex_triangles(&mesh.triangles, mesh.positions.len());
+        Self {
+            mesh,
+            vertices: ClosestPoints::new(&mesh.positions),
+            start,
+            triangles,
+        }
+    }
+
+    /// The closest point of the surface to `p` and its distance.
+    pub fn project(&self, p: [f64; 3]) -> Option<(SurfacePoint, f64)> {
+        let p = DVec3::from_array(p);
+        let mut best: Option<(SurfacePoint, f64)> = None;
+        for v in self.vertices.closest_n(&p.to_array(), Self::K) {
+            let (s, e) = (self.start[v] as usize, self.start[v + 1] as usize);
+            for &t in &self.triangles[s..e] {
+                let [a, b, c] = self.mesh.triangles[t as usize]
+                    .map(|i| DVec3::from_array(self.mesh.positions[i as usize]));
+                let l = closest_point_on_triangle(p, a, b, c);
+                let q = a * l[0] + b * l[1] + c * l[2];
+                let d = q.distance(p);
+                if best.is_none_or(|(_, bd)| d < bd) {
+                    best = Some((
+                        SurfacePoint {
+                            triangle: t,
+                            barycentric: l,
+                        },
+                        d,
+                    ));
+                }
+            }
+        }
+        best
+    }
+}
+
+/// Matches unmatched vertices of A next to matched ones by the rule in the module
+/// documentation, growing at most `rings` rings; returns what it did.
+pub fn complete_correspondence(
+    a: &TriMesh,
+    b: &TriMesh,
+    correspondence: &mut [Option<SurfacePoint>],
+    rings: usize,
+    tolerance: Tolerance,
+) -> Completion {
+    let mut done = Completion::default();
+    let n = a.positions.len();
+    if rings == 0 || correspondence.len() != n {
+        return done;
+    }
+    let matched: Vec<usize> = (0..n).filter(|&v| correspondence[v].is_some()).collect();
+    if matched.len() < 3 || matched.len() == n {
+        return done;
+    }
+    let target = |v: usize| -> [f64; 3] {
+        correspondence[v]
+            .expect("matched")
+            .position(&b.positions, &b.triangles)
+    };
+    let p: Vec<[f64; 3]> = matched.iter().map(|&v| a.positions[v]).collect();
+    let q: Vec<[f64; 3]> = matched.iter().map(|&v| target(v)).collect();
+    let Some(similarity) = fit_similarity_3d(&p, &q, &vec![1.0; p.len()], true) else {
+        return done;
+    };
+    let moved = |v: usize| DVec3::from_array(similarity.apply(a.positions[v]));
+    let scale = similarity.scale();
+    let mut offset: Vec<Option<DVec3>> = vec![None; n];
+    for (k, &v) in matched.iter().enumerate() {
+        offset[v] = Some(DVec3::from_array(q[k]) - moved(v));
+    }
+    // Vertex adjacency of A (CSR) from its unique edges.
+    let edges = Topology::new(a).edges;
+    let mut start = vec![0u32; n + 1];
+    for e in &edges {
+        start[e[0] as usize + 1] += 1;
+        start[e[1] as usize + 1] += 1;
+    }
+    for v in 0..n {
+        start[v + 1] += start[v];
+    }
+    let mut fill = start.clone();
+    let mut neighbours = vec![0u32; 2 * edges.len()];
+    for e in &edges {
+        for (x, y) in [(e[0], e[1]), (e[1], e[0])] {
+            neighbours[fill[x as usize] as usize] = y;
+            fill[x as usize] += 1;
+        }
+    }
+    let ring = |v: usize| &neighbours[start[v] as usize..start[v + 1] as usize];
+    let projector = SurfaceProjector::new(b);
+    let rims = Rims::new(b);
+    let (tri_start, tri_list) = vertex_triangles(&a.triangles, n);
+    let area_ratio = b.area() / a.area();
+    for _ in 0..rings {
+        let front: Vec<usize> = (0..n)
+            .filter(|&v| {
+                offset[v].is_none() && ring(v).iter().any(|&u| offset[u as usize].is_some())
+            })
+            .collect();
+        let mut candidates: Vec<(usize, DVec3, f64)> = front
+            .par_iter()
+            .filter_map(|&v| {
+                let x = DVec3::from_array(a.positions[v]);
+                let (mut sum, mut weight, mut length, mut count) = (DVec3::ZERO, 0.0, 0.0, 0);
+                for &u in ring(v) {
+                    let d = x.distance(DVec3::from_array(a.positions[u as usize]));
+                    length += d;
+                    count += 1;
+                    if let Some(o) = offset[u as usize]
+                        && d > 0.0
+                    {
+                        sum += o / d;
+                        weight += 1.0 / d;
+                    }
+                }
+                if weight <= 0.0 {
+                    return None;
+                }
+                let predicted = moved(v) + sum / weight;
+                let (point, distance) = projector.project(predicted.to_array())?;
+                let factor = if rims.on_hole_rim(b, point) {
+                    tolerance.hole_rim
+                } else {
+                    tolerance.elsewhere
+                };
+                let allowed = factor * scale * length / count as f64;
+                (distance <= allowed).then_some((v, predicted, distance / allowed))
+            })
+            .collect();
+        // Closest first. A candidate whose closest point would turn over or collapse an
+        // image triangle with the vertices matched so far is moved toward the centroid
+        // of its matched neighbours' images (the umbrella position, which unfolds a
+        // star) in steps; if every step folds it stays unmatched (this round).
+        candidates.sort_by(|x, y| x.2.total_cmp(&y.2));
+        let mut accepted = 0;
+        for (v, predicted, _) in candidates {
+            let images: Vec<DVec3> = ring(v)
+                .iter()
+                .filter_map(|&u| correspondence[u as usize])
+                .map(|p| DVec3::from_array(p.position(&b.positions, &b.triangles)))
+                .collect();
+            let centroid = images.iter().sum::<DVec3>() / images.len().max(1) as f64;
+            let triangles = &tri_list[tri_start[v] as usize..tri_start[v + 1] as usize];
+            for t in UMBRELLA_STEPS {
+                let Some((point, _)) = projector.project(predicted.lerp(centroid, t).to_array())
+                else {
+                    continue;
+                };
+                correspondence[v] = Some(point);
+                let folds = triangles.iter().any(|&f| {
+                    let tri = a.triangles[f as usize];
+                    let pts = tri.map(|u| correspondence[u as usize]);
+                    let [Some(p0), Some(p1), Some(p2)] = pts else {
+                        return false;
+                    };
+                    image_fold(a, b, area_ratio, tri, [p0, p1, p2]) != ImageFold::None
+                });
+                if folds {
+                    correspondence[v] = None;
+                    continue;
+                }
+                let q = DVec3::from_array(point.position(&b.positions, &b.triangles));
+                offset[v] = Some(q - moved(v));
+                accepted += 1;
+                break;
+            }
+        }
+        if accepted == 0 {
+            break;
+        }
+        done.rounds += 1;
+        done.completed += accepted;
+    }
+    done
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::generate::bumpy_disc;
+    use crate::testing::Rng;
+
+    /// The faces of `mesh` whose three vertices `keep`, with the vertices renumbered;
+    /// also the new index of every old vertex (`None`: removed).
+    fn crop(mesh: &TriMesh, keep: impl Fn([f64; 3]) -> bool) -> (TriMesh, Vec<Option<u32>>) {
+        let mut index = vec![None; mesh.num_vertices()];
+        let mut positions = vec![];
+        for (v, &p) in mesh.positions.iter().enumerate() {
+            if keep(p) {
+                index[v] = Some(positions.len() as u32);
+                positions.push(p);
+            }
+        }
+        let triangles = mesh
+            .triangles
+            .iter()
+            .filter_map(|t| {
+                let [a, b, c] = t.map(|v| index[v as usize]);
+                Some([a?, b?, c?])
+            })
+            .collect();
+        (TriMesh::new(positions, triangles), index)
+    }
+
+    /// A vertex of `mesh` as a surface point (a triangle around it, weight 1 there).
+    fn at_vertex(mesh: &TriMesh, v: u32) -> Option<SurfacePoint> {
+        mesh.triangles.iter().enumerate().find_map(|(t, tri)| {
+            let k = tri.iter().position(|&u| u == v)?;
+            let mut barycentric = [0.0; 3];
+            barycentric[k] = 1.0;
+            Some(SurfacePoint {
+                triangle: t as u32,
+                barycentric,
+            })
+        })
+    }
+
+    /// A smooth non-rigid bend plus a rotation and a shift: where the copy's vertices go.
+    fn bend(p: [f64; 3]) -> [f64; 3] {
+        let q = [p[0], p[1], p[2] + 0.15 * p[0] * p[0] - 0.1 * p[1]];
+        let (c, s) = (0.6f64.cos(), 0.6f64.sin());
+        [
+            c * q[0] - s * q[2] + 2.0,
+            q[1] - 1.0,
+            s * q[0] + c * q[2] + 0.5,
+        ]
+    }
+
+    fn distance(x: [f64; 3], y: [f64; 3]) -> f64 {
+        DVec3::from_array(x).distance(DVec3::from_array(y))
+    }
+
+    #[test]
+    fn the_closest_point_of_a_triangle_beats_every_sample_of_it() {
+        let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+        for _ in 0..200 {
+            let mut pick = || {
+                DVec3::new(
+                    rng.range(-1.0, 1.0),
+                    rng.range(-1.0, 1.0),
+                    rng.range(-1.0, 1.0),
+                )
+            };
+            let (a, b, c, p) = (pick(), pick(), pick(), pick() * 2.0);
+            let l = closest_point_on_triangle(p, a, b, c);
+            assert!((l.iter().sum::<f64>() - 1.0).abs() < 1e-12 && l.iter().all(|&x| x >= -1e-12));
+            let found = (a * l[0] + b * l[1] + c * l[2]).distance(p);
+            let n = 60;
+            for i in 0..=n {
+                for j in 0..=n - i {
+                    let (u, v) = (i as f64 / n as f64, j as f64 / n as f64);
+                    let q = a * (1.0 - u - v) + b * u + c * v;
+                    assert!(
+                        found <= q.distance(p) + 1e-12,
+                        "{found} > {}",
+                        q.distance(p)
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn rim_vertices_left_unmatched_are_completed_onto_a_bent_copy() {
+        // A: a disc with a hole; B: the same surface bent and moved, so every vertex of A
+        // has a known counterpart. The correspondence lacks the two outer rings and the
+        // two rings around the hole, as φ leaves them.
+        let disc = bumpy_disc(16, 0.3);
+        let (a, _) = crop(&disc, |p| (p[0] - 0.2).hypot(p[1]) > 0.25);
+        let b = TriMesh::new(
+            a.positions.iter().map(|&p| bend(p)).collect(),
+            a.triangles.clone(),
+        );
+        let edge = 1.0 / 16.0;
+        let missing = |p: [f64; 3]| {
+            p[0].hypot(p[1]) > 1.0 - 2.5 * edge / 1.0
+                || (p[0] - 0.2).hypot(p[1]) < 0.25 + 2.0 * edge
+        };
+        let mut corr: Vec<Option<SurfacePoint>> = (0..a.num_vertices() as u32)
+            .map(|v| {
+                (!missing(a.positions[v as usize]))
+                    .then(|| at_vertex(&b, v))
+                    .flatten()
+            })
+            .collect();
+        let before = corr.iter().filter(|p| p.is_none()).count();
+        assert!(before > 100, "{before} vertices to complete");
+        let done = complete_correspondence(&a, &b, &mut corr, COMPLETE_RINGS, COMPLETE_TOLERANCE);
+        // All but a few of the outermost vertices, where the bend's offsets extrapolated
+        // from one side miss B's outer rim by more than the strict quarter edge.
+        assert!(done.completed * 100 >= before * 95, "{done:?} of {before}");
+        let around_hole = |p: [f64; 3]| (p[0] - 0.2).hypot(p[1]) < 0.6;
+        let left = (0..a.num_vertices())
+            .filter(|&v| corr[v].is_none() && around_hole(a.positions[v]))
+            .count();
+        assert_eq!(left, 0, "vertices around the hole left unmatched");
+        // Each completed vertex lands near its counterpart: within half an edge, most
+        // much closer (the offsets of a smooth bend are extrapolated from one side).
+        let mut e: Vec<f64> = (0..a.num_vertices())
+            .filter(|&v| missing(a.positions[v]))
+            .filter_map(|v| {
+                let p = corr[v]?.position(&b.positions, &b.triangles);
+                Some(distance(p, b.positions[v]))
+            })
+            .collect();
+        e.sort_by(f64::total_cmp);
+        let (median, worst) = (e[e.len() / 2], e[e.len() - 1]);
+        println!(
+            "completed {}: median error {median:.5}, worst {worst:.5} (edge {edge})",
+            e.len()
+        );
+        assert!(
+            median < 0.1 * edge && worst < 0.5 * edge,
+            "median {median} worst {worst}"
+        );
+        let folds = super::super::output::check_folds(&a, &b, &corr);
+        assert!(
+            folds.flipped.is_empty() && folds.collapsed.is_empty(),
+            "{folds:?}"
+        );
+    }
+
+    #[test]
+    fn the_part_of_a_beyond_b_stays_unmatched() {
+        // B: the part x > −0.3 of A (bent and moved); A's vertices of that part matched,
+        // the rest has no counterpart and must stay unmatched (partial correspondence).
+        let a = bumpy_disc(16, 0.3);
+        let (cropped, index) = crop(&a, |p| p[0] > -0.3);
+        let b = TriMesh::new(
+            cropped.positions.iter().map(|&p| bend(p)).collect(),
+            cropped.triangles.clone(),
+        );
+        // φ also missed the first ring inside B's rim.
+        let rim: Vec<bool> = {
+            let mut on = vec![false; b.num_vertices()];
+            for l in Topology::new(&b).boundary_loops {
+                for v in l.vertices {
+                    on[v as usize] = true;
+                }
+            }
+            on
+        };
+        let mut corr: Vec<Option<SurfacePoint>> = (0..a.num_vertices())
+            .map(|v| {
+                index[v]
+                    .filter(|&w| !rim[w as usize])
+                    .and_then(|w| at_vertex(&b, w))
+            })
+            .collect();
+        let done = complete_correspondence(&a, &b, &mut corr, COMPLETE_RINGS, COMPLETE_TOLERANCE);
+        let rim_count = rim.iter().filter(|&&r| r).count();
+        assert!(
+            done.completed >= rim_count * 9 / 10,
+            "{done:?} of {rim_count} rim vertices"
+        );
+        let false_matches = (0..a.num_vertices())
+            .filter(|&v| index[v].is_none() && corr[v].is_some())
+            .count();
+        let beyond = index.iter().filter(|i| i.is_none()).count();
+        println!(
+            "{done:?}, {rim_count} rim vertices; {false_matches} of {beyond} beyond B matched"
+        );
+        assert!(
+            false_matches * 50 <= beyond,
+            "{false_matches} of {beyond} vertices beyond B matched"
+        );
+    }
+}
