@@ -18,6 +18,16 @@
 //! Stopping: `λ²/2 ≤ tolerance` (energy per unit area, scale-free), the iteration cap,
 //! or no measurable decrease (the rounding floor).
 //!
+//! With the boundary barrier of the bijective mode ([`super::barrier`]) the line search
+//! also stops short of the first boundary contact, and each active pair (boundary vertex
+//! `v`, boundary edge `ab`) adds its Gauss–Newton Hessian `b''(d) ∇d ∇dᵀ`, which couples
+//! `v` with `a` and `b`: vertices that are not mesh neighbours, so the sparse pattern
+//! gets those couplings when a pair first needs them (re-analysed with the same
+//! ordering, with a margin for the pairs about to come; it only grows). Without the
+//! couplings (each vertex's own block only) Newton slides along contacts with tiny
+//! steps; with them too early (a start far from the minimum with hundreds of pairs in
+//! contact) the steps rush into new contacts, so they are used once `λ² < 0.3·E`.
+//!
 //! Rigid motions are removed by pinning three coordinates (both coordinates of one
 //! vertex, the `v` coordinate of a second one after rotating it onto the `u` axis):
 //! the energy is invariant under rigid motions, so this changes nothing but the
@@ -865,20 +875,16 @@ mod tests {
         plain.system.mul_vec(&x, &mut y0).unwrap();
         let dof = |v: u32, k: usize| solver.dof.get(2 * v as usize + k);
         for (vertices, c, nrm, f2) in &expected_pairs {
-            let mut gx = 0.0;
-            for (v, ci) in vertices.iter().zip(c) {
-                for k in 0..2 {
-                    if let Some(d) = dof(*v, k) {
-                        gx += ci * nrm[k] * x[d as usize];
-                    }
-                }
-            }
-            for (v, ci) in vertices.iter().zip(c) {
-                for k in 0..2 {
-                    if let Some(d) = dof(*v, k) {
-                        y0[d as usize] += f2 * gx * ci * nrm[k];
-                    }
-                }
+            // g on the unknowns: c_i n_k at coordinate k of vertex i (none where pinned).
+            let g: Vec<(usize, f64)> = vertices
+                .iter()
+                .zip(c)
+                .flat_map(|(v, ci)| nrm.iter().enumerate().map(move |(k, nk)| (*v, k, ci * nk)))
+                .filter_map(|(v, k, gk)| dof(v, k).map(|d| (d as usize, gk)))
+                .collect();
+            let gx: f64 = g.iter().map(|&(d, gk)| gk * x[d]).sum();
+            for &(d, gk) in &g {
+                y0[d] += f2 * gx * gk;
             }
         }
         let scale = y0.iter().fold(0.0f64, |m, v| m.max(v.abs()));
