@@ -9,7 +9,7 @@
 //! ```
 //!
 //! (the clamped log barrier of Li et al. 2020, "Incremental Potential Contact", scaled
-//! by `κ` so that `b(ε/2) = 1`; [`profile`])
+//! by `κ` so that `b(ε/2) = 1`; see `profile`)
 //! over boundary vertices `v` and boundary edges `e` not incident to `v` (`d`:
 //! point–segment distance in the plane). It is zero while every vertex stays `ε` away
 //! from every other boundary edge and `+∞` at contact. For an edge that shares a vertex
