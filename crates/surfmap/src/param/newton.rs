@@ -873,7 +873,8 @@ mod tests {
         let (mut y, mut y0) = (vec![0.0; unknowns], vec![0.0; unknowns]);
         solver.system.mul_vec(&x, &mut y).unwrap();
         plain.system.mul_vec(&x, &mut y0).unwrap();
-        let dof = |v: u32, k: usize| solver.dof.get(2 * v as usize + k);
+        let unknown_of = solver.dof.as_slice().to_vec();
+        let dof = |v: u32, k: usize| Some(unknown_of[2 * v as usize + k]).filter(|&d| d != FIXED);
         for (vertices, c, nrm, f2) in &expected_pairs {
             // g on the unknowns: c_i n_k at coordinate k of vertex i (none where pinned).
             let g: Vec<(usize, f64)> = vertices
@@ -896,6 +897,33 @@ mod tests {
             .assemble(&uv, &density, HessianKind::Projected)
             .unwrap();
         assert_eq!(solver.timings.pattern_rebuilds, 1);
+        // Uncoupled (far from the minimum): each vertex's own block only, no new pattern.
+        let rest = rest_triangles(&mesh.positions, &mesh.triangles).unwrap();
+        let mut uncoupled = NewtonSolver::new(n, &mesh.triangles, rest, &pins, None).unwrap();
+        uncoupled.set_barrier(BoundaryBarrier::new(disc.boundary(), &uv));
+        uncoupled.couple_pairs = false;
+        uncoupled
+            .assemble(&uv, &density, HessianKind::Projected)
+            .unwrap();
+        assert_eq!(uncoupled.timings.pattern_rebuilds, 0);
+        let mut y1 = vec![0.0; unknowns];
+        uncoupled.system.mul_vec(&x, &mut y1).unwrap();
+        plain.system.mul_vec(&x, &mut y0).unwrap();
+        for (vertices, c, nrm, f2) in &expected_pairs {
+            for (v, ci) in vertices.iter().zip(c) {
+                let own: f64 = (0..2)
+                    .filter_map(|k| dof(*v, k).map(|d| nrm[k] * x[d as usize]))
+                    .sum();
+                for (k, nk) in nrm.iter().enumerate() {
+                    if let Some(d) = dof(*v, k) {
+                        y0[d as usize] += f2 * ci * ci * own * nk;
+                    }
+                }
+            }
+        }
+        for (a, b) in y1.iter().zip(&y0) {
+            assert!((a - b).abs() <= 1e-9 * scale, "{a} vs {b}");
+        }
     }
 
     #[test]
