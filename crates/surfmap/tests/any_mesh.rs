@@ -1,6 +1,8 @@
 //! Every closed, holed and higher-genus mesh of the shared data (up to ~10k faces, to
 //! keep the suite quick) flattens by default to a valid map: one chart, flip-free, and,
-//! checked by the measure code independently of the solver, overlap-free.
+//! checked by the measure code independently of the solver, overlap-free; and the
+//! barrier solves (one of them on the 18k-face ICT face opened with seams) converge in
+//! few Newton iterations.
 
 use surfmap::measure::charts::chart_labels;
 use surfmap::measure::overlap::boundary_overlap;
