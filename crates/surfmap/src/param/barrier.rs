@@ -5,9 +5,11 @@
 //! boundary curve does not cross itself. The barrier adds to the elastic energy
 //!
 //! ```text
-//! E_B(u) = λ · Σ_{v, e} max(0, ε / d(u_v, u_e) − 1)²
+//! E_B(u) = λ · Σ_{v, e} b(d(u_v, u_e)),   b(d) = −κ (d − ε)² ln(d / ε) for d < ε, 0 beyond
 //! ```
 //!
+//! (the clamped log barrier of Li et al. 2020, "Incremental Potential Contact", scaled
+//! by `κ` so that `b(ε/2) = 1`; see `profile`)
 //! over boundary vertices `v` and boundary edges `e` not incident to `v` (`d`:
 //! point–segment distance in the plane). It is zero while every vertex stays `ε` away
 //! from every other boundary edge and `+∞` at contact. For an edge that shares a vertex
@@ -20,9 +22,11 @@
 //! [`BoundaryBarrier::max_step`]), so every iterate of a crossing-free start is
 //! crossing-free.
 //!
-//! Newton uses the Gauss–Newton part of the barrier Hessian, `f''(d) ∇d ∇dᵀ`, kept on
-//! the vertices' own 2×2 blocks only (the pairs are not neighbours in the sparse
-//! pattern): positive semi-definite, so the direction is still a descent direction.
+//! Newton uses the Gauss–Newton part of each pair's Hessian, `λ b''(d) ∇d ∇dᵀ` with
+//! `∇d = c ⊗ n` over the pair's three vertices ([`BoundaryBarrier::for_each_pair_term`]):
+//! positive semi-definite, so the direction is still a descent direction. Its couplings
+//! of the vertex with the edge's ends are not mesh neighbours: the Newton solver adds
+//! them to its sparse pattern when a pair first needs them ([`super::newton`]).
 //! Candidate pairs come from a uniform grid over the boundary edges, rebuilt per
 //! evaluation in buffers kept between calls.
 
@@ -34,10 +38,10 @@ pub const EPSILON_FACTOR: f64 = 0.25;
 
 /// Barrier weight in units of `h²` (`h`: mean boundary edge length at the start; `h²`
 /// is about one boundary triangle's energy). A stiff barrier keeps contacts at a stable
-/// distance: measured on `holes.off` opened with seams, `λ = h²` left Newton sliding
-/// along the contacts for 200 iterations, `100 h²` converged in 29 with the energy 0.3 %
-/// higher (`ict_neutral` 200 → 73 iterations, +0.05 %; `three_holes` 17 → 20, same
-/// energy).
+/// distance: measured on `holes.off` opened with seams (with the earlier `(ε/d − 1)²`
+/// profile and only each vertex's own Hessian block), `λ = h²` left Newton sliding along
+/// the contacts for 200 iterations, `100 h²` converged in 29 with the energy 0.3 %
+/// higher.
 pub const WEIGHT_FACTOR: f64 = 100.0;
 
 /// Cap of `ε`, relative to the start length of the edge between them, for a vertex and
@@ -104,9 +108,19 @@ impl BoundaryBarrier {
     fn for_each_active_pair(
         &self,
         uv: &[[f64; 2]],
+        f: impl FnMut(usize, usize, f64, f64, f64, [f64; 2]),
+    ) {
+        self.for_each_pair_closer_than(uv, 1.0, f);
+    }
+
+    /// [`Self::for_each_active_pair`] for the pairs with `d < reach · ε` (their own `ε`).
+    fn for_each_pair_closer_than(
+        &self,
+        uv: &[[f64; 2]],
+        reach: f64,
         mut f: impl FnMut(usize, usize, f64, f64, f64, [f64; 2]),
     ) {
-        let eps = self.epsilon;
+        let eps = reach * self.epsilon;
         let mut grid = self.grid.lock().unwrap_or_else(|e| e.into_inner());
         grid.build(self.loop_.len(), eps, |i| {
             let (a, b) = self.edge(i);
@@ -127,7 +141,7 @@ impl BoundaryBarrier {
                 let (a, b) = self.edge(i);
                 let (a, b) = (uv[a as usize], uv[b as usize]);
                 let (d, s, n) = point_segment(p, a, b);
-                if d < eps {
+                if d < reach * eps {
                     f(k, i, eps, d, s, n);
                 }
             });
@@ -139,7 +153,7 @@ impl BoundaryBarrier {
         let mut e = 0.0;
         self.for_each_active_pair(uv, |_, _, eps, d, _, _| {
             e += if d > 0.0 {
-                (eps / d - 1.0).powi(2)
+                profile(eps, d).0
             } else {
                 f64::INFINITY
             };
@@ -147,30 +161,40 @@ impl BoundaryBarrier {
         self.weight * e
     }
 
-    /// Adds `∇E_B` to `gradient` (per vertex) and the diagonal blocks of its
-    /// Gauss–Newton Hessian to `blocks` (per vertex `[h_uu, h_vu, h_vv]`).
-    pub fn add_derivatives(
+    /// Calls `f(vertices, c, n, f1, f2)` for every penalized pair at positive distance:
+    /// the pair's term is `f(d)` with `d = n · (u_v − (1 − s) u_a − s u_b)` to first
+    /// order, so its gradient is `f1 · c_i · n` on vertex `vertices[i]` (`c = (1, −(1 −
+    /// s), −s)`, vertices `(v, a, b)`) and its Gauss–Newton Hessian is `f2 · (c cᵀ) ⊗ (n
+    /// nᵀ)` (`f1 = f'(d)`, `f2 = f''(d) ≥ 0`, weight included).
+    pub fn for_each_pair_term(
         &self,
         uv: &[[f64; 2]],
-        gradient: &mut dyn FnMut(u32, [f64; 2]),
-        blocks: &mut dyn FnMut(u32, [f64; 3]),
+        mut f: impl FnMut([u32; 3], [f64; 3], [f64; 2], f64, f64),
     ) {
         let w = self.weight;
         self.for_each_active_pair(uv, |k, i, eps, d, s, n| {
             if d <= 0.0 {
                 return;
             }
-            let r = eps / d - 1.0;
-            // f(d) = w r², f' = −2 w r ε / d², f'' = 2 w (ε²/d⁴ + 2 r ε / d³).
-            let f1 = -2.0 * w * r * eps / (d * d);
-            let f2 = 2.0 * w * (eps * eps / d.powi(4) + 2.0 * r * eps / d.powi(3));
+            let (_, f1, f2) = profile(eps, d);
             let (a, b) = self.edge(i);
-            let nn = [n[0] * n[0], n[0] * n[1], n[1] * n[1]];
-            for (v, c) in [(self.loop_[k], 1.0), (a, -(1.0 - s)), (b, -s)] {
-                gradient(v, [f1 * c * n[0], f1 * c * n[1]]);
-                let h = f2 * c * c;
-                blocks(v, [h * nn[0], h * nn[1], h * nn[2]]);
-            }
+            f(
+                [self.loop_[k], a, b],
+                [1.0, -(1.0 - s), -s],
+                n,
+                w * f1,
+                w * f2,
+            );
+        });
+    }
+
+    /// Calls `f([v, a, b])` for every pair (vertex `v`, edge `ab`) closer than `reach`
+    /// times its `ε`: the pairs that may become active soon (for a sparse pattern
+    /// with a margin).
+    pub fn for_each_pair_within(&self, uv: &[[f64; 2]], reach: f64, mut f: impl FnMut([u32; 3])) {
+        self.for_each_pair_closer_than(uv, reach, |k, i, _, _, _, _| {
+            let (a, b) = self.edge(i);
+            f([self.loop_[k], a, b]);
         });
     }
 
@@ -276,6 +300,28 @@ fn first_contact(x: [[f64; 2]; 3], d: [[f64; 2]; 3]) -> f64 {
         }
     }
     f64::INFINITY
+}
+
+/// The barrier profile `b(d) = −κ (d − ε)² ln(d / ε)` of Li et al. 2020 (IPC) at
+/// distance `0 < d < ε`, with `κ = 1 / ((ε/2)² ln 2)` so that `b(ε/2) = 1`, and its
+/// first two derivatives:
+///
+/// ```text
+/// b'(d)  = −κ (2 (d − ε) ln(d/ε) + (d − ε)² / d)
+/// b''(d) = −κ (2 ln(d/ε) + 4 (d − ε) / d − (d − ε)² / d²)   > 0 on (0, ε)
+/// ```
+///
+/// `b` is C² at `ε` (value, slope and curvature vanish there) and grows only like
+/// `−ln d` at contact, so a Newton step that overshoots toward a contact costs little
+/// (a `(ε/d − 1)²` profile, tried first, made steps stall after such overshoots).
+fn profile(eps: f64, d: f64) -> (f64, f64, f64) {
+    let k = 1.0 / (0.25 * eps * eps * std::f64::consts::LN_2);
+    let (l, r) = ((d / eps).ln(), d - eps);
+    (
+        -k * r * r * l,
+        -k * (2.0 * r * l + r * r / d),
+        -k * (2.0 * l + 4.0 * r / d - r * r / (d * d)),
+    )
 }
 
 fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
@@ -449,6 +495,59 @@ mod tests {
     }
 
     #[test]
+    fn profile_derivatives_match_finite_differences() {
+        let eps = 0.3;
+        let (b, b1, b2) = profile(eps, 0.5 * eps);
+        assert!((b - 1.0).abs() < 1e-14, "{b}");
+        assert!(b1 < 0.0 && b2 > 0.0);
+        // Value, slope and curvature vanish at ε: the barrier is C² there.
+        let (b, b1, b2) = profile(eps, eps);
+        assert_eq!((b, b1), (0.0, 0.0));
+        assert!(b2.abs() < 1e-12, "{b2}");
+        let h = 1e-6;
+        for d in [1e-3, 0.01, 0.05, 0.1, 0.2, 0.29] {
+            let (_, b1, b2) = profile(eps, d);
+            let fd1 = (profile(eps, d + h).0 - profile(eps, d - h).0) / (2.0 * h);
+            let fd2 = (profile(eps, d + h).1 - profile(eps, d - h).1) / (2.0 * h);
+            assert!(
+                (fd1 - b1).abs() <= 1e-6 * (1.0 + b1.abs()),
+                "d {d}: {fd1} vs {b1}"
+            );
+            assert!(
+                (fd2 - b2).abs() <= 1e-6 * (1.0 + b2.abs()),
+                "d {d}: {fd2} vs {b2}"
+            );
+            assert!(b2 > 0.0, "convex: {b2} at {d}");
+        }
+    }
+
+    #[test]
+    fn pair_distance_gradient_is_c_times_n() {
+        // d(u_v, u_a, u_b) for a point against a segment, its closest point inside the
+        // segment (s = 0.3) and at its end (clamped, s = 0): ∂d/∂u_k = c_k n.
+        for (p, a, b) in [
+            ([0.3, 0.2], [0.0, 0.0], [1.0, 0.1]),
+            ([-0.2, 0.3], [0.0, 0.0], [1.0, 0.1]),
+        ] {
+            let (_, s, n) = point_segment(p, a, b);
+            let c = [1.0, -(1.0 - s), -s];
+            let x = [p, a, b];
+            let h = 1e-7;
+            for k in 0..3 {
+                for j in 0..2 {
+                    let (mut plus, mut minus) = (x, x);
+                    plus[k][j] += h;
+                    minus[k][j] -= h;
+                    let fd = (point_segment(plus[0], plus[1], plus[2]).0
+                        - point_segment(minus[0], minus[1], minus[2]).0)
+                        / (2.0 * h);
+                    assert!((fd - c[k] * n[j]).abs() < 1e-7, "{fd} vs {}", c[k] * n[j]);
+                }
+            }
+        }
+    }
+
+    #[test]
     fn energy_gradient_and_step_bound() {
         let mut uv = square(4);
         let loop_: Vec<u32> = (0..uv.len() as u32).collect();
@@ -463,14 +562,16 @@ mod tests {
         assert!(e > 0.0 && e.is_finite());
         // Gradient by central differences, on every coordinate.
         let mut grad = vec![[0.0; 2]; uv.len()];
-        barrier.add_derivatives(
-            &uv,
-            &mut |v, g| {
-                grad[v as usize][0] += g[0];
-                grad[v as usize][1] += g[1];
-            },
-            &mut |_, h| assert!(h[0] >= 0.0 && h[2] >= 0.0 && h[0] * h[2] >= h[1] * h[1] - 1e-12),
-        );
+        let mut pairs = 0;
+        barrier.for_each_pair_term(&uv, |vertices, c, n, f1, f2| {
+            assert!(f2 > 0.0, "{f2}");
+            pairs += 1;
+            for (v, c) in vertices.into_iter().zip(c) {
+                grad[v as usize][0] += f1 * c * n[0];
+                grad[v as usize][1] += f1 * c * n[1];
+            }
+        });
+        assert!(pairs > 0);
         let step = 1e-7;
         for v in 0..uv.len() {
             for c in 0..2 {

@@ -18,6 +18,16 @@
 //! Stopping: `λ²/2 ≤ tolerance` (energy per unit area, scale-free), the iteration cap,
 //! or no measurable decrease (the rounding floor).
 //!
+//! With the boundary barrier of the bijective mode ([`super::barrier`]) the line search
+//! also stops short of the first boundary contact, and each active pair (boundary vertex
+//! `v`, boundary edge `ab`) adds its Gauss–Newton Hessian `b''(d) ∇d ∇dᵀ`, which couples
+//! `v` with `a` and `b`: vertices that are not mesh neighbours, so the sparse pattern
+//! gets those couplings when a pair first needs them (re-analysed with the same
+//! ordering, with a margin for the pairs about to come; it only grows). Without the
+//! couplings (each vertex's own block only) Newton slides along contacts with tiny
+//! steps; with them too early (a start far from the minimum with hundreds of pairs in
+//! contact) the steps rush into new contacts, so they are used once `λ² < 0.3·E`.
+//!
 //! Rigid motions are removed by pinning three coordinates (both coordinates of one
 //! vertex, the `v` coordinate of a second one after rotating it onto the `u` axis):
 //! the energy is invariant under rigid motions, so this changes nothing but the
@@ -107,9 +117,19 @@ pub struct NewtonSolver<'m> {
     direction: Vec<[f64; 2]>,
     trial: Vec<[f64; 2]>,
     best: Vec<[f64; 2]>,
-    /// The boundary barrier of the bijective mode ([`super::barrier`]), and the value
-    /// slots of every vertex's own 2×2 block (`[uu, vu, vv]`, `u32::MAX` where pinned).
-    barrier: Option<(BoundaryBarrier, Vec<[u32; 3]>)>,
+    /// The boundary barrier of the bijective mode ([`super::barrier`]).
+    barrier: Option<BoundaryBarrier>,
+    /// The barrier's pair terms at the last assembly ([`PairTerm`]).
+    pairs: Vec<PairTerm>,
+    /// The fill-reducing ordering of the unknowns, kept to re-analyse the pattern.
+    ordering: Ordering,
+    /// Couplings of unknowns beyond the triangles' in the sparse pattern: those of
+    /// every barrier pair met so far (the pattern only grows, so a pair that comes
+    /// back costs no new analysis).
+    extra: Vec<(u32, u32)>,
+    /// Whether the next assembly couples the vertices of each barrier pair (else it
+    /// keeps only each vertex's own block of the pair's Hessian).
+    couple_pairs: bool,
     /// Where the time went, accumulated over all calls of [`Self::minimize`].
     pub timings: NewtonTimings,
 }
@@ -131,6 +151,9 @@ pub struct NewtonTimings {
     /// failed (not positive definite) and were redone with the projected Hessian.
     pub factorizations: usize,
     pub exact_failures: usize,
+    /// Symbolic re-analyses of the sparse pattern for new boundary-barrier pairs
+    /// (their time is in `symbolic`).
+    pub pattern_rebuilds: usize,
 }
 
 /// Which element Hessian to assemble.
@@ -150,6 +173,17 @@ const BARRIER_RELATIVE_TOLERANCE: f64 = 1e-6;
 
 /// Largest step tried with a boundary barrier (the contact search's reach).
 const BARRIER_STEP_CAP: f64 = 16.0;
+
+/// Pairs closer than this many times their barrier distance `ε` get their couplings
+/// in the sparse pattern whenever it is re-analysed (a margin for the pairs to come;
+/// measured on `ict_neutral` opened with seams: 14 re-analyses with no margin, 5 with
+/// 2, 3 with 4).
+const PATTERN_REACH: f64 = 4.0;
+
+/// Couple the vertices of each boundary-barrier pair in the Hessian once the Newton
+/// decrement is below this fraction of the energy (measured: from a mean-value start
+/// with hundreds of pairs in contact, coupling earlier stalls the solve).
+const COUPLING_SWITCH: f64 = 0.3;
 
 /// Armijo constant for exact-Hessian steps (see the line search).
 const EXACT_ARMIJO_C: f64 = 1e-4;
@@ -190,37 +224,13 @@ impl<'m> NewtonSolver<'m> {
         let nv = num_vertices;
         let dof = Unknowns::new(2 * nv, pins.iter().map(|&(v, c)| 2 * v as usize + c));
         let n = dof.count();
-        let local_dofs = |t: &[u32; 3]| -> [u32; 6] {
-            std::array::from_fn(|i| dof.as_slice()[2 * t[i / 2] as usize + i % 2])
-        };
-        let mut entries = Vec::with_capacity(triangles.len() * 21);
-        for t in triangles {
-            let ld = local_dofs(t);
-            for &(i, j) in &LOWER_PAIRS {
-                if ld[i] != FIXED && ld[j] != FIXED {
-                    entries.push((ld[i], ld[j]));
-                }
-            }
-        }
         let t_symbolic = Instant::now();
         let ordering = match ordering {
             Some(vertices) => vertices.expand(2, &dof)?,
             None => Ordering::Amd,
         };
-        let (system, entry_slots) = SpdSystem::with_ordering(n, &entries, &ordering)?;
+        let (system, slots) = build_system(&dof, triangles, &[], &ordering)?;
         let symbolic_time = t_symbolic.elapsed().as_secs_f64();
-        drop(entries);
-        let mut slots = vec![[u32::MAX; 21]; triangles.len()];
-        let mut k = 0;
-        for (t, tri) in triangles.iter().enumerate() {
-            let ld = local_dofs(tri);
-            for (p, &(i, j)) in LOWER_PAIRS.iter().enumerate() {
-                if ld[i] != FIXED && ld[j] != FIXED {
-                    slots[t][p] = entry_slots[k];
-                    k += 1;
-                }
-            }
-        }
         let nf = triangles.len();
         Ok(Self {
             triangles,
@@ -236,6 +246,10 @@ impl<'m> NewtonSolver<'m> {
             trial: vec![[0.0; 2]; nv],
             best: vec![[0.0; 2]; nv],
             barrier: None,
+            pairs: Vec::new(),
+            ordering,
+            extra: Vec::new(),
+            couple_pairs: true,
             timings: NewtonTimings {
                 symbolic: symbolic_time,
                 ..Default::default()
@@ -246,19 +260,7 @@ impl<'m> NewtonSolver<'m> {
     /// Adds the boundary barrier `barrier` to the energy, and its contact bound to the
     /// line search (the bijective mode, [`super::barrier`]).
     pub fn set_barrier(&mut self, barrier: BoundaryBarrier) {
-        let mut blocks = vec![[u32::MAX; 3]; self.direction.len()];
-        // Local pairs (2k, 2k), (2k + 1, 2k), (2k + 1, 2k + 1) of corner k.
-        let index = |i: usize, j: usize| LOWER_PAIRS.iter().position(|&p| p == (i, j)).unwrap();
-        for (t, tri) in self.triangles.iter().enumerate() {
-            for (k, &v) in tri.iter().enumerate() {
-                blocks[v as usize] = [
-                    self.slots[t][index(2 * k, 2 * k)],
-                    self.slots[t][index(2 * k + 1, 2 * k)],
-                    self.slots[t][index(2 * k + 1, 2 * k + 1)],
-                ];
-            }
-        }
-        self.barrier = Some((barrier, blocks));
+        self.barrier = Some(barrier);
     }
 
     /// The stopping threshold on `λ²/2`: the settings' tolerance, or with the barrier
@@ -275,7 +277,7 @@ impl<'m> NewtonSolver<'m> {
 
     /// The barrier energy at `uv` (0 without a barrier).
     fn barrier_energy(&self, uv: &[[f64; 2]]) -> f64 {
-        self.barrier.as_ref().map_or(0.0, |(b, _)| b.energy(uv))
+        self.barrier.as_ref().map_or(0.0, |b| b.energy(uv))
     }
 
     #[inline]
@@ -352,13 +354,17 @@ impl<'m> NewtonSolver<'m> {
         let mut decrement_prev = f64::INFINITY;
         let mut last_step_full_exact = false;
         for it in 1..=settings.max_iterations {
+            // Far from the minimum (a start that squeezed the boundary together, with
+            // hundreds of pairs in contact) the coupled pair Hessian lets the step rush
+            // into new contacts; there each vertex keeps its own block only.
+            self.couple_pairs = decrement_prev < COUPLING_SWITCH * energy.abs();
             if last_step_full_exact {
                 // After a full exact-Newton step the decrement has dropped quadratically:
                 // test convergence with the previous factorization (a Hessian that differs
                 // by O(step), so the estimate is accurate to that order) before paying
                 // for a new one. Not converged: go on as usual.
                 let t0 = Instant::now();
-                self.assemble(uv, density, HessianKind::None);
+                self.assemble(uv, density, HessianKind::None)?;
                 let t1 = Instant::now();
                 let mut q: Vec<f64> = self.gradient.iter().map(|g| -g).collect();
                 self.system.solve_in_place(&mut q)?;
@@ -382,7 +388,7 @@ impl<'m> NewtonSolver<'m> {
             let mut solved_exact = false;
             if try_exact {
                 let t0 = Instant::now();
-                self.assemble(uv, density, HessianKind::Exact);
+                self.assemble(uv, density, HessianKind::Exact)?;
                 let t1 = Instant::now();
                 let ok = self.system.factorize_unshifted().is_ok();
                 self.timings.factorizations += 1;
@@ -402,7 +408,7 @@ impl<'m> NewtonSolver<'m> {
             }
             if !solved {
                 let t0 = Instant::now();
-                self.assemble(uv, density, HessianKind::Projected);
+                self.assemble(uv, density, HessianKind::Projected)?;
                 let t1 = Instant::now();
                 self.system.factorize()?;
                 self.timings.factorizations += 1;
@@ -436,7 +442,7 @@ impl<'m> NewtonSolver<'m> {
             }
             let t_search = Instant::now();
             let mut t_max = max_flip_free_step(uv, self.triangles, &self.direction);
-            if let Some((barrier, _)) = &self.barrier {
+            if let Some(barrier) = &self.barrier {
                 // No step past the first boundary contact; the contact search covers
                 // steps up to a cap (the doubling below stays under it).
                 let cap = t_max.min(BARRIER_STEP_CAP);
@@ -528,8 +534,15 @@ impl<'m> NewtonSolver<'m> {
         Ok((StopReason::IterationCap, settings.max_iterations, energy))
     }
 
-    /// Fills the gradient and the projected Hessian values for the current `uv`.
-    fn assemble<D: Density + ?Sized>(&mut self, uv: &[[f64; 2]], density: &D, kind: HessianKind) {
+    /// Fills the gradient and the Hessian values of `kind` for the current `uv` (the
+    /// boundary barrier's pairs with their full Gauss–Newton Hessian, the pattern
+    /// re-analysed first if a pair couples unknowns it does not hold yet).
+    fn assemble<D: Density + ?Sized>(
+        &mut self,
+        uv: &[[f64; 2]],
+        density: &D,
+        kind: HessianKind,
+    ) -> Result<(), SolveError> {
         let triangles = self.triangles;
         let rest = &self.rest;
         self.elem_grad
@@ -561,8 +574,32 @@ impl<'m> NewtonSolver<'m> {
                     }
                 }
             });
-        self.gradient.iter_mut().for_each(|g| *g = 0.0);
         let with_hessian = kind != HessianKind::None;
+        if let Some(barrier) = &self.barrier {
+            let (dof, pairs) = (&self.dof, &mut self.pairs);
+            pairs.clear();
+            barrier.for_each_pair_term(uv, |vertices, c, n, f1, f2| {
+                pairs.push(PairTerm {
+                    dofs: std::array::from_fn(|i| {
+                        dof.as_slice()[2 * vertices[i / 2] as usize + i % 2]
+                    }),
+                    c,
+                    n,
+                    f1,
+                    f2,
+                    slots: [u32::MAX; 21],
+                });
+            });
+            if with_hessian && self.couple_pairs {
+                self.ensure_pair_pattern(uv)?;
+            } else if with_hessian {
+                // Each vertex's own block is always in the pattern.
+                for pair in &mut self.pairs {
+                    pair.find_slots(&self.system);
+                }
+            }
+        }
+        self.gradient.iter_mut().for_each(|g| *g = 0.0);
         // Only a new Hessian touches the matrix (and invalidates its factorization).
         let mut values = with_hessian.then(|| self.system.values_mut());
         if let Some(values) = values.as_deref_mut() {
@@ -586,28 +623,136 @@ impl<'m> NewtonSolver<'m> {
                 }
             }
         }
-        if let Some((barrier, blocks)) = &self.barrier {
-            let (dof, gradient) = (&self.dof, &mut self.gradient);
-            barrier.add_derivatives(
-                uv,
-                &mut |v, g| {
-                    for (c, gc) in g.iter().enumerate() {
-                        if let Some(k) = dof.get(2 * v as usize + c) {
-                            gradient[k as usize] += gc;
-                        }
+        for pair in &self.pairs {
+            for i in 0..6 {
+                if pair.dofs[i] != FIXED {
+                    self.gradient[pair.dofs[i] as usize] += pair.f1 * pair.c[i / 2] * pair.n[i % 2];
+                }
+            }
+            if let Some(values) = values.as_deref_mut() {
+                for (&s, &(i, j)) in pair.slots.iter().zip(&LOWER_PAIRS) {
+                    if s != u32::MAX && (self.couple_pairs || i / 2 == j / 2) {
+                        values[s as usize] += pair.f2
+                            * (pair.c[i / 2] * pair.c[j / 2])
+                            * (pair.n[i % 2] * pair.n[j % 2]);
                     }
-                },
-                &mut |v, h| {
-                    if let Some(values) = values.as_deref_mut() {
-                        for (&s, hc) in blocks[v as usize].iter().zip(h) {
-                            if s != u32::MAX {
-                                values[s as usize] += hc;
-                            }
-                        }
-                    }
-                },
-            );
+                }
+            }
         }
+        Ok(())
+    }
+
+    /// Finds the value slots of every barrier pair's Hessian; where the pattern lacks a
+    /// coupling, adds those of every pair closer than [`PATTERN_REACH`]` · ε` to it and
+    /// re-analyses it (symbolic factorization with the same ordering).
+    fn ensure_pair_pattern(&mut self, uv: &[[f64; 2]]) -> Result<(), SolveError> {
+        let mut complete = true;
+        for pair in &mut self.pairs {
+            complete &= pair.find_slots(&self.system);
+        }
+        if complete {
+            return Ok(());
+        }
+        let t0 = Instant::now();
+        let (dof, extra) = (&self.dof, &mut self.extra);
+        if let Some(barrier) = &self.barrier {
+            barrier.for_each_pair_within(uv, PATTERN_REACH, |vertices| {
+                let dofs: [u32; 6] =
+                    std::array::from_fn(|i| dof.as_slice()[2 * vertices[i / 2] as usize + i % 2]);
+                for &(i, j) in &LOWER_PAIRS {
+                    let (a, b) = (dofs[i], dofs[j]);
+                    if i / 2 != j / 2 && a != FIXED && b != FIXED {
+                        extra.push((a.max(b), a.min(b)));
+                    }
+                }
+            });
+        }
+        self.extra.sort_unstable();
+        self.extra.dedup();
+        let (system, slots) = build_system(&self.dof, self.triangles, &self.extra, &self.ordering)?;
+        self.system = system;
+        self.slots = slots;
+        for pair in &mut self.pairs {
+            pair.find_slots(&self.system);
+        }
+        self.timings.symbolic += t0.elapsed().as_secs_f64();
+        self.timings.pattern_rebuilds += 1;
+        Ok(())
+    }
+}
+
+/// The sparse system over the couplings of every triangle's unknowns and `extra`,
+/// with its symbolic factorization in `ordering`, and for each triangle the value slots
+/// of its 21 lower-triangle local pairs (`u32::MAX` where a pinned coordinate is involved).
+fn build_system(
+    dof: &Unknowns,
+    triangles: &[[u32; 3]],
+    extra: &[(u32, u32)],
+    ordering: &Ordering,
+) -> Result<(SpdSystem, Vec<[u32; 21]>), SolveError> {
+    let local_dofs = |t: &[u32; 3]| -> [u32; 6] {
+        std::array::from_fn(|i| dof.as_slice()[2 * t[i / 2] as usize + i % 2])
+    };
+    let mut entries = Vec::with_capacity(triangles.len() * 21 + extra.len());
+    for t in triangles {
+        let ld = local_dofs(t);
+        for &(i, j) in &LOWER_PAIRS {
+            if ld[i] != FIXED && ld[j] != FIXED {
+                entries.push((ld[i], ld[j]));
+            }
+        }
+    }
+    entries.extend_from_slice(extra);
+    let (system, entry_slots) = SpdSystem::with_ordering(dof.count(), &entries, ordering)?;
+    drop(entries);
+    let mut slots = vec![[u32::MAX; 21]; triangles.len()];
+    let mut k = 0;
+    for (t, tri) in triangles.iter().enumerate() {
+        let ld = local_dofs(tri);
+        for (p, &(i, j)) in LOWER_PAIRS.iter().enumerate() {
+            if ld[i] != FIXED && ld[j] != FIXED {
+                slots[t][p] = entry_slots[k];
+                k += 1;
+            }
+        }
+    }
+    Ok((system, slots))
+}
+
+/// One boundary-barrier pair (vertex `v`, edge `ab`) at the current map: its term's
+/// gradient `f1 · c_k · n` on vertex `k` of `(v, a, b)` and its Gauss–Newton Hessian
+/// `f2 · (c cᵀ) ⊗ (n nᵀ)` ([`BoundaryBarrier::for_each_pair_term`]), over the unknowns
+/// `dofs` (`u, v` of each vertex; `FIXED` where pinned).
+struct PairTerm {
+    dofs: [u32; 6],
+    c: [f64; 3],
+    n: [f64; 2],
+    f1: f64,
+    f2: f64,
+    /// Value slots of the 21 lower-triangle local pairs (`u32::MAX` where pinned).
+    slots: [u32; 21],
+}
+
+impl PairTerm {
+    /// Looks up the value slots in `system`'s pattern; `false` if one is missing.
+    fn find_slots(&mut self, system: &SpdSystem) -> bool {
+        let (col_ptr, row_idx) = system.pattern();
+        let mut complete = true;
+        for (slot, &(i, j)) in self.slots.iter_mut().zip(&LOWER_PAIRS) {
+            let (a, b) = (self.dofs[i], self.dofs[j]);
+            *slot = u32::MAX;
+            if a == FIXED || b == FIXED {
+                continue;
+            }
+            let (row, col) = (a.max(b), a.min(b));
+            let start = col_ptr[col as usize] as usize;
+            let rows = &row_idx[start..col_ptr[col as usize + 1] as usize];
+            match rows.binary_search(&row) {
+                Ok(k) => *slot = (start + k) as u32,
+                Err(_) => complete = false,
+            }
+        }
+        complete
     }
 }
 
@@ -617,6 +762,7 @@ mod tests {
     use crate::energy::Alpha;
     use crate::mesh::Disc;
     use crate::mesh::generate::bumpy_disc;
+    use crate::param::barrier::BoundaryBarrier;
     use crate::param::element::rest_triangles;
     use crate::param::tutte::mean_value;
 
@@ -656,7 +802,7 @@ mod tests {
             solver.timings.factorizations,
             iterations + solver.timings.exact_failures
         );
-        solver.assemble(&uv, &density, HessianKind::Exact);
+        solver.assemble(&uv, &density, HessianKind::Exact).unwrap();
         solver.system.factorize().unwrap();
         let mut p: Vec<f64> = solver.gradient.iter().map(|g| -g).collect();
         solver.system.solve_in_place(&mut p).unwrap();
@@ -670,6 +816,114 @@ mod tests {
             0.5 * decrement.abs() <= 2.0 * settings.tolerance,
             "decrement {decrement:e} at the returned map"
         );
+    }
+
+    /// A strip of `m` quads bent into a ring open by the angle `gap`, radius 1 to 1.2:
+    /// its two end edges face each other `gap` apart.
+    fn open_ring(m: usize, gap: f64) -> crate::mesh::TriMesh {
+        let mut positions = Vec::new();
+        for i in 0..=m {
+            let t = i as f64 / m as f64 * (std::f64::consts::TAU - gap);
+            for r in [1.0, 1.2] {
+                positions.push([r * t.cos(), r * t.sin(), 0.0]);
+            }
+        }
+        let mut triangles = Vec::new();
+        for i in 0..m as u32 {
+            let (a, b, c, d) = (2 * i, 2 * i + 1, 2 * i + 2, 2 * i + 3);
+            triangles.push([a, c, b]);
+            triangles.push([b, c, d]);
+        }
+        crate::mesh::TriMesh::new(positions, triangles)
+    }
+
+    #[test]
+    fn barrier_pairs_are_coupled_in_the_assembled_hessian() {
+        // The ring's end edges are closer than ε: the assembled matrix must be the
+        // elastic one plus Σ f2 g gᵀ over the pairs (g = c ⊗ n on the unknowns),
+        // computed here from the barrier alone, once the pattern holds the couplings.
+        let mesh = open_ring(40, 0.02);
+        let disc = Disc::new(&mesh).unwrap();
+        let uv: Vec<[f64; 2]> = mesh.positions.iter().map(|p| [p[0], p[1]]).collect();
+        let rest = rest_triangles(&mesh.positions, &mesh.triangles).unwrap();
+        let pins = [(10, 0), (10, 1), (60, 1)];
+        let n = uv.len();
+        let mut plain = NewtonSolver::new(n, &mesh.triangles, rest.clone(), &pins, None).unwrap();
+        let mut solver = NewtonSolver::new(n, &mesh.triangles, rest, &pins, None).unwrap();
+        let barrier = BoundaryBarrier::new(disc.boundary(), &uv);
+        let mut expected_pairs = Vec::new();
+        barrier.for_each_pair_term(&uv, |vertices, c, n, _, f2| {
+            expected_pairs.push((vertices, c, n, f2))
+        });
+        assert!(expected_pairs.len() >= 2, "{}", expected_pairs.len());
+        solver.set_barrier(barrier);
+        let density = Alpha::balanced();
+        plain
+            .assemble(&uv, &density, HessianKind::Projected)
+            .unwrap();
+        solver.couple_pairs = true;
+        solver
+            .assemble(&uv, &density, HessianKind::Projected)
+            .unwrap();
+        assert_eq!(solver.timings.pattern_rebuilds, 1);
+        let unknowns = solver.dof.count();
+        let x: Vec<f64> = (0..unknowns)
+            .map(|i| ((i * 7919) % 101) as f64 / 50.0 - 1.0)
+            .collect();
+        let (mut y, mut y0) = (vec![0.0; unknowns], vec![0.0; unknowns]);
+        solver.system.mul_vec(&x, &mut y).unwrap();
+        plain.system.mul_vec(&x, &mut y0).unwrap();
+        let unknown_of = solver.dof.as_slice().to_vec();
+        let dof = |v: u32, k: usize| Some(unknown_of[2 * v as usize + k]).filter(|&d| d != FIXED);
+        for (vertices, c, nrm, f2) in &expected_pairs {
+            // g on the unknowns: c_i n_k at coordinate k of vertex i (none where pinned).
+            let g: Vec<(usize, f64)> = vertices
+                .iter()
+                .zip(c)
+                .flat_map(|(v, ci)| nrm.iter().enumerate().map(move |(k, nk)| (*v, k, ci * nk)))
+                .filter_map(|(v, k, gk)| dof(v, k).map(|d| (d as usize, gk)))
+                .collect();
+            let gx: f64 = g.iter().map(|&(d, gk)| gk * x[d]).sum();
+            for &(d, gk) in &g {
+                y0[d] += f2 * gx * gk;
+            }
+        }
+        let scale = y0.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for (a, b) in y.iter().zip(&y0) {
+            assert!((a - b).abs() <= 1e-9 * scale, "{a} vs {b}");
+        }
+        // Again at the same map: the pattern holds the pairs already.
+        solver
+            .assemble(&uv, &density, HessianKind::Projected)
+            .unwrap();
+        assert_eq!(solver.timings.pattern_rebuilds, 1);
+        // Uncoupled (far from the minimum): each vertex's own block only, no new pattern.
+        let rest = rest_triangles(&mesh.positions, &mesh.triangles).unwrap();
+        let mut uncoupled = NewtonSolver::new(n, &mesh.triangles, rest, &pins, None).unwrap();
+        uncoupled.set_barrier(BoundaryBarrier::new(disc.boundary(), &uv));
+        uncoupled.couple_pairs = false;
+        uncoupled
+            .assemble(&uv, &density, HessianKind::Projected)
+            .unwrap();
+        assert_eq!(uncoupled.timings.pattern_rebuilds, 0);
+        let mut y1 = vec![0.0; unknowns];
+        uncoupled.system.mul_vec(&x, &mut y1).unwrap();
+        plain.system.mul_vec(&x, &mut y0).unwrap();
+        for (vertices, c, nrm, f2) in &expected_pairs {
+            for (v, ci) in vertices.iter().zip(c) {
+                let own: f64 = (0..2)
+                    .filter_map(|k| dof(*v, k).map(|d| nrm[k] * x[d as usize]))
+                    .sum();
+                for (k, nk) in nrm.iter().enumerate() {
+                    if let Some(d) = dof(*v, k) {
+                        y0[d as usize] += f2 * ci * ci * own * nk;
+                    }
+                }
+            }
+        }
+        for (a, b) in y1.iter().zip(&y0) {
+            assert!((a - b).abs() <= 1e-9 * scale, "{a} vs {b}");
+        }
     }
 
     #[test]

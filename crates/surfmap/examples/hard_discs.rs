@@ -1,0 +1,145 @@
+//! Hard discs (issue 12): Newton iterations and time of the default flattening on the
+//! cut closed meshes, the higher-genus ones and the discs with holes opened by seams,
+//! every one under 20k faces in `../shared/data`.
+//!
+//! `cargo run --release -p surfmap --example hard_discs [-- --repeat 3] [-- --log] [-- MESH[:cut]...]`
+//!
+//! `MESH:cut` opens the holes with seams (`--cut-holes`) instead of filling them. Per
+//! mesh: what was done (plan), whether the boundary barrier was needed, the Newton
+//! iterations of the returned solve (the barrier solve when there was one), the
+//! iterations of all solves together, the energy, the guarantee, and the median wall
+//! and CPU time of the whole `flatten` call (CPU: all threads of the process, from
+//! `/proc/self/task/*/schedstat`, so a shared machine's load shows in the wall column
+//! only). `--log` prints every iteration of the last run.
+
+use std::path::PathBuf;
+use std::time::Instant;
+use surfmap::{FlattenOptions, flatten_with_progress, read_mesh};
+
+/// CPU time of all threads of this process so far, seconds (0 where unavailable).
+fn cpu_seconds() -> f64 {
+    let Ok(tasks) = std::fs::read_dir("/proc/self/task") else {
+        return 0.0;
+    };
+    tasks
+        .flatten()
+        .filter_map(|t| std::fs::read_to_string(t.path().join("schedstat")).ok())
+        .filter_map(|s| s.split_whitespace().next()?.parse::<f64>().ok())
+        .sum::<f64>()
+        * 1e-9
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn main() {
+    let mut args: Vec<String> = std::env::args().skip(1).collect();
+    let mut repeat = 3;
+    if let Some(i) = args.iter().position(|a| a == "--repeat") {
+        repeat = args[i + 1].parse().expect("--repeat N");
+        args.drain(i..i + 2);
+    }
+    let print_log = args.iter().any(|a| a == "--log");
+    args.retain(|a| a != "--log");
+    let meshes: Vec<(PathBuf, bool)> = if args.is_empty() {
+        let Some(data) = surfmap::testing::shared_data() else {
+            eprintln!("no ../shared/data: give meshes on the command line");
+            return;
+        };
+        [
+            ("sphere.obj", false),
+            ("bunny.off", false),
+            ("max_planck.obj", false),
+            ("punctured_torus.obj", false),
+            ("three_holes.off", false),
+            ("elephant_holes.off", false),
+            ("halftunnel.off", true),
+            ("holes.off", true),
+            ("faces/head_cgal.off", true),
+            ("faces/ict/ict_neutral.obj", true),
+        ]
+        .into_iter()
+        .map(|(m, cut)| (data.join(m), cut))
+        .collect()
+    } else {
+        args.iter()
+            .map(|a| match a.strip_suffix(":cut") {
+                Some(m) => (PathBuf::from(m), true),
+                None => (PathBuf::from(a), false),
+            })
+            .collect()
+    };
+    println!(
+        "{:<22} {:>6} {:<44} {:>7} {:>5} {:>5} {:>10} {:>9} {:>8} {:>8}",
+        "mesh", "F", "plan", "barrier", "iters", "all", "energy", "guarantee", "wall_s", "cpu_s"
+    );
+    for (path, cut_holes) in &meshes {
+        let mesh = match read_mesh(path) {
+            Ok(m) => m.mesh,
+            Err(e) => {
+                eprintln!("{}: {e}", path.display());
+                continue;
+            }
+        };
+        let options = FlattenOptions::default().with_fill_holes(!cut_holes);
+        let (mut walls, mut cpus) = (Vec::new(), Vec::new());
+        let mut last = None;
+        for _ in 0..repeat.max(1) {
+            let mut all = 0usize;
+            let (c0, t0) = (cpu_seconds(), Instant::now());
+            let result = flatten_with_progress(&mesh, &options, &mut |l| {
+                all += usize::from(l.iteration > 0)
+            });
+            walls.push(t0.elapsed().as_secs_f64());
+            cpus.push(cpu_seconds() - c0);
+            match result {
+                Ok(r) => last = Some((r, all)),
+                Err(e) => {
+                    eprintln!("{}: {e}", path.display());
+                    break;
+                }
+            }
+        }
+        let Some((r, all)) = last else { continue };
+        let name = path.file_name().unwrap().to_string_lossy();
+        let name = if *cut_holes {
+            format!("{name} (cut)")
+        } else {
+            name.to_string()
+        };
+        println!(
+            "{:<22} {:>6} {:<44} {:>7} {:>5} {:>5} {:>10.6} {:>9} {:>8.3} {:>8.3}",
+            name,
+            mesh.triangles.len(),
+            r.plan.describe().chars().take(44).collect::<String>(),
+            if r.barrier { "yes" } else { "no" },
+            r.iterations,
+            all,
+            r.energy,
+            format!("{:?}", r.guarantee),
+            median(walls),
+            median(cpus),
+        );
+        if print_log {
+            println!("  {:?}", r.newton_timings);
+            println!(
+                "  {:>4} {:>5} {:>14} {:>10} {:>10} {:>9} {:>10}",
+                "it", "stage", "energy", "|grad|", "decrement", "step", "step_max"
+            );
+            for l in &r.log {
+                println!(
+                    "  {:>4} {:>5} {:>14.8} {:>10.3e} {:>10.3e} {:>9.3e} {:>10.3e}",
+                    l.iteration,
+                    l.stage,
+                    l.energy,
+                    l.gradient_norm,
+                    l.newton_decrement,
+                    l.step,
+                    l.flip_free_step
+                );
+            }
+        }
+    }
+}
