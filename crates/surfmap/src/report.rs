@@ -203,6 +203,9 @@ pub struct FlattenReport<'a> {
     pub plan: String,
     /// The seams when the surface was cut: why, the edges (vertex pairs), their length.
     pub seams: Option<&'a Seams>,
+    /// The distortion-driven cutting ([`crate::FlattenOptions::max_distortion`]): bound,
+    /// mean symmetric Dirichlet distortion before and after, rounds, seam length added.
+    pub distortion_cuts: Option<&'a crate::DistortionCuts>,
     /// Initial map used: `lscm`, `mean_value`, `given` or `multilevel`.
     pub start: StartMap,
     /// The multilevel start's coarse level, re-insertion and timings (when tried).
@@ -260,6 +263,7 @@ impl<'a> FlattenReport<'a> {
             triangles: mesh.triangles.len(),
             plan: r.plan.describe(),
             seams: r.seams.as_ref(),
+            distortion_cuts: r.distortion_cuts.as_ref(),
             start: r.start,
             multilevel: r.multilevel.as_ref(),
             lscm_flipped_triangles: r.lscm_flipped,
