@@ -20,7 +20,7 @@
 //! sliver triangle can have any distortion, and the mean is what a texture's overall
 //! stretch follows. [`DistortionCuts`] also reports the per-round values.
 //!
-//! **The loop** ([`cut_to_bound`]), on the disc the solver flattened (after holes are
+//! **The loop** (`cut_to_bound`, run by [`super::flatten::flatten`]), on the disc the solver flattened (after holes are
 //! filled and a closed or higher-genus surface is cut, [`super::plan`]):
 //!
 //! 1. Measure `D`; stop when `D ≤ bound` (a map already under the bound is returned
@@ -41,7 +41,7 @@
 //!    round (measured on bear, 27k faces, bound 1.05: 6 rounds instead of 21).
 //! 4. Split the disc along the paths ([`crate::mesh::cut::open_along`]) and flatten it
 //!    again from the previous map: the copies of a split vertex start at its old UV,
-//!    moved a little into their own side ([`open_slit`]), a flip-free and
+//!    moved a little into their own side (`open_slit`), a flip-free and
 //!    crossing-free start (the boundary barrier needs one) whose slits open under
 //!    Newton.
 //!
@@ -68,7 +68,7 @@ use std::time::Instant;
 pub const DEFAULT_MAX_ROUNDS: usize = 30;
 
 /// Paths cut per round at most: the best-scoring one, then every one that scores at
-/// least [`NEXT_PATH_SCORE`] of it once the paths before are part of the boundary.
+/// least half of it (`NEXT_PATH_SCORE`) once the paths before are part of the boundary.
 pub const MAX_PATHS_PER_ROUND: usize = 4;
 const NEXT_PATH_SCORE: f64 = 0.5;
 
@@ -611,25 +611,7 @@ mod tests {
         let d = measured.symmetric_dirichlet / 4.0;
         assert!((cuts.after - d).abs() <= 1e-12 * d, "{} vs {d}", cuts.after);
         if let Some(seams) = &map.seams {
-            let topology = Topology::new(mesh);
-            for (e, &[a, b]) in topology.edges.iter().enumerate() {
-                let &[f, g] = topology.faces_of_edge(e) else {
-                    continue;
-                };
-                let uv_of = |t: u32, v: u32| {
-                    let k = mesh.triangles[t as usize]
-                        .iter()
-                        .position(|&w| w == v)
-                        .unwrap();
-                    seams.uv_triangles[t as usize][k]
-                };
-                let joined = uv_of(f, a) == uv_of(g, a) && uv_of(f, b) == uv_of(g, b);
-                assert_eq!(
-                    joined,
-                    seams.edges.binary_search(&[a, b]).is_err(),
-                    "({a}, {b})"
-                );
-            }
+            crate::param::plan::tests::seams_split_exactly(mesh, seams);
         }
         cuts
     }

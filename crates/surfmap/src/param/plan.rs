@@ -284,7 +284,7 @@ pub(crate) fn map_back(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::mesh::generate::{grid_disc, octahedron, torus};
     use crate::param::flatten::{Bijective, Guarantee};
@@ -386,7 +386,7 @@ mod tests {
 
     /// Whether the two faces of every input edge agree on its endpoints' UVs exactly
     /// when the edge is no seam.
-    fn seams_split_exactly(mesh: &TriMesh, seams: &Seams) {
+    pub(crate) fn seams_split_exactly(mesh: &TriMesh, seams: &Seams) {
         let topology = Topology::new(mesh);
         for (e, &[a, b]) in topology.edges.iter().enumerate() {
             let &[f, g] = topology.faces_of_edge(e) else {
