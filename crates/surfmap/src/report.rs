@@ -199,7 +199,8 @@ pub struct FlattenReport<'a> {
     pub vertices: usize,
     pub triangles: usize,
     /// What was done before the solve: `disc as is`, `fill N holes`, `cut open along
-    /// seams (…)`.
+    /// seams (…)`; then, if kept, `cut open to lower the distortion`
+    /// ([`Flattening::describe_plan`]).
     pub plan: String,
     /// The seams when the surface was cut: why, the edges (vertex pairs), their length.
     pub seams: Option<&'a Seams>,
@@ -261,7 +262,7 @@ impl<'a> FlattenReport<'a> {
             input: input.map(|p| p.display().to_string()),
             vertices: mesh.positions.len(),
             triangles: mesh.triangles.len(),
-            plan: r.plan.describe(),
+            plan: r.describe_plan(),
             seams: r.seams.as_ref(),
             distortion_cuts: r.distortion_cuts.as_ref(),
             start: r.start,

@@ -470,14 +470,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 None => String::new(),
                 Some(s) => format!(
                     "{} ({} seam edges, length {:.4}), ",
-                    match (&result.plan.cut, result.plan.is_disc_as_is()) {
-                        (Some(_), _) => result.plan.describe(),
-                        (None, true) => "cut open to lower the distortion".to_string(),
-                        (None, false) => format!(
-                            "{}, then cut open to lower the distortion",
-                            result.plan.describe()
-                        ),
-                    },
+                    result.describe_plan(),
                     s.edges.len(),
                     s.length
                 ),

@@ -405,6 +405,26 @@ impl Flattening {
         }
     }
 
+    /// What was done around the solve, for people: the plan ([`Plan::describe`]),
+    /// followed by the distortion cuts when the map kept some
+    /// ([`FlattenOptions::max_distortion`]): `disc as is`, `cut open to lower the
+    /// distortion`, `cut open along seams (closed, genus 0), then cut open to lower the
+    /// distortion`.
+    pub fn describe_plan(&self) -> String {
+        let distortion_cuts = self
+            .distortion_cuts
+            .as_ref()
+            .is_some_and(|c| c.seam_edges_added > 0);
+        match (distortion_cuts, self.plan.is_disc_as_is()) {
+            (false, _) => self.plan.describe(),
+            (true, true) => "cut open to lower the distortion".to_string(),
+            (true, false) => format!(
+                "{}, then cut open to lower the distortion",
+                self.plan.describe()
+            ),
+        }
+    }
+
     /// The UVs mapped into `[0, 1]²` with the aspect ratio kept
     /// ([`super::normalize_uvs`]), e.g. for texture coordinates.
     pub fn normalized_uvs(&self) -> Vec<[f64; 2]> {

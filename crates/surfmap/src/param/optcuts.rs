@@ -633,6 +633,7 @@ mod tests {
         assert!(cuts.after <= 1.01);
         let seams = map.seams.as_ref().unwrap();
         assert_eq!(seams.reason, CutReason::Distortion);
+        assert_eq!(map.describe_plan(), "cut open to lower the distortion");
         assert_eq!(seams.edges.len(), cuts.seam_edges_added);
         assert!((seams.length - cuts.seam_length_added).abs() < 1e-12);
         // One round, one cut: along a generator from the apex to the rim (the shortest
@@ -673,6 +674,7 @@ mod tests {
         assert!(cuts.before < 1.5 && cuts.met, "{cuts:?}");
         assert_eq!((cuts.rounds, cuts.seam_edges_added), (0, 0));
         assert!(map.seams.is_none());
+        assert_eq!(map.describe_plan(), "disc as is");
         assert_eq!(map.uvs, plain.uvs);
         assert_eq!(map.iterations, plain.iterations);
     }
@@ -702,6 +704,10 @@ mod tests {
         let seams = map.seams.as_ref().unwrap();
         let topological = plain.seams.as_ref().unwrap();
         assert_eq!(seams.reason, topological.reason);
+        assert_eq!(
+            map.describe_plan(),
+            "cut open along seams (closed, genus 0), then cut open to lower the distortion"
+        );
         assert!(
             topological
                 .edges
