@@ -6,6 +6,8 @@ holed and higher-genus meshes, all scored in the same run by the peers' referee
 * ours:      `surfmap flatten MESH -o OUT.obj --report R.json` (default options: holes
              filled, closed and higher-genus surfaces cut; `--cut-holes` per mesh below).
 * ours_sd:   the same with `--energy sd` (symmetric Dirichlet, the energy SLIM minimizes).
+* ours@D:    `ours` with `--max-distortion D` (distortion-driven cuts until the mean
+             symmetric Dirichlet distortion is at most D); `ours_sd@D` likewise.
 * xatlas:    the harness's `xatlas` worker (default chart and pack options) on the mesh
              scaled to area 1e4 (xatlas's float32 epsilons; the metrics are scale-free).
 * igl_cut_slim: `igl.cut_to_disk` (plus, for a closed genus-0 surface, which it leaves
@@ -207,18 +209,33 @@ def main(argv):
         name = os.path.basename(path)
         for method in a.methods.split(","):
             row = {"mesh": name, "faces": len(F), "method": method, "note": ""}
-            if method in ("ours", "ours_sd"):
+            if method.split("@")[0] in ("ours", "ours_sd"):
                 out, rep = os.path.join(work, "ours.obj"), os.path.join(work, "ours.json")
+                for stale in (out, rep):
+                    if os.path.exists(stale):
+                        os.remove(stale)
                 cmd = [a.surfmap, "flatten", path, "-o", out, "--report", rep, "-q"]
                 if name in CUT_HOLES:
                     cmd.append("--cut-holes")
-                if method == "ours_sd":
+                if method.startswith("ours_sd"):
                     cmd += ["--energy", "sd"]
+                if "@" in method:
+                    # ours@D: distortion-driven cutting to the bound D (the command
+                    # fails when D is not met, after writing the best map and report).
+                    cmd += ["--max-distortion", method.split("@")[1]]
                 p, err, wall = run(cmd, a.timeout)
+                if err is not None and "@" in method and os.path.exists(rep):
+                    err = None
                 if err is None:
                     r = json.load(open(rep))
                     row["time_s"] = r["time_total_s"]
                     row["note"] = f'{r["plan"]}; {r["iterations"]} it; {r["guarantee"]}'
+                    c = r.get("distortion_cuts")
+                    if c:
+                        row["note"] = (f'D {c["before"]:.4f} -> {c["after"]:.4f} '
+                                       f'({"met" if c["met"] else "NOT met"}), {c["rounds"]} rounds, '
+                                       f'+{c["seam_length_added"]:.4g} seam, {c["total_iterations"]} it; '
+                                       f'{r["guarantee"]}')
                     _, _, C = D.load_mesh(out)
                     score(V, F, C, row)
             else:

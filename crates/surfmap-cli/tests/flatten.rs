@@ -488,3 +488,102 @@ fn a_failed_write_is_reported_once_and_contradictory_flags_are_refused() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The mean symmetric Dirichlet distortion (isometry 1) of an OBJ with per-corner `vt`,
+/// measured here from the file.
+fn mean_sd_of(path: &Path) -> f64 {
+    let mesh = read_mesh(path).expect("our own output reads back").mesh;
+    let Some(surfmap::Uvs::PerCorner { coords, indices }) = &mesh.uvs else {
+        panic!("per-corner UVs expected")
+    };
+    let corners: Vec<[[f64; 2]; 3]> = indices
+        .iter()
+        .map(|t| t.map(|v| coords[v as usize]))
+        .collect();
+    let r = surfmap::distortion_report(
+        &mesh.positions,
+        &mesh.triangles,
+        &corners,
+        &surfmap::MeasureOptions::default(),
+    )
+    .unwrap();
+    assert_eq!((r.charts, r.flipped_triangles), (1, 0));
+    assert!(!r.boundary_overlap.self_intersecting);
+    r.symmetric_dirichlet / 4.0
+}
+
+#[test]
+fn max_distortion_cuts_a_cone_until_the_bound_holds_and_says_when_it_cannot() {
+    let dir = temp_dir("flatten-max-distortion");
+    let input = dir.join("cone.obj");
+    let cone = surfmap::mesh::generate::cone(1.0, 3.0, 12, 48);
+    surfmap::write_obj(&input, &cone, None).unwrap();
+    let (out, seams, report) = (
+        dir.join("out.obj"),
+        dir.join("seams.obj"),
+        dir.join("r.json"),
+    );
+    let args = [
+        "--max-distortion",
+        "1.02",
+        "--seams",
+        seams.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+    ];
+    let run = flatten(&input, &args, &out);
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(
+        stdout.contains("cut open to lower the distortion") && stdout.contains("≤ 1.02"),
+        "{stdout}"
+    );
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    let cuts = &r["distortion_cuts"];
+    assert_eq!(cuts["met"], true, "{cuts}");
+    assert_eq!(r["seams"]["reason"]["kind"], "distortion");
+    assert_eq!(r["guarantee"], "bijective");
+    let after = cuts["after"].as_f64().unwrap();
+    assert!(
+        cuts["before"].as_f64().unwrap() > 1.02 && after <= 1.02,
+        "{cuts}"
+    );
+    // The bound holds on the file as written, measured here.
+    let written = mean_sd_of(&out);
+    assert!((written - after).abs() < 1e-9, "{written} vs {after}");
+    assert!(check_cut_output(&out, &seams, &cone) > 0.0);
+
+    // Out of reach (a cut cone is developable, a hemisphere is not: no cut makes its
+    // map an isometry): the best map is written, the command fails saying so.
+    let cap = dir.join("cap.obj");
+    let hemisphere =
+        surfmap::mesh::generate::spherical_cap(1.0, std::f64::consts::FRAC_PI_2, 8, 32);
+    surfmap::write_obj(&cap, &hemisphere, None).unwrap();
+    let run = flatten(
+        &cap,
+        &["--max-distortion", "1", "--max-cut-rounds", "2"],
+        &out,
+    );
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(!run.status.success());
+    assert!(
+        stderr.contains("the distortion bound 1 was not met") && stderr.contains("written to"),
+        "{stderr}"
+    );
+    assert!(mean_sd_of(&out) > 1.0);
+    let back = read_mesh(&out).unwrap().mesh;
+    assert_eq!(back.triangles, hemisphere.triangles);
+
+    // Below an isometry: refused before any work.
+    let run = flatten(&input, &["--max-distortion", "0.5"], &out);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(!run.status.success());
+    assert!(
+        stderr.contains("--max-distortion must be at least 1"),
+        "{stderr}"
+    );
+}

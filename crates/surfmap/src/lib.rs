@@ -120,8 +120,9 @@ pub use mesh::{
     BoundaryLoop, Disc, IndexError, NotADisc, PointLocator, SurfacePoint, Topology, TriMesh, Uvs,
 };
 pub use param::flatten::{
-    Bijective, CoarseLevel, Cut, FlattenError, FlattenOptions, Flattening, Guarantee, IterationLog,
-    Multilevel, NewtonSettings, Seams, Start, StartMap, StopReason, flatten, flatten_with_progress,
+    Bijective, CoarseLevel, Cut, CutStop, DistortionCuts, FlattenError, FlattenOptions, Flattening,
+    Guarantee, IterationLog, MaxDistortion, Multilevel, NewtonSettings, Seams, Start, StartMap,
+    StopReason, flatten, flatten_with_progress,
 };
 pub use param::normalize_uvs;
 pub use param::plan::{Plan, plan};

@@ -199,10 +199,14 @@ pub struct FlattenReport<'a> {
     pub vertices: usize,
     pub triangles: usize,
     /// What was done before the solve: `disc as is`, `fill N holes`, `cut open along
-    /// seams (…)`.
+    /// seams (…)`; then, if kept, `cut open to lower the distortion`
+    /// ([`Flattening::describe_plan`]).
     pub plan: String,
     /// The seams when the surface was cut: why, the edges (vertex pairs), their length.
     pub seams: Option<&'a Seams>,
+    /// The distortion-driven cutting ([`crate::FlattenOptions::max_distortion`]): bound,
+    /// mean symmetric Dirichlet distortion before and after, rounds, seam length added.
+    pub distortion_cuts: Option<&'a crate::DistortionCuts>,
     /// Initial map used: `lscm`, `mean_value`, `given` or `multilevel`.
     pub start: StartMap,
     /// The multilevel start's coarse level, re-insertion and timings (when tried).
@@ -258,8 +262,9 @@ impl<'a> FlattenReport<'a> {
             input: input.map(|p| p.display().to_string()),
             vertices: mesh.positions.len(),
             triangles: mesh.triangles.len(),
-            plan: r.plan.describe(),
+            plan: r.describe_plan(),
             seams: r.seams.as_ref(),
+            distortion_cuts: r.distortion_cuts.as_ref(),
             start: r.start,
             multilevel: r.multilevel.as_ref(),
             lscm_flipped_triangles: r.lscm_flipped,

@@ -51,6 +51,9 @@ pub fn option_message(e: &OptionError) -> String {
         OptionError::CoarseVertices(n) => {
             format!("--coarse-vertices must be at least 16, got {n}")
         }
+        OptionError::MaxDistortion(d) => format!(
+            "--max-distortion must be at least 1 (the mean symmetric Dirichlet distortion of an isometry, the least any map has), got {d}"
+        ),
         other => other.to_string(),
     }
 }

@@ -15,8 +15,9 @@ use surfmap::fsutil::write_atomically;
 use surfmap::measure::{Measure, per_triangle_measure};
 use surfmap::render;
 use surfmap::{
-    Alpha, Bijective, CoarseLevel, Cut, Energy, FlattenOptions, FlattenReport, Flattening,
-    Guarantee, Multilevel, Seams, Start, TriMesh, Uvs, flatten_with_progress, write_obj,
+    Alpha, Bijective, CoarseLevel, Cut, DistortionCuts, Energy, FlattenOptions, FlattenReport,
+    Flattening, Guarantee, MaxDistortion, Multilevel, Seams, Start, TriMesh, Uvs,
+    flatten_with_progress, write_obj,
 };
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
@@ -129,6 +130,16 @@ pub struct Args {
     /// give a folder (ending in `/`): it receives NAME.seams.obj per cut mesh.
     #[arg(long, value_name = "SEAMS.obj")]
     pub seams: Option<PathBuf>,
+    /// Cut the chart open where the distortion concentrates until its mean symmetric
+    /// Dirichlet distortion (area-weighted mean of (σ1² + σ2² + σ1⁻² + σ2⁻²)/4 at equal
+    /// UV and 3D area; 1 for an isometry) is at most D. Not met within --max-cut-rounds:
+    /// the best map is written and the command fails, saying so.
+    #[arg(long, value_name = "D")]
+    pub max_distortion: Option<f64>,
+    /// Cut rounds at most for --max-distortion (each cuts up to four seam paths and
+    /// flattens again).
+    #[arg(long, value_name = "N", default_value_t = surfmap::param::optcuts::DEFAULT_MAX_ROUNDS, requires = "max_distortion")]
+    pub max_cut_rounds: usize,
     #[command(flatten)]
     pub repair: RepairArgs,
 }
@@ -252,13 +263,22 @@ pub fn flatten_options(args: &Args) -> anyhow::Result<FlattenOptions> {
         Some(path) => Cut::Along(read_seams(path)?),
         None => Cut::Auto,
     };
-    Ok(options(&args.solver, !args.cut_holes)?
-        .with_cut(cut)
-        .with_bijective(match args.bijective {
-            BijectiveChoice::Auto => Bijective::WhenOverlapping,
-            BijectiveChoice::Always => Bijective::Always,
-            BijectiveChoice::Off => Bijective::Off,
-        }))
+    let opts = FlattenOptions {
+        max_distortion: args.max_distortion.map(|bound| MaxDistortion {
+            bound,
+            max_rounds: args.max_cut_rounds,
+        }),
+        ..options(&args.solver, !args.cut_holes)?
+            .with_cut(cut)
+            .with_bijective(match args.bijective {
+                BijectiveChoice::Auto => Bijective::WhenOverlapping,
+                BijectiveChoice::Always => Bijective::Always,
+                BijectiveChoice::Off => Bijective::Off,
+            })
+    };
+    opts.validate()
+        .map_err(|e| anyhow::anyhow!(option_message(&e)))?;
+    Ok(opts)
 }
 
 /// Runs the flattening with a progress spinner on a terminal; errors name the flags
@@ -444,17 +464,21 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             eprintln!("note: multilevel start abandoned ({reason}); used the single-level start");
         }
         outln!(
-            "{}: {}start {}{}, {} iterations, {}, energy {:.6}, flipped triangles {}{}, {:.3} s → {}",
+            "{}: {}{}start {}{}, {} iterations, {}, energy {:.6}, flipped triangles {}{}, {:.3} s → {}",
             input.display(),
             match &result.seams {
                 None => String::new(),
                 Some(s) => format!(
                     "{} ({} seam edges, length {:.4}), ",
-                    result.plan.describe(),
+                    result.describe_plan(),
                     s.edges.len(),
                     s.length
                 ),
             },
+            result
+                .distortion_cuts
+                .as_ref()
+                .map_or_else(String::new, distortion_summary),
             result.start_description(),
             match result.warm_start_iterations {
                 0 => String::new(),
@@ -476,7 +500,45 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             args.output.display()
         );
     }
+    if let Some(cuts) = result.distortion_cuts.as_ref().filter(|c| !c.met) {
+        bail!(
+            "the distortion bound {} was not met: the best map reaches {:.6} (one chart: {:.6}) after {} cut rounds ({}); it was written to {}. Allow more rounds (--max-cut-rounds) or a higher --max-distortion",
+            cuts.bound,
+            cuts.after,
+            cuts.before,
+            cuts.rounds,
+            cut_stop_words(&cuts.stop),
+            args.output.display()
+        );
+    }
     Ok(())
+}
+
+/// `distortion 1.3160 → 1.0416 ≤ 1.05 (2 cut rounds, 6 seam edges added, length
+/// 0.3310), ` for the summary line.
+fn distortion_summary(cuts: &DistortionCuts) -> String {
+    format!(
+        "distortion {:.4} → {:.4} {} {} ({} cut rounds, {} seam edges added, length {:.4}), ",
+        cuts.before,
+        cuts.after,
+        if cuts.met { "≤" } else { ">" },
+        cuts.bound,
+        cuts.rounds,
+        cuts.seam_edges_added,
+        cuts.seam_length_added,
+    )
+}
+
+/// Why the cut loop stopped, for people.
+fn cut_stop_words(stop: &surfmap::CutStop) -> String {
+    use surfmap::CutStop;
+    match stop {
+        CutStop::Met => "bound met".to_string(),
+        CutStop::RoundCap => "round cap reached".to_string(),
+        CutStop::NoProgress => "two rounds in a row gained less than 1% of the excess".to_string(),
+        CutStop::NoCandidate => "no interior vertex left to cut to".to_string(),
+        CutStop::SolveFailed(reason) => format!("a round's flattening failed: {reason}"),
+    }
 }
 
 /// Writes `value` as pretty JSON (atomically).

@@ -275,6 +275,31 @@ pub fn spherical_cap(radius: f64, opening_angle: f64, rings: usize, segments: us
     TriMesh::new(positions, triangles)
 }
 
+/// Lateral surface of the right circular cone with apex `(0, 0, height)` over the circle
+/// of radius `radius` in the plane `z = 0` (no base: a disc). Ring `k` lies at height
+/// `height·(1 − k/rings)` with `segments` vertices at azimuth `2π m / segments`; vertex 0
+/// is the apex. Every quad between two rings lies in the plane of its two generators, so
+/// the surface is developable but at the apex: cut along a generator, it unrolls
+/// isometrically onto a sector of angle `2π·radius/√(radius² + height²)`. Normals point
+/// outward.
+pub fn cone(radius: f64, height: f64, rings: usize, segments: usize) -> TriMesh {
+    let rings = rings.max(1);
+    let (vertices, triangles) = ring_disc(rings, |_| segments);
+    let positions = vertices
+        .iter()
+        .map(|&(k, t)| {
+            let s = k as f64 / rings as f64;
+            let phi = TAU * t;
+            [
+                radius * s * phi.cos(),
+                radius * s * phi.sin(),
+                height * (1.0 - s),
+            ]
+        })
+        .collect();
+    TriMesh::new(positions, triangles)
+}
+
 /// Patch of the cylinder of radius `radius` around the z axis: azimuth `φ ∈ [0, angle]`
 /// in `n` steps, height `z ∈ [0, height]` in `m` steps; `(n + 1)(m + 1)` vertices, vertex
 /// `(i, j)` at `(R cos φ_i, R sin φ_i, z_j)` with index `j·(n + 1) + i`. Every grid quad is

@@ -14,6 +14,7 @@ use super::element::{RestTriangleError, rest_triangles};
 use super::flip_free::max_flip_free_step;
 use super::newton::NewtonSolver;
 pub use super::newton::{IterationLog, NewtonSettings, NewtonTimings, StopReason};
+pub use super::optcuts::{CutRound, CutStop, DistortionCuts, MaxDistortion};
 pub use super::plan::{Cut, CutReason, Seams};
 use super::plan::{Plan, map_back, plan_with_topology, prepare};
 use super::{InitialMapError, count_flipped, lscm, signed_uv_area, tutte};
@@ -226,6 +227,10 @@ pub struct FlattenOptions {
     /// Whether the boundary is kept from overlapping itself (default:
     /// [`Bijective::WhenOverlapping`]).
     pub bijective: Bijective,
+    /// A bound on the distortion: while the map's mean symmetric Dirichlet distortion
+    /// exceeds it, cut the chart open where the distortion concentrates and flatten
+    /// again ([`super::optcuts`]; default: none, one chart as it comes).
+    pub max_distortion: Option<MaxDistortion>,
 }
 
 impl Default for FlattenOptions {
@@ -238,6 +243,7 @@ impl Default for FlattenOptions {
             fill_holes: true,
             cut: Cut::Auto,
             bijective: Bijective::default(),
+            max_distortion: None,
         }
     }
 }
@@ -271,8 +277,21 @@ impl FlattenOptions {
         Self { bijective, ..self }
     }
 
+    /// These options with the distortion bound `bound` ([`MaxDistortion::new`]).
+    pub fn with_max_distortion(self, bound: f64) -> Self {
+        Self {
+            max_distortion: Some(MaxDistortion::new(bound)),
+            ..self
+        }
+    }
+
     /// Checks the numeric settings (called by [`flatten`]).
     pub fn validate(&self) -> Result<(), OptionError> {
+        if let Some(m) = &self.max_distortion
+            && !(m.bound >= 1.0 && m.bound.is_finite())
+        {
+            return Err(OptionError::MaxDistortion(m.bound));
+        }
         let n = &self.newton;
         if n.tolerance.is_nan() || n.tolerance <= 0.0 {
             return Err(OptionError::Tolerance(n.tolerance));
@@ -305,6 +324,10 @@ pub enum OptionError {
     ArmijoRho(f64),
     #[error("CoarseLevel::vertices must be at least {MIN_COARSE_VERTICES}, got {0}")]
     CoarseVertices(usize),
+    #[error(
+        "MaxDistortion::bound must be a finite number of at least 1 (the mean symmetric Dirichlet distortion of an isometry, the least any map has), got {0}"
+    )]
+    MaxDistortion(f64),
 }
 
 /// Result of a flattening.
@@ -357,6 +380,11 @@ pub struct Flattening {
     pub newton_timings: NewtonTimings,
     /// The multilevel start, when it was tried.
     pub multilevel: Option<MultilevelReport>,
+    /// What the distortion-driven cutting did ([`FlattenOptions::max_distortion`]):
+    /// the distortion before and after, the rounds, the seam length added, whether the
+    /// bound holds. The other fields describe the solve of the map returned (the best
+    /// one found), [`Self::time_total`] every round.
+    pub distortion_cuts: Option<DistortionCuts>,
 }
 
 impl Flattening {
@@ -374,6 +402,26 @@ impl Flattening {
                 Some(m) => format!("multilevel ({} coarse vertices)", m.coarse_vertices),
                 None => "multilevel".to_string(),
             },
+        }
+    }
+
+    /// What was done around the solve, for people: the plan ([`Plan::describe`]),
+    /// followed by the distortion cuts when the map kept some
+    /// ([`FlattenOptions::max_distortion`]): `disc as is`, `cut open to lower the
+    /// distortion`, `cut open along seams (closed, genus 0), then cut open to lower the
+    /// distortion`.
+    pub fn describe_plan(&self) -> String {
+        let distortion_cuts = self
+            .distortion_cuts
+            .as_ref()
+            .is_some_and(|c| c.seam_edges_added > 0);
+        match (distortion_cuts, self.plan.is_disc_as_is()) {
+            (false, _) => self.plan.describe(),
+            (true, true) => "cut open to lower the distortion".to_string(),
+            (true, false) => format!(
+                "{}, then cut open to lower the distortion",
+                self.plan.describe()
+            ),
         }
     }
 
@@ -454,6 +502,8 @@ pub enum FlattenError {
     Cut(#[from] CutError),
     #[error("internal error: the result has {0} flipped triangles; please report this mesh")]
     FlippedResult(usize),
+    #[error("measuring the distortion for the distortion bound: {0}")]
+    Distortion(#[from] crate::measure::MeasureError),
 }
 
 impl From<NotADisc> for FlattenError {
@@ -485,14 +535,14 @@ pub fn flatten_with_progress(
     mesh.check_indices()?;
     let topology = Topology::new(mesh);
     let mut plan = plan_with_topology(mesh, &topology, options)?;
-    if plan.is_disc_as_is() {
+    if plan.is_disc_as_is() && options.max_distortion.is_none() {
         let mut result = flatten_used(mesh, Some(topology), options, progress)?;
         result.plan = plan;
         result.time_total = clock.elapsed().as_secs_f64();
         return Ok(result);
     }
     drop(topology);
-    if matches!(options.start, Start::Given(_)) {
+    if matches!(options.start, Start::Given(_)) && !plan.is_disc_as_is() {
         return Err(match plan.cut {
             None => FlattenError::GivenStartWithFilledHoles(plan.holes_to_fill),
             Some(_) => FlattenError::GivenStartWithCut(plan.describe()),
@@ -500,10 +550,22 @@ pub fn flatten_with_progress(
     }
     // The fill's vertices come after the original ones and the cut's copies after
     // those: mapping back drops them (the holes stay open in the map).
-    let prepared = prepare(mesh, &mut plan, options)?;
+    let mut prepared = prepare(mesh, &mut plan, options)?;
     let time_prepare = clock.elapsed().as_secs_f64();
     let mut result = flatten_used(&prepared.mesh, None, options, progress)?;
-    let (uvs, seams) = map_back(mesh, prepared, &plan, std::mem::take(&mut result.uvs));
+    if let Some(bound) = &options.max_distortion {
+        (prepared, result) = super::optcuts::cut_to_bound(
+            mesh.triangles.len(),
+            prepared,
+            result,
+            bound,
+            options,
+            progress,
+        )?;
+    }
+    // Seams with no topological reason were cut for the distortion bound.
+    let reason = plan.cut.clone().unwrap_or(CutReason::Distortion);
+    let (uvs, seams) = map_back(mesh, prepared, reason, std::mem::take(&mut result.uvs));
     result.uvs = uvs;
     result.seams = seams;
     result.holes_filled = plan.holes_to_fill;
@@ -515,7 +577,7 @@ pub fn flatten_with_progress(
 
 /// The flattening of the vertices used by a triangle; the others are put at the origin.
 /// `topology`: that of `mesh`, if already derived.
-fn flatten_used(
+pub(super) fn flatten_used(
     mesh: &TriMesh,
     topology: Option<Topology>,
     options: &FlattenOptions,
@@ -867,6 +929,7 @@ fn solve_disc(
         time_total: clock.elapsed().as_secs_f64(),
         newton_timings: solver.timings,
         multilevel,
+        distortion_cuts: None,
     })
 }
 

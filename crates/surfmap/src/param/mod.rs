@@ -13,6 +13,7 @@ pub mod lscm;
 pub mod multilevel;
 #[doc(hidden)]
 pub mod newton;
+pub mod optcuts;
 pub mod plan;
 pub mod tutte;
 

@@ -39,6 +39,10 @@ pub enum CutReason {
     /// The surface to flatten (holes filled, if asked) has `boundary_loops` boundary
     /// loops (0: closed) and genus `genus`; a disc has one and 0.
     Topology { boundary_loops: usize, genus: u32 },
+    /// A disc cut only to bring its distortion under the bound
+    /// ([`super::flatten::FlattenOptions::max_distortion`]); a surface cut for its
+    /// topology keeps that reason when distortion cuts are added.
+    Distortion,
 }
 
 /// What [`super::flatten`] does before the solve (see the module docs).
@@ -66,6 +70,7 @@ impl Plan {
         };
         let cut = self.cut.as_ref().map(|reason| match reason {
             CutReason::Given => "cut open along the given seams".to_string(),
+            CutReason::Distortion => "cut open to lower the distortion".to_string(),
             CutReason::Topology {
                 boundary_loops,
                 genus,
@@ -237,7 +242,7 @@ pub struct Seams {
 pub(crate) fn map_back(
     input: &TriMesh,
     prepared: Prepared,
-    plan: &Plan,
+    reason: CutReason,
     uvs: Vec<[f64; 2]>,
 ) -> (Vec<[f64; 2]>, Option<Seams>) {
     let n = input.positions.len();
@@ -269,7 +274,7 @@ pub(crate) fn map_back(
         .filter(|e| e.iter().all(|&v| (v as usize) < n))
         .collect();
     let seams = Seams {
-        reason: plan.cut.clone().unwrap_or(CutReason::Given),
+        reason,
         length: crate::mesh::cut::seam_length(&input.positions, &edges),
         edges,
         uv_triangles,
@@ -279,7 +284,7 @@ pub(crate) fn map_back(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::mesh::generate::{grid_disc, octahedron, torus};
     use crate::param::flatten::{Bijective, Guarantee};
@@ -381,7 +386,7 @@ mod tests {
 
     /// Whether the two faces of every input edge agree on its endpoints' UVs exactly
     /// when the edge is no seam.
-    fn seams_split_exactly(mesh: &TriMesh, seams: &Seams) {
+    pub(crate) fn seams_split_exactly(mesh: &TriMesh, seams: &Seams) {
         let topology = Topology::new(mesh);
         for (e, &[a, b]) in topology.edges.iter().enumerate() {
             let &[f, g] = topology.faces_of_edge(e) else {
