@@ -623,10 +623,14 @@ impl Solver<'_> {
         let n = phi.size;
         let w = self.options.sobolev_cells / (n - 1) as f64;
         let precondition = (w > 0.0).then(|| SobolevPreconditioner::new(n, w * w));
+        let mut settings = self.options.ncg;
+        if k == self.a.num_levels() - 1 {
+            settings.tolerance = settings.finest_tolerance;
+        }
         let log = minimize(
             &mut energy,
             phi,
-            &self.options.ncg,
+            &settings,
             k,
             precondition.as_ref(),
             &mut refit,
