@@ -130,7 +130,7 @@ pub(crate) struct TriangleA {
 pub(crate) struct LevelB {
     /// `[h, signed boundary distance, g11, g12, g22 (softened outside), x, y, z]`.
     pub field: Grid<[f64; B_CHANNELS]>,
-    /// Per feature: `d_B`.
+    /// Per feature: `d_B` (set through [`LevelB::new`], which also makes the packed copy).
     pub features: Vec<Grid<f64>>,
     /// The same distances node-major (`packed[node · n_features + f]`), so that one
     /// node's features are read from a few cache lines.

@@ -32,6 +32,16 @@ use rayon::prelude::*;
 /// is still `+∞` in `element::energy`.
 #[inline]
 pub fn flip_free_step(uv: [[f64; 2]; 3], dir: [[f64; 2]; 3]) -> f64 {
+    match det_quadratic(uv, dir) {
+        Some((a, b, c)) => smallest_positive_root(a, b, c),
+        None => 0.0,
+    }
+}
+
+/// `(a, b, c)` of `det Ds(s) = c + b·s + a·s²` (module docs), or `None` unless `c > 0` and
+/// all three are finite.
+#[inline]
+fn det_quadratic(uv: [[f64; 2]; 3], dir: [[f64; 2]; 3]) -> Option<(f64, f64, f64)> {
     let a00 = uv[1][0] - uv[0][0];
     let a01 = uv[2][0] - uv[0][0];
     let a10 = uv[1][1] - uv[0][1];
@@ -43,10 +53,7 @@ pub fn flip_free_step(uv: [[f64; 2]; 3], dir: [[f64; 2]; 3]) -> f64 {
     let c = a00 * a11 - a01 * a10;
     let b = a00 * b11 + a11 * b00 - a01 * b10 - a10 * b01;
     let a = b00 * b11 - b01 * b10;
-    if !(c > 0.0 && c.is_finite() && b.is_finite() && a.is_finite()) {
-        return 0.0;
-    }
-    smallest_positive_root(a, b, c)
+    (c > 0.0 && c.is_finite() && b.is_finite() && a.is_finite()).then_some((a, b, c))
 }
 
 /// [`flip_free_step`] where it is below `limit`; otherwise some value `≥ limit`, found
@@ -56,20 +63,9 @@ pub fn flip_free_step(uv: [[f64; 2]; 3], dir: [[f64; 2]; 3]) -> f64 {
 /// For the minimum over many triangles, with `limit` the minimum so far.
 #[inline]
 pub fn flip_free_step_below(uv: [[f64; 2]; 3], dir: [[f64; 2]; 3], limit: f64) -> f64 {
-    let a00 = uv[1][0] - uv[0][0];
-    let a01 = uv[2][0] - uv[0][0];
-    let a10 = uv[1][1] - uv[0][1];
-    let a11 = uv[2][1] - uv[0][1];
-    let b00 = dir[1][0] - dir[0][0];
-    let b01 = dir[2][0] - dir[0][0];
-    let b10 = dir[1][1] - dir[0][1];
-    let b11 = dir[2][1] - dir[0][1];
-    let c = a00 * a11 - a01 * a10;
-    let b = a00 * b11 + a11 * b00 - a01 * b10 - a10 * b01;
-    let a = b00 * b11 - b01 * b10;
-    if !(c > 0.0 && c.is_finite() && b.is_finite() && a.is_finite()) {
+    let Some((a, b, c)) = det_quadratic(uv, dir) else {
         return 0.0;
-    }
+    };
     if limit.is_finite() && c + b.min(0.0) * limit + a.min(0.0) * limit * limit > 1e-9 * c {
         return limit;
     }
