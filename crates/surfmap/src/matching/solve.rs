@@ -4,7 +4,8 @@
 //! Levels `k = k₀ … K` live on `(2^k + 1)²` grids; level `k` uses images filtered with
 //! `σ_k = 2^−k` (the finest unfiltered) and the cut-off width `ε_k = 2^{1−k}` (thesis:
 //! `ε = 2σ_k`; on the finest level, where `σ = 0`, two grid cells). Each level is
-//! minimized by [`super::ncg`] and prolongated (exactly, as a P1 map) to the next.
+//! minimized by [`super::ncg`] and prolongated (exactly, as a P1 map) to the next; the
+//! finest level stops at the looser [`NcgSettings::finest_tolerance`].
 //!
 //! Alignment: both flattenings preserve orientation, so ω_A and ω_B differ by a
 //! similarity of the plane. With paired landmarks or features it is their
