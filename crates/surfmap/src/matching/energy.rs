@@ -44,9 +44,6 @@ pub(crate) const B_G: usize = 2;
 pub(crate) const B_X: usize = 5;
 pub(crate) const B_CHANNELS: usize = 8;
 
-/// A triangle's mean of its three nodes' samples is their sum times this.
-const THIRD: f64 = 1.0 / 3.0;
-
 /// Weights β of the energy terms.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct Betas {
@@ -479,7 +476,7 @@ impl LevelEnergy {
                     return terms;
                 }
                 let [s0, s1, s2] = tri.map(|k| &samples[k]);
-                let bm: [f64; 3] = std::array::from_fn(|c| (s0.g[c] + s1.g[c] + s2.g[c]) * THIRD);
+                let bm: [f64; 3] = std::array::from_fn(|c| (s0.g[c] + s1.g[c] + s2.g[c]) / 3.0);
                 let det_b = bm[0] * bm[2] - bm[1] * bm[1];
                 // ∂E/∂Dφ and ∂E/∂(mean sampled value) [g11, g12, g22, sd] of this triangle.
                 let mut p = [[0.0; 2]; 2];
@@ -508,10 +505,9 @@ impl LevelEnergy {
                         terms.total = f64::INFINITY;
                         return terms;
                     }
-                    let barrier = (al + aa) / dd;
-                    let wv = al * a + aa * dd + barrier - w0;
+                    let wv = al * a + aa * dd + (al + aa) / dd - w0;
                     let wa = al;
-                    let wd = aa - barrier / dd;
+                    let wd = aa - (al + aa) / (dd * dd);
                     let c = beta.reg * ta.weight;
                     terms.reg += c * wv;
                     // ∂a/∂Dφ = 2 B Dφ g_A⁻¹; ∂d/∂Dφ = 2 det(Dφ) det B det g_A⁻¹ cof(Dφ).
@@ -552,13 +548,13 @@ impl LevelEnergy {
                             .iter()
                             .map(|&k| feature_samples[k * nf + f].d)
                             .sum::<f64>()
-                            * THIRD;
+                            / 3.0;
                         let (e, de) = eta(db, eps);
                         if e == 0.0 && de == 0.0 {
                             continue;
                         }
                         let (chi_v, dchi_b, sqrt_b, dsqrt) = *shared.get_or_insert_with(|| {
-                            let sd = (s0.sd + s1.sd + s2.sd) * THIRD;
+                            let sd = (s0.sd + s1.sd + s2.sd) / 3.0;
                             let (chi_b, dchi_b) = chi(sd, eps);
                             let sqrt_b = det_b.max(0.0).sqrt();
                             let dsqrt = if sqrt_b > 0.0 {
@@ -573,7 +569,7 @@ impl LevelEnergy {
                         terms.features += c * chi_v * core;
                         // Through the sampled values: χ_B(sd), η(d_B), √det g_B.
                         q[3] += c * ta.chi * dchi_b * core;
-                        let adj_d = c * chi_v * de * sqrt_b * det_d * THIRD;
+                        let adj_d = c * chi_v * de * sqrt_b * det_d / 3.0;
                         for &k in &tri {
                             feature_adjoint[(k - base) * nf + f] += adj_d;
                         }
@@ -590,7 +586,7 @@ impl LevelEnergy {
                     }
                 }
                 let adj = jacobian_adjoint(p, upper, inv_h);
-                let q = q.map(|x| x * THIRD);
+                let q = q.map(|x| x / 3.0);
                 for v in 0..3 {
                     let local = tri[v] - base;
                     grad[local][0] += adj[v][0];
