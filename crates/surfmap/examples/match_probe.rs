@@ -1,7 +1,7 @@
 //! Development probe for the matcher: `match_probe A.obj B.obj OUT.npy [landmarks.json]
 //! [key=value …]` writes one 3D point per vertex of A (NaN = unmatched), the format the
 //! referee in `../shared/match_eval` scores, and prints the per-level log.
-//! Keys: size, k0, bend, reg, feat, pos, soft, tol, align (auto|search|none|features),
+//! Keys: size, k0, bend, reg, feat, pos, soft, tol, ftol (finest level), align (auto|search|none|features),
 //! rot (rotations tried), scale (0/1), alevels.
 
 use std::path::Path;
@@ -31,6 +31,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 "tol" => options.ncg.tolerance = f(),
                 "maxit" => options.ncg.max_iterations = f() as usize,
                 "refit" => options.ncg.refit_every = f() as usize,
+                "ftol" => options.ncg.finest_tolerance = f(),
                 "rot" => options.align_rotations = f() as usize,
                 "scale" => options.allow_scale = f() != 0.0,
                 "sob" => options.sobolev_cells = f(),

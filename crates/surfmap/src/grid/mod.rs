@@ -51,6 +51,7 @@ pub use eikonal::{seed_polyline, seed_region_boundary, solve_eikonal};
 pub use extend::{HarmonicExtension, harmonic_extension};
 pub use grid::Grid;
 pub use pyramid::{MetricPyramid, Pyramid};
+pub use sample::GridPoint;
 pub use value::Vector;
 
 /// What went wrong with a grid, and what to do about it.

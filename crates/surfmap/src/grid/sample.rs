@@ -23,9 +23,14 @@
 use super::grid::Grid;
 use super::value::Vector;
 
-/// The cell containing a clamped point: index of its lower-left node, local coordinates,
-/// and `∂(local)/∂ξ` per axis (`N − 1`, or `0` where the point was clamped).
-struct Cell {
+/// Where a point falls on an `n × n` grid, after clamping onto ω: the index of its
+/// cell's lower-left node, the local coordinates `(s, t)`, and `∂(local)/∂ξ` per axis
+/// (`N − 1`, or `0` where the point was clamped). Located once, it samples every grid of
+/// that size at the point ([`Grid::sample_with_gradient_at`]): the matcher reads B's
+/// images and all of B's feature distances at the same `φ(ξ)`.
+#[derive(Clone, Copy, Debug)]
+pub struct GridPoint {
+    n: usize,
     k: usize,
     s: f64,
     t: f64,
@@ -33,20 +38,44 @@ struct Cell {
     dt: f64,
 }
 
-#[inline(always)]
-fn locate(n: usize, p: [f64; 2]) -> Cell {
-    let last = (n - 1) as f64;
-    let (x, y) = (p[0] * last, p[1] * last);
-    let (xc, yc) = (x.clamp(0.0, last), y.clamp(0.0, last));
-    // `as usize` saturates (NaN → 0), so the index stays in range for any input.
-    let j = (xc as usize).min(n - 2);
-    let i = (yc as usize).min(n - 2);
-    Cell {
-        k: i * n + j,
-        s: xc - j as f64,
-        t: yc - i as f64,
-        ds: if x == xc { last } else { 0.0 },
-        dt: if y == yc { last } else { 0.0 },
+impl GridPoint {
+    /// Locates `p ∈ ℝ²` (domain coordinates) on an `n × n` grid (`n ≥ 2`).
+    #[inline(always)]
+    pub fn locate(n: usize, p: [f64; 2]) -> Self {
+        let last = (n - 1) as f64;
+        let (x, y) = (p[0] * last, p[1] * last);
+        let (xc, yc) = (x.clamp(0.0, last), y.clamp(0.0, last));
+        // `as usize` saturates (NaN → 0), so the index stays in range for any input.
+        let j = (xc as usize).min(n - 2);
+        let i = (yc as usize).min(n - 2);
+        Self {
+            n,
+            k: i * n + j,
+            s: xc - j as f64,
+            t: yc - i as f64,
+            ds: if x == xc { last } else { 0.0 },
+            dt: if y == yc { last } else { 0.0 },
+        }
+    }
+
+    /// Indices of the cell's corners `[(i, j), (i, j + 1), (i + 1, j), (i + 1, j + 1)]`.
+    #[inline(always)]
+    pub fn corners(&self) -> [usize; 4] {
+        [self.k, self.k + 1, self.k + self.n, self.k + self.n + 1]
+    }
+
+    /// The bilinear interpolant of the corner values `[f(i, j), f(i, j + 1), f(i + 1, j),
+    /// f(i + 1, j + 1)]` at this point and its partial derivatives (see the module docs).
+    #[inline(always)]
+    pub fn interpolate_with_gradient<T: Vector>(&self, corners: [T; 4]) -> (T, T, T) {
+        let [f00, f01, f10, f11] = corners;
+        let (e0, e1) = (f01.sub(f00), f11.sub(f10));
+        let lo = f00.add_scaled(self.s, e0);
+        let hi = f10.add_scaled(self.s, e1);
+        let across = hi.sub(lo);
+        let value = lo.add_scaled(self.t, across);
+        let along = e0.add_scaled(self.t, e1.sub(e0));
+        (value, along.scale(self.ds), across.scale(self.dt))
     }
 }
 
@@ -54,7 +83,7 @@ impl<T: Vector> Grid<T> {
     /// The bilinear interpolant at `p ∈ ℝ²` (domain coordinates), `p` clamped onto ω.
     #[inline(always)]
     pub fn sample(&self, p: [f64; 2]) -> T {
-        let c = locate(self.size(), p);
+        let c = GridPoint::locate(self.size(), p);
         let [f00, f01, f10, f11] = self.cell_corners(c.k);
         let lo = f00.add_scaled(c.s, f01.sub(f00));
         let hi = f10.add_scaled(c.s, f11.sub(f10));
@@ -65,15 +94,14 @@ impl<T: Vector> Grid<T> {
     /// `(f, ∂f/∂ξ₀, ∂f/∂ξ₁)`; outside ω, those of the clamped function (see the module docs).
     #[inline(always)]
     pub fn sample_with_gradient(&self, p: [f64; 2]) -> (T, T, T) {
-        let c = locate(self.size(), p);
-        let [f00, f01, f10, f11] = self.cell_corners(c.k);
-        let (e0, e1) = (f01.sub(f00), f11.sub(f10));
-        let lo = f00.add_scaled(c.s, e0);
-        let hi = f10.add_scaled(c.s, e1);
-        let across = hi.sub(lo);
-        let value = lo.add_scaled(c.t, across);
-        let along = e0.add_scaled(c.t, e1.sub(e0));
-        (value, along.scale(c.ds), across.scale(c.dt))
+        self.sample_with_gradient_at(&GridPoint::locate(self.size(), p))
+    }
+
+    /// [`Grid::sample_with_gradient`] at a point already located on a grid of this size.
+    #[inline(always)]
+    pub fn sample_with_gradient_at(&self, c: &GridPoint) -> (T, T, T) {
+        debug_assert_eq!(c.n, self.size(), "located on a grid of another size");
+        c.interpolate_with_gradient(self.cell_corners(c.k))
     }
 
     /// `[f(i, j), f(i, j + 1), f(i + 1, j), f(i + 1, j + 1)]` for the node at index `k`.

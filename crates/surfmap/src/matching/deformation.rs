@@ -21,7 +21,7 @@
 
 use rayon::prelude::*;
 
-use crate::param::flip_free::flip_free_step;
+use crate::param::flip_free::flip_free_step_below;
 
 /// Node position `ξ = (j, i)/(n − 1)` of grid index `k`.
 #[inline]
@@ -191,7 +191,7 @@ impl Deformation {
     }
 
     /// Largest `t` such that `φ + s·v` keeps every triangle positively oriented for
-    /// `s ∈ [0, t)` (closed form per triangle, [`flip_free_step`]); `0` if φ itself
+    /// `s ∈ [0, t)` (closed form per triangle, [`crate::param::flip_free::flip_free_step`]); `0` if φ itself
     /// has a folded triangle, `∞` if no triangle ever degenerates along `v`.
     pub fn max_fold_free_step(&self, direction: &[[f64; 2]]) -> f64 {
         let n = self.size;
@@ -217,9 +217,8 @@ impl Deformation {
                     );
                     // Node order [origin, ξ₀-side, ξ₁-side] is counter-clockwise for
                     // both triangles, as flip_free_step expects.
-                    m = m
-                        .min(flip_free_step([p00, p01, p10], [d00, d01, d10]))
-                        .min(flip_free_step([p11, p10, p01], [d11, d10, d01]));
+                    m = m.min(flip_free_step_below([p00, p01, p10], [d00, d01, d10], m));
+                    m = m.min(flip_free_step_below([p11, p10, p01], [d11, d10, d01], m));
                 }
                 m
             })

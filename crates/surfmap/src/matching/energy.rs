@@ -35,7 +35,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::deformation::{cell_triangles, jacobian, jacobian_adjoint};
-use crate::grid::Grid;
+use crate::grid::{Grid, GridPoint};
 
 /// Channel layout of B's sampled field.
 pub(crate) const B_H: usize = 0;
@@ -127,8 +127,39 @@ pub(crate) struct TriangleA {
 pub(crate) struct LevelB {
     /// `[h, signed boundary distance, g11, g12, g22 (softened outside), x, y, z]`.
     pub field: Grid<[f64; B_CHANNELS]>,
-    /// Per feature: `d_B`.
+    /// Per feature: `d_B` (set through [`LevelB::new`], which also makes the packed copy).
     pub features: Vec<Grid<f64>>,
+    /// The same distances node-major (`packed[node · n_features + f]`), so that one
+    /// node's features are read from a few cache lines.
+    packed: Vec<f64>,
+}
+
+impl LevelB {
+    /// `features` must be on `field`'s grid.
+    pub fn new(field: Grid<[f64; B_CHANNELS]>, features: Vec<Grid<f64>>) -> Self {
+        let nodes = field.as_slice().len();
+        let packed = (0..nodes)
+            .flat_map(|k| features.iter().map(move |f| f.as_slice()[k]))
+            .collect();
+        Self {
+            field,
+            features,
+            packed,
+        }
+    }
+
+    /// Every feature distance `d_B` and its gradient at a located point (one per entry
+    /// of `out`, which has one entry per feature): the bilinear interpolant of each
+    /// feature grid, read from the node-major copy.
+    #[inline]
+    fn sample_features(&self, at: &GridPoint, out: &mut [FeatureSample]) {
+        let nf = self.features.len();
+        let corners = at.corners().map(|c| &self.packed[c * nf..(c + 1) * nf]);
+        for (f, o) in out.iter_mut().enumerate() {
+            let (d, dx, dy) = at.interpolate_with_gradient(corners.map(|c| c[f]));
+            *o = FeatureSample { d, dx, dy };
+        }
+    }
 }
 
 /// The similarity `T(x) = M x + t` of the position term.
@@ -334,7 +365,8 @@ impl LevelEnergy {
             let k = i * n + j;
             *g = [0.0; 2];
             let phi = [j as f64 * h + u[k][0], i as f64 * h + u[k][1]];
-            let (sv, sdx, sdy) = self.b.field.sample_with_gradient(phi);
+            let at = GridPoint::locate(n, phi);
+            let (sv, sdx, sdy) = self.b.field.sample_with_gradient_at(&at);
             *sample = NodeSample {
                 g: [sv[B_G], sv[B_G + 1], sv[B_G + 2]],
                 g_dx: [sdx[B_G], sdx[B_G + 1], sdx[B_G + 2]],
@@ -343,10 +375,8 @@ impl LevelEnergy {
                 sd_dx: sdx[B_SD],
                 sd_dy: sdy[B_SD],
             };
-            for (f, fb) in self.b.features.iter().enumerate() {
-                let (d, dx, dy) = fb.sample_with_gradient(phi);
-                feature_samples[j * nf + f] = FeatureSample { d, dx, dy };
-            }
+            self.b
+                .sample_features(&at, &mut feature_samples[j * nf..(j + 1) * nf]);
             let chi_a = self.a.chi[k];
             let w = self.a.weight[k];
             if chi_a == 0.0 || w == 0.0 {
@@ -515,15 +545,8 @@ impl LevelEnergy {
                     }
                 }
                 if with_features && ta.chi != 0.0 {
-                    let sd = (s0.sd + s1.sd + s2.sd) / 3.0;
-                    let (chi_b, dchi_b) = chi(sd, eps);
-                    let chi_v = ta.chi * chi_b;
-                    let sqrt_b = det_b.max(0.0).sqrt();
-                    let dsqrt = if sqrt_b > 0.0 {
-                        [0.5 * bm[2] / sqrt_b, -bm[1] / sqrt_b, 0.5 * bm[0] / sqrt_b]
-                    } else {
-                        [0.0; 3]
-                    };
+                    // χ_B and √det g_B of the triangle, computed at its first active feature.
+                    let mut shared = None;
                     let cell = 2 * (i * (n - 1) + j) + t;
                     for f in 0..nf {
                         let th = self.a.feature_theta[f][cell];
@@ -539,14 +562,25 @@ impl LevelEnergy {
                         if e == 0.0 && de == 0.0 {
                             continue;
                         }
+                        let (chi_v, dchi_b, sqrt_b, dsqrt) = *shared.get_or_insert_with(|| {
+                            let sd = (s0.sd + s1.sd + s2.sd) / 3.0;
+                            let (chi_b, dchi_b) = chi(sd, eps);
+                            let sqrt_b = det_b.max(0.0).sqrt();
+                            let dsqrt = if sqrt_b > 0.0 {
+                                [0.5 * bm[2] / sqrt_b, -bm[1] / sqrt_b, 0.5 * bm[0] / sqrt_b]
+                            } else {
+                                [0.0; 3]
+                            };
+                            (ta.chi * chi_b, dchi_b, sqrt_b, dsqrt)
+                        });
                         let c = beta.features * ta.area * th;
                         let core = e * sqrt_b * det_d;
                         terms.features += c * chi_v * core;
                         // Through the sampled values: χ_B(sd), η(d_B), √det g_B.
                         q[3] += c * ta.chi * dchi_b * core;
-                        let adj_d = c * chi_v * de * sqrt_b * det_d;
+                        let adj_d = c * chi_v * de * sqrt_b * det_d / 3.0;
                         for &k in &tri {
-                            feature_adjoint[(k - base) * nf + f] += adj_d / 3.0;
+                            feature_adjoint[(k - base) * nf + f] += adj_d;
                         }
                         for m in 0..3 {
                             q[m] += c * chi_v * e * det_d * dsqrt[m];
@@ -561,12 +595,13 @@ impl LevelEnergy {
                     }
                 }
                 let adj = jacobian_adjoint(p, upper, inv_h);
+                let q = q.map(|x| x / 3.0);
                 for v in 0..3 {
                     let local = tri[v] - base;
                     grad[local][0] += adj[v][0];
                     grad[local][1] += adj[v][1];
                     for m in 0..4 {
-                        adjoint[local][m] += q[m] / 3.0;
+                        adjoint[local][m] += q[m];
                     }
                 }
             }
@@ -693,9 +728,9 @@ mod tests {
                 ]
             })
             .collect();
-        let b = LevelB {
-            field: Grid::from_vec(n, b_data).unwrap(),
-            features: vec![
+        let b = LevelB::new(
+            Grid::from_vec(n, b_data).unwrap(),
+            vec![
                 Grid::from_vec(
                     n,
                     (0..n * n)
@@ -707,7 +742,7 @@ mod tests {
                 )
                 .unwrap(),
             ],
-        };
+        );
         LevelEnergy {
             a,
             b,
@@ -886,6 +921,26 @@ mod tests {
             .map(|g| g[0].abs().max(g[1].abs()))
             .fold(0.0, f64::max);
         assert!(gmax < 1e-10, "{gmax}");
+    }
+
+    #[test]
+    fn packed_features_sample_like_their_grids() {
+        let n = 9;
+        let mut e = synthetic(n, ONLY(2));
+        let mut rng = Rng(8);
+        let second: Vec<f64> = (0..n * n).map(|_| rng.range(0.0, 1.0)).collect();
+        let features = vec![e.b.features[0].clone(), Grid::from_vec(n, second).unwrap()];
+        e.b = LevelB::new(e.b.field.clone(), features);
+        let mut out = [FeatureSample::default(); 2];
+        for _ in 0..200 {
+            // Inside ω and beyond its border (clamped).
+            let p = [rng.range(-0.2, 1.2), rng.range(-0.2, 1.2)];
+            e.b.sample_features(&GridPoint::locate(n, p), &mut out);
+            for (f, o) in out.iter().enumerate() {
+                let (d, dx, dy) = e.b.features[f].sample_with_gradient(p);
+                assert_eq!((o.d, o.dx, o.dy), (d, dx, dy), "feature {f} at {p:?}");
+            }
+        }
     }
 
     #[test]

@@ -20,6 +20,10 @@ use super::precondition::SobolevPreconditioner;
 pub struct NcgSettings {
     /// Stop when `(E_k − E_{k+1}) / E_k` is below this.
     pub tolerance: f64,
+    /// The same on the finest level of the multiscale solve (unfiltered images): looser
+    /// than `tolerance` because there, measured on the ICT pairs, the last iterations
+    /// cost most of the time and do not change the accuracy (BENCHMARKS.md, "Matching").
+    pub finest_tolerance: f64,
     pub max_iterations: usize,
     /// Armijo sufficient-decrease constant.
     pub armijo_c: f64,
@@ -31,6 +35,7 @@ impl Default for NcgSettings {
     fn default() -> Self {
         Self {
             tolerance: 1e-6,
+            finest_tolerance: 1e-5,
             max_iterations: 300,
             armijo_c: 1e-4,
             refit_every: 10,

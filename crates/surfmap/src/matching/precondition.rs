@@ -14,11 +14,12 @@
 //! functions `cos(π m i/(n − 1))` (the mirror condition at the border nodes is
 //! exactly what DCT-I diagonalizes), with eigenvalues
 //! `−(μ_l + μ_m)`, `μ_m = 4 sin²(π m / (2(n − 1))) / h²`, so one solve is a 2D DCT-I,
-//! a division by `1 + λ(μ_l + μ_m)` and the inverse transform: `O(n² log n)`.
+//! a division by `1 + λ(μ_l + μ_m)` and the inverse transform: `O(n² log n)`. The two
+//! components are solved in parallel; the column transforms run as row transforms of
+//! the transpose (contiguous memory), and every buffer is allocated once.
 
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
-use rayon::prelude::*;
 use rustdct::{Dct1, DctPlanner};
 
 /// `(I − λΔ_h)⁻¹` on an `n × n` grid.
@@ -27,6 +28,15 @@ pub struct SobolevPreconditioner {
     dct: Arc<dyn Dct1<f64>>,
     /// `1 / (1 + λ(μ_l + μ_m))`, scaled by the inverse transform's `(2/(n − 1))²`.
     factor: Vec<f64>,
+    /// Work space of each component.
+    scratch: [Mutex<Scratch>; 2],
+}
+
+/// One component's values, their transpose and the 1D transform's scratch.
+struct Scratch {
+    values: Vec<f64>,
+    transposed: Vec<f64>,
+    dct: Vec<f64>,
 }
 
 impl std::fmt::Debug for SobolevPreconditioner {
@@ -52,43 +62,73 @@ impl SobolevPreconditioner {
         let factor = (0..n * n)
             .map(|k| norm / (1.0 + lambda * (mu[k / n] + mu[k % n])))
             .collect();
+        let dct = DctPlanner::new().plan_dct1(n);
+        let scratch = std::array::from_fn(|_| {
+            Mutex::new(Scratch {
+                values: vec![0.0; n * n],
+                transposed: vec![0.0; n * n],
+                dct: vec![0.0; dct.get_scratch_len()],
+            })
+        });
         Self {
             size: n,
-            dct: DctPlanner::new().plan_dct1(n),
+            dct,
             factor,
+            scratch,
         }
     }
 
     /// `v = (I − λΔ_h)⁻¹ g`, both components.
     pub fn apply(&self, g: &[[f64; 2]], v: &mut [[f64; 2]]) {
         let n = self.size;
-        let mut comps: [Vec<f64>; 2] = std::array::from_fn(|c| g.iter().map(|x| x[c]).collect());
-        comps.par_iter_mut().for_each(|buf| {
-            self.transform(buf);
-            for (b, f) in buf.iter_mut().zip(&self.factor) {
-                *b *= f;
-            }
-            self.transform(buf);
-        });
-        for (k, out) in v.iter_mut().enumerate().take(n * n) {
-            *out = [comps[0][k], comps[1][k]];
+        let lock = |c: usize| self.scratch[c].lock().unwrap_or_else(|e| e.into_inner());
+        let (mut guard0, mut guard1) = (lock(0), lock(1));
+        let (s0, s1): (&mut Scratch, &mut Scratch) = (&mut guard0, &mut guard1);
+        rayon::join(
+            || self.solve_component(g, 0, s0),
+            || self.solve_component(g, 1, s1),
+        );
+        for ((out, a), b) in v.iter_mut().take(n * n).zip(&s0.values).zip(&s1.values) {
+            *out = [*a, *b];
         }
     }
 
-    /// Unnormalized 2D DCT-I in place (rows, then columns).
-    fn transform(&self, buf: &mut [f64]) {
-        let n = self.size;
-        for row in buf.chunks_mut(n) {
-            self.dct.process_dct1(row);
+    /// Component `c` of `(I − λΔ_h)⁻¹ g` into `s.values`.
+    fn solve_component(&self, g: &[[f64; 2]], c: usize, s: &mut Scratch) {
+        for (x, y) in s.values.iter_mut().zip(g) {
+            *x = y[c];
         }
-        let mut column = vec![0.0; n];
-        for j in 0..n {
-            for i in 0..n {
-                column[i] = buf[i * n + j];
-            }
-            self.dct.process_dct1(&mut column);
-            for i in 0..n {
-                buf[i * n + j] = column[i];
+        self.transform(s);
+        for (b, f) in s.values.iter_mut().zip(&self.factor) {
+            *b *= f;
+        }
+        self.transform(s);
+    }
+
+    /// Unnormalized 2D DCT-I of `s.values` in place (rows, then columns as the rows of
+    /// the transpose).
+    fn transform(&self, s: &mut Scratch) {
+        let n = self.size;
+        for row in s.values.chunks_mut(n) {
+            self.dct.process_dct1_with_scratch(row, &mut s.dct);
+        }
+        transpose(n, &s.values, &mut s.transposed);
+        for row in s.transposed.chunks_mut(n) {
+            self.dct.process_dct1_with_scratch(row, &mut s.dct);
+        }
+        transpose(n, &s.transposed, &mut s.values);
+    }
+}
+
+/// `to = fromᵀ` for `n × n` row-major matrices, in cache-sized blocks.
+fn transpose(n: usize, from: &[f64], to: &mut [f64]) {
+    const BLOCK: usize = 16;
+    for i0 in (0..n).step_by(BLOCK) {
+        for j0 in (0..n).step_by(BLOCK) {
+            for i in i0..(i0 + BLOCK).min(n) {
+                for j in j0..(j0 + BLOCK).min(n) {
+                    to[j * n + i] = from[i * n + j];
+                }
             }
         }
     }

@@ -4,7 +4,8 @@
 //! Levels `k = k₀ … K` live on `(2^k + 1)²` grids; level `k` uses images filtered with
 //! `σ_k = 2^−k` (the finest unfiltered) and the cut-off width `ε_k = 2^{1−k}` (thesis:
 //! `ε = 2σ_k`; on the finest level, where `σ = 0`, two grid cells). Each level is
-//! minimized by [`super::ncg`] and prolongated (exactly, as a P1 map) to the next.
+//! minimized by [`super::ncg`] and prolongated (exactly, as a P1 map) to the next; the
+//! finest level stops at the looser [`NcgSettings::finest_tolerance`].
 //!
 //! Alignment: both flattenings preserve orientation, so ω_A and ω_B differ by a
 //! similarity of the plane. With paired landmarks or features it is their
@@ -637,10 +638,14 @@ impl Solver<'_> {
         let n = phi.size;
         let w = self.options.sobolev_cells / (n - 1) as f64;
         let precondition = (w > 0.0).then(|| SobolevPreconditioner::new(n, w * w));
+        let mut settings = self.options.ncg;
+        if k == self.a.num_levels() - 1 {
+            settings.tolerance = settings.finest_tolerance;
+        }
         let log = minimize(
             &mut energy,
             phi,
-            &self.options.ncg,
+            &settings,
             k,
             precondition.as_ref(),
             &mut refit,

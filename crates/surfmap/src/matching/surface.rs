@@ -269,16 +269,16 @@ impl MatchSurface {
                 ]
             })
             .collect();
-        LevelB {
-            field: Grid::from_vec(m, data).expect("level size"),
-            features: features
+        LevelB::new(
+            Grid::from_vec(m, data).expect("level size"),
+            features
                 .iter()
                 .map(|&f| {
                     Grid::from_vec(m, self.inject(&self.feature_distance[f], k))
                         .expect("level size")
                 })
                 .collect(),
-        }
+        )
     }
 
     /// Finest-level position (mesh units, extended) and signed boundary distance, for

@@ -32,6 +32,16 @@ use rayon::prelude::*;
 /// is still `+∞` in `element::energy`.
 #[inline]
 pub fn flip_free_step(uv: [[f64; 2]; 3], dir: [[f64; 2]; 3]) -> f64 {
+    match det_quadratic(uv, dir) {
+        Some((a, b, c)) => smallest_positive_root(a, b, c),
+        None => 0.0,
+    }
+}
+
+/// `(a, b, c)` of `det Ds(s) = c + b·s + a·s²` (module docs), or `None` unless `c > 0` and
+/// all three are finite.
+#[inline]
+fn det_quadratic(uv: [[f64; 2]; 3], dir: [[f64; 2]; 3]) -> Option<(f64, f64, f64)> {
     let a00 = uv[1][0] - uv[0][0];
     let a01 = uv[2][0] - uv[0][0];
     let a10 = uv[1][1] - uv[0][1];
@@ -43,8 +53,21 @@ pub fn flip_free_step(uv: [[f64; 2]; 3], dir: [[f64; 2]; 3]) -> f64 {
     let c = a00 * a11 - a01 * a10;
     let b = a00 * b11 + a11 * b00 - a01 * b10 - a10 * b01;
     let a = b00 * b11 - b01 * b10;
-    if !(c > 0.0 && c.is_finite() && b.is_finite() && a.is_finite()) {
+    (c > 0.0 && c.is_finite() && b.is_finite() && a.is_finite()).then_some((a, b, c))
+}
+
+/// [`flip_free_step`] where it is below `limit`; otherwise some value `≥ limit`, found
+/// without the root when the quadratic provably stays positive on `[0, limit]`:
+/// `c + min(b, 0)·limit + min(a, 0)·limit² > 0` bounds `det` from below there (with a
+/// relative margin of 10⁻⁹ so that a root within rounding of `limit` is still computed).
+/// For the minimum over many triangles, with `limit` the minimum so far.
+#[inline]
+pub fn flip_free_step_below(uv: [[f64; 2]; 3], dir: [[f64; 2]; 3], limit: f64) -> f64 {
+    let Some((a, b, c)) = det_quadratic(uv, dir) else {
         return 0.0;
+    };
+    if limit.is_finite() && c + b.min(0.0) * limit + a.min(0.0) * limit * limit > 1e-9 * c {
+        return limit;
     }
     smallest_positive_root(a, b, c)
 }
@@ -210,6 +233,41 @@ mod tests {
             }
         }
         assert!(finite > 500, "too few finite cases ({finite}) to be a test");
+    }
+
+    #[test]
+    fn step_below_a_limit_is_the_step_or_at_least_the_limit() {
+        // The early exit must never hide a root below the limit; above it, any value
+        // ≥ limit is allowed. Limits at, around and far from the true step.
+        let mut rng = Rng(0x9e3779b97f4a7c15);
+        let (mut skipped, mut exact) = (0, 0);
+        for _ in 0..4000 {
+            let uv = ccw_triangle(&mut rng);
+            let dir = [rng.point(2.0), rng.point(2.0), rng.point(2.0)];
+            let t = flip_free_step(uv, dir);
+            let scale = if t.is_finite() { t } else { 1.0 };
+            for limit in [
+                f64::INFINITY,
+                scale * rng.range(0.0, 3.0),
+                scale,
+                scale * (1.0 + 1e-12),
+            ] {
+                let b = flip_free_step_below(uv, dir, limit);
+                if t < limit {
+                    assert_eq!(b, t, "limit {limit}: {b} vs the step {t}");
+                    exact += 1;
+                } else {
+                    assert!(b >= limit || b == t, "limit {limit}: {b} < limit, step {t}");
+                    skipped += usize::from(b == limit && t != limit);
+                }
+            }
+        }
+        assert!(
+            skipped > 1000 && exact > 1000,
+            "{skipped} skipped, {exact} exact"
+        );
+        let clockwise = [[0.0, 0.0], [0.0, 1.0], [1.0, 0.0]];
+        assert_eq!(flip_free_step_below(clockwise, [[0.0; 2]; 3], 1.0), 0.0);
     }
 
     /// Exactly linear case (a = 0) and near-linear case (tiny a): the stable formula
