@@ -15,7 +15,6 @@ pub mod deformation;
 pub mod energy;
 pub mod ncg;
 pub mod output;
-pub mod pin;
 pub mod pictures;
 pub mod precondition;
 pub mod rigid;
