@@ -163,27 +163,38 @@ pub fn closest_point_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> [f64
     [1.0 - v - w, v, w]
 }
 
+/// Compressed rows: the items `(row, value)` grouped by row, as `(start, list)` with row
+/// `r`'s values in `list[start[r]..start[r + 1]]` (in the order given).
+fn compressed_rows(
+    rows: usize,
+    items: impl Iterator<Item = (u32, u32)> + Clone,
+) -> (Vec<u32>, Vec<u32>) {
+    let mut start = vec![0u32; rows + 1];
+    for (r, _) in items.clone() {
+        start[r as usize + 1] += 1;
+    }
+    for r in 0..rows {
+        start[r + 1] += start[r];
+    }
+    let mut fill = start.clone();
+    let mut list = vec![0u32; start[rows] as usize];
+    for (r, value) in items {
+        list[fill[r as usize] as usize] = value;
+        fill[r as usize] += 1;
+    }
+    (start, list)
+}
+
 /// Triangles around each vertex as CSR arrays `(start, list)`: the triangles of vertex
 /// `v` are `list[start[v]..start[v + 1]]`.
 pub fn vertex_triangles(triangles: &[[u32; 3]], num_vertices: usize) -> (Vec<u32>, Vec<u32>) {
-    let mut start = vec![0u32; num_vertices + 1];
-    for t in triangles {
-        for &v in t {
-            start[v as usize + 1] += 1;
-        }
-    }
-    for v in 0..num_vertices {
-        start[v + 1] += start[v];
-    }
-    let mut fill = start.clone();
-    let mut list = vec![0u32; 3 * triangles.len()];
-    for (t, tri) in triangles.iter().enumerate() {
-        for &v in tri {
-            list[fill[v as usize] as usize] = t as u32;
-            fill[v as usize] += 1;
-        }
-    }
-    (start, list)
+    compressed_rows(
+        num_vertices,
+        triangles
+            .iter()
+            .enumerate()
+            .flat_map(|(t, tri)| tri.map(|v| (v, t as u32))),
+    )
 }
 
 /// Closest points on a triangle mesh: the triangles around the `K` nearest vertices
@@ -273,22 +284,8 @@ pub fn complete_correspondence(
     }
     // Vertex adjacency of A (CSR) from its unique edges.
     let edges = Topology::new(a).edges;
-    let mut start = vec![0u32; n + 1];
-    for e in &edges {
-        start[e[0] as usize + 1] += 1;
-        start[e[1] as usize + 1] += 1;
-    }
-    for v in 0..n {
-        start[v + 1] += start[v];
-    }
-    let mut fill = start.clone();
-    let mut neighbours = vec![0u32; 2 * edges.len()];
-    for e in &edges {
-        for (x, y) in [(e[0], e[1]), (e[1], e[0])] {
-            neighbours[fill[x as usize] as usize] = y;
-            fill[x as usize] += 1;
-        }
-    }
+    let (start, neighbours) =
+        compressed_rows(n, edges.iter().flat_map(|e| [(e[0], e[1]), (e[1], e[0])]));
     let ring = |v: usize| &neighbours[start[v] as usize..start[v + 1] as usize];
     let projector = SurfaceProjector::new(b);
     let rims = Rims::new(b);

@@ -23,6 +23,7 @@ use super::{LevelLog, MatchError};
 use crate::fsutil::write_atomically;
 use crate::mesh::{PointLocator, SurfacePoint, TriMesh};
 use crate::raster::npy::save_npy;
+use crate::vec3::{cross3 as cross, norm3 as norm, sub3 as sub};
 
 /// Triangles of A whose image on B turns over or collapses.
 #[derive(Clone, Debug, Default, Serialize)]
@@ -37,22 +38,6 @@ pub struct FoldCheck {
 
 /// An image triangle smaller than this fraction of its (area-scaled) source collapses.
 pub const COLLAPSE_RATIO: f64 = 0.01;
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn cross(u: [f64; 3], v: [f64; 3]) -> [f64; 3] {
-    [
-        u[1] * v[2] - u[2] * v[1],
-        u[2] * v[0] - u[0] * v[2],
-        u[0] * v[1] - u[1] * v[0],
-    ]
-}
-
-fn norm(u: [f64; 3]) -> f64 {
-    (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt()
-}
 
 /// How an image triangle of A on B sits: as it should, turned over, or collapsed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -17,6 +17,7 @@ use rayon::prelude::*;
 
 use super::energy::Similarity3;
 use crate::linsolve::dense::symmetric_eigen;
+use crate::vec3::{cross3 as cross, dot3 as dot, sub3 as sub};
 
 /// Fraction of the pairs (closest first) that each ICP step fits.
 pub const KEEP: f64 = 0.7;
@@ -180,22 +181,6 @@ pub fn vertex_normals(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> Vec<[f6
         }
     }
     n
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross(u: [f64; 3], v: [f64; 3]) -> [f64; 3] {
-    [
-        u[1] * v[2] - u[2] * v[1],
-        u[2] * v[0] - u[0] * v[2],
-        u[0] * v[1] - u[1] * v[0],
-    ]
 }
 
 /// The rotation by `angle` (radians, right-handed) about `axis` (any length; the
