@@ -42,6 +42,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 "rings" => options.complete_rings = f() as usize,
                 "ctol" => options.complete_tolerance.elsewhere = f(),
                 "htol" => options.complete_tolerance.hole_rim = f(),
+                "itol" => options.complete_tolerance.interior = f(),
+                "smooth" => options.rim_smoothing.rings = f() as usize,
+                "smoothit" => options.rim_smoothing.iterations = f() as usize,
                 "holes" => {
                     options.hole_features = match v {
                         "auto" => surfmap::matching::HoleFeatures::Auto,

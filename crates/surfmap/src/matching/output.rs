@@ -322,6 +322,7 @@ impl SurfaceMatch {
             &mut points,
             self.complete_rings,
             self.complete_tolerance,
+            self.rim_smoothing,
         );
         if drop && completion.completed > 0 {
             dropped += drop_folds(mesh_a, &check_folds(mesh_a, mesh_b, &points), &mut points);

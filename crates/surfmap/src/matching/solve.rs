@@ -113,6 +113,9 @@ pub struct MatchOptions {
     /// Largest distance (fraction of the vertex's mean edge length) from a completed
     /// vertex's predicted point to B ([`super::complete::COMPLETE_TOLERANCE`]).
     pub complete_tolerance: super::complete::Tolerance,
+    /// Smoothing of the matched border before completion
+    /// ([`super::complete::RimSmoothing`]).
+    pub rim_smoothing: super::complete::RimSmoothing,
 }
 
 impl Default for MatchOptions {
@@ -143,6 +146,7 @@ impl Default for MatchOptions {
             drop_folds: true,
             complete_rings: super::complete::COMPLETE_RINGS,
             complete_tolerance: super::complete::COMPLETE_TOLERANCE,
+            rim_smoothing: super::complete::RIM_SMOOTHING,
         }
     }
 }
@@ -270,6 +274,8 @@ pub struct SurfaceMatch {
     pub complete_rings: usize,
     /// See [`MatchOptions::complete_tolerance`].
     pub complete_tolerance: super::complete::Tolerance,
+    /// See [`MatchOptions::rim_smoothing`].
+    pub rim_smoothing: super::complete::RimSmoothing,
 }
 
 /// Points mapped within this many finest-grid cells of B's surface are snapped onto it
@@ -506,6 +512,7 @@ pub fn solve(
         snap_cells: options.snap_cells,
         complete_rings: options.complete_rings,
         complete_tolerance: options.complete_tolerance,
+        rim_smoothing: options.rim_smoothing,
     })
 }
 
