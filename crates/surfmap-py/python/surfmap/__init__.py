@@ -110,7 +110,9 @@ def flatten_many(
     ``workers``: meshes flattened at once, and the threads used in total (None: one
     per core). ``progress``: True draws a progress line on stderr; a callable is called
     with each row as its mesh finishes (from a worker thread). ``options``: the
-    keywords of ``flatten`` (``preset``, ``alpha``, ``fill_holes``, ``normalize``, …).
+    keywords of ``flatten`` (``preset``, ``alpha``, ``fill_holes``, ``cut``,
+    ``max_distortion``, ``normalize``, …); with ``cut`` the OBJ files have per-corner
+    UVs, split along the seams.
 
     The same as ``surfmap flatten A B … -o OUTDIR/ --jobs WORKERS`` on the command
     line, which writes the same table.
