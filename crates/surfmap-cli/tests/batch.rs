@@ -329,3 +329,159 @@ fn a_batch_cuts_surfaces_that_are_not_discs_as_one_mesh_does() {
             .is_some()
     );
 }
+
+/// The summary's distortion and what-was-done columns are the numbers of each mesh's
+/// `NAME.json`, on a batch that does everything: a cone cut for the distortion bound (one
+/// generator from the apex unrolls it: one cut, 12 edges), a sphere cut open for its
+/// topology, a flat disc with two holes (filled), a flat disc as is.
+#[test]
+fn the_summary_columns_are_the_numbers_of_each_report() {
+    let dir = temp_dir("batch-columns");
+    let mut holed = surfmap::mesh::generate::grid_disc(8);
+    holed
+        .triangles
+        .retain(|t| !t.contains(&(2 * 9 + 2)) && !t.contains(&(5 * 9 + 5)));
+    let meshes = [
+        ("cone", surfmap::mesh::generate::cone(1.0, 3.0, 12, 48)),
+        ("sphere", surfmap::mesh::generate::sphere(2)),
+        ("holed", holed),
+        // Flat: an isometry flattens it, under any bound.
+        ("disc", bumpy_disc(6, 0.0)),
+    ];
+    let inputs: Vec<PathBuf> = meshes
+        .iter()
+        .map(|(name, mesh)| {
+            let path = dir.join(format!("{name}.obj"));
+            surfmap::write_mesh(&path, mesh).unwrap();
+            path
+        })
+        .collect();
+    let out = dir.join("out");
+    let bound = 1.01;
+    let run = batch(
+        &inputs,
+        &format!("{}/", out.display()),
+        &[
+            "--max-distortion",
+            &bound.to_string(),
+            "--max-cut-rounds",
+            "2",
+        ],
+    );
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let (header, rows) = read_csv(&out.join("summary.csv"));
+    let col = |row: &[String], name: &str| -> String {
+        let i = header.iter().position(|h| h == name);
+        row[i.unwrap_or_else(|| panic!("no column {name}"))].clone()
+    };
+    let number = |row: &[String], name: &str| -> f64 {
+        let cell = col(row, name);
+        cell.parse()
+            .unwrap_or_else(|_| panic!("{name}: {cell:?} is no number"))
+    };
+    for (row, (name, _)) in rows.iter().zip(&meshes) {
+        let json = read_json(&out.join(format!("{name}.json")));
+        let m = &json["measures"];
+        let t = &m["measures"];
+        // Numbers: the JSON's, to the last bit or two (serde_json's default parser may
+        // round a decimal's last bit; the CSV is Rust's shortest exact form).
+        let same = |a: f64, b: f64| a == b || (a - b).abs() <= 1e-15 * a.abs().max(b.abs());
+        for (column, value) in [
+            ("energy", &json["energy"]),
+            ("symmetric_dirichlet", &json["symmetric_dirichlet"]),
+            ("symmetric_dirichlet_max", &m["symmetric_dirichlet_max"]),
+            ("angle_mean", &t["angle"]["mean"]),
+            ("angle_max", &t["angle"]["max"]),
+            ("area_min", &t["area"]["min"]),
+            ("area_mean", &t["area"]["mean"]),
+            ("area_max", &t["area"]["max"]),
+            ("distortion_bound", &json["distortion_cuts"]["bound"]),
+            (
+                "distortion_seam_length",
+                &json["distortion_cuts"]["seam_length_added"],
+            ),
+        ] {
+            let (a, b) = (number(row, column), value.as_f64().unwrap());
+            assert!(same(a, b), "{name}: {column}: {a} vs {b}");
+        }
+        let seams = &json["seams"];
+        let seam_edges = seams["edges"].as_array().map_or(0, Vec::len);
+        assert_eq!(col(row, "seam_edges"), seam_edges.to_string(), "{name}");
+        let (a, b) = (
+            number(row, "seam_length"),
+            seams["length"].as_f64().unwrap_or(0.0),
+        );
+        assert!(same(a, b), "{name}: seam_length {a} vs {b}");
+        for (column, value) in [
+            ("plan", &json["plan"]),
+            ("guarantee", &json["guarantee"]),
+            ("start", &json["start"]),
+        ] {
+            assert_eq!(
+                col(row, column),
+                value.as_str().unwrap(),
+                "{name}: {column}"
+            );
+        }
+        for (column, value) in [
+            ("vertices", &json["vertices"]),
+            ("triangles", &json["triangles"]),
+            ("iterations", &json["iterations"]),
+            ("converged", &json["converged"]),
+            ("flipped_triangles", &json["flipped_triangles"]),
+            ("holes_filled", &json["holes_filled"]),
+            (
+                "boundary_overlap",
+                &json["boundary_overlap"]["self_intersecting"],
+            ),
+            ("distortion_bound_met", &json["distortion_cuts"]["met"]),
+        ] {
+            assert_eq!(col(row, column), value.to_string(), "{name}: {column}");
+        }
+        // The cut paths the map keeps: those of the rounds up to the best one.
+        let cuts = &json["distortion_cuts"];
+        let best = cuts["best_round"].as_u64().unwrap() as usize;
+        let paths: usize = cuts["history"].as_array().unwrap()[..best]
+            .iter()
+            .map(|r| r["from_vertices"].as_array().unwrap().len())
+            .sum();
+        assert_eq!(col(row, "distortion_cuts"), paths.to_string(), "{name}");
+        // The bound holds exactly when the mean symmetric Dirichlet energy over 4 (1
+        // for an isometry) is under it.
+        let d = number(row, "symmetric_dirichlet") / 4.0;
+        assert_eq!(
+            col(row, "distortion_bound_met"),
+            (d <= bound).to_string(),
+            "{name}: {d}"
+        );
+        assert!(number(row, "symmetric_dirichlet_max") >= number(row, "symmetric_dirichlet"));
+    }
+    // What was done, independently of the reports.
+    let by_name = |name: &str| &rows[meshes.iter().position(|m| m.0 == name).unwrap()];
+    let cone = by_name("cone");
+    assert_eq!(col(cone, "plan"), "cut open to lower the distortion");
+    assert_eq!(
+        (col(cone, "distortion_cuts"), col(cone, "seam_edges")),
+        ("1".into(), "12".into())
+    );
+    assert!((number(cone, "seam_length") - 1f64.hypot(3.0)).abs() < 1e-12);
+    assert_eq!(col(cone, "distortion_bound_met"), "true");
+    assert!(col(by_name("sphere"), "plan").starts_with("cut open along seams (closed, genus 0)"));
+    assert!(number(by_name("sphere"), "seam_length") > 0.0);
+    let holed = by_name("holed");
+    assert_eq!(
+        (col(holed, "plan"), col(holed, "holes_filled")),
+        ("fill 2 holes".into(), "2".into())
+    );
+    assert_eq!(col(holed, "seam_edges"), "0");
+    let disc = by_name("disc");
+    assert_eq!(col(disc, "plan"), "disc as is");
+    assert_eq!(col(disc, "distortion_cuts"), "0");
+    for row in &rows {
+        assert_eq!(col(row, "guarantee"), "bijective");
+    }
+}

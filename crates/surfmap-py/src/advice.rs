@@ -38,11 +38,12 @@ fn python_remedy(kind: DefectKind) -> Option<&'static str> {
         }
         DefectKind::SeveralBoundaryLoops => {
             "pass fill_holes=True to fill all but the longest for the flattening (they stay \
-             open in the map), or cut from each hole to the outer boundary."
+             open in the map), or cut=\"holes\" to open them with seams to the outer boundary \
+             (per-corner UVs: UV, FUV, report)."
         }
         DefectKind::ClosedSurface | DefectKind::PositiveGenus => {
-            "surfmap.flatten returns one UV per vertex and does not cut: cut it open first, \
-             or run `surfmap flatten` on the command line, which cuts it along seams."
+            "pass cut=\"auto\" to cut it open into a disc along seams (per-corner UVs: UV, FUV, \
+             report), or seams=EDGES to cut along your own edges."
         }
         DefectKind::NoFaces | DefectKind::NonManifoldVertices | DefectKind::NonOrientable => {
             return None;
@@ -61,6 +62,9 @@ pub fn option_message(e: &OptionError) -> String {
         OptionError::Tolerance(t) => format!("tolerance must be positive, got {t}"),
         OptionError::ArmijoC(c) => format!("armijo_c must be in (0, 1), got {c}"),
         OptionError::CoarseVertices(n) => format!("coarse_vertices must be at least 16, got {n}"),
+        OptionError::MaxDistortion(d) => format!(
+            "max_distortion must be a finite number of at least 1 (the mean symmetric Dirichlet distortion of an isometry, the least any map has), got {d}"
+        ),
         other => other.to_string(),
     }
 }

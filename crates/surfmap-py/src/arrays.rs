@@ -113,6 +113,11 @@ pub fn positions(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<[f64; 3]>> 
     real_rows(obj, name, "x, y, z per vertex")
 }
 
+/// Texture coordinates, any number of rows: shape (n, 2), float64 or float32.
+pub fn uv_rows(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<[f64; 2]>> {
+    real_rows(obj, name, "u, v per row")
+}
+
 /// Texture coordinates: shape (`num_vertices`, 2), float64 or float32.
 pub fn uvs(obj: &Bound<'_, PyAny>, name: &str, num_vertices: usize) -> PyResult<Vec<[f64; 2]>> {
     let uv = real_rows(obj, name, "u, v per vertex")?;
@@ -125,6 +130,56 @@ pub fn uvs(obj: &Bound<'_, PyAny>, name: &str, num_vertices: usize) -> PyResult<
     Ok(uv)
 }
 
+/// Rows of `K` non-negative integer indices (any integer dtype), as `u32`; `what`: the
+/// meaning of one row, `noun` and `below`: what the indices are and their bound, for
+/// the message. A negative or too large index is a `MeshError` naming the entry.
+fn index_rows<const K: usize>(
+    obj: &Bound<'_, PyAny>,
+    name: &str,
+    what: &str,
+    [noun, below]: [&str; 2],
+) -> PyResult<Vec<[u32; K]>> {
+    let arr = two_d(obj, name, K, what)?;
+    let wide: Vec<[i128; K]> = if let Some(r) = rows_of::<i64, K>(arr)? {
+        widen(r)
+    } else if let Some(r) = rows_of::<i32, K>(arr)? {
+        widen(r)
+    } else if let Some(r) = rows_of::<u32, K>(arr)? {
+        widen(r)
+    } else if let Some(r) = rows_of::<u64, K>(arr)? {
+        widen(r)
+    } else if let Some(r) = rows_of::<i16, K>(arr)? {
+        widen(r)
+    } else if let Some(r) = rows_of::<u16, K>(arr)? {
+        widen(r)
+    } else if let Some(r) = rows_of::<u8, K>(arr)? {
+        widen(r)
+    } else if let Some(r) = rows_of::<i8, K>(arr)? {
+        widen(r)
+    } else {
+        return Err(PyValueError::new_err(format!(
+            "{name} must hold integers ({noun}), got dtype {}; convert it with {name}.astype(numpy.int64)",
+            dtype_name(arr)
+        )));
+    };
+    let mut out = Vec::with_capacity(wide.len());
+    for (t, row) in wide.iter().enumerate() {
+        let mut indices = [0u32; K];
+        for (c, &v) in row.iter().enumerate() {
+            indices[c] = u32::try_from(v).map_err(|_| {
+                mesh_error(
+                    format!(
+                        "{name}[{t}, {c}] = {v}: {noun} count from 0 and must be below {below}"
+                    ),
+                    &[],
+                )
+            })?;
+        }
+        out.push(indices);
+    }
+    Ok(out)
+}
+
 /// Triangles `F`: shape (m, 3), any integer dtype, every index in `0..num_vertices`
 /// (out of range: `MeshError`, in the library's words for indices it can hold).
 pub fn triangles(
@@ -132,49 +187,64 @@ pub fn triangles(
     name: &str,
     num_vertices: usize,
 ) -> PyResult<Vec<[u32; 3]>> {
-    let arr = two_d(obj, name, 3, "three vertex indices per triangle")?;
-    let wide: Vec<[i128; 3]> = if let Some(r) = rows_of::<i64, 3>(arr)? {
-        widen(r)
-    } else if let Some(r) = rows_of::<i32, 3>(arr)? {
-        widen(r)
-    } else if let Some(r) = rows_of::<u32, 3>(arr)? {
-        widen(r)
-    } else if let Some(r) = rows_of::<u64, 3>(arr)? {
-        widen(r)
-    } else if let Some(r) = rows_of::<i16, 3>(arr)? {
-        widen(r)
-    } else if let Some(r) = rows_of::<u16, 3>(arr)? {
-        widen(r)
-    } else if let Some(r) = rows_of::<u8, 3>(arr)? {
-        widen(r)
-    } else if let Some(r) = rows_of::<i8, 3>(arr)? {
-        widen(r)
-    } else {
-        return Err(PyValueError::new_err(format!(
-            "{name} must hold integers (vertex indices), got dtype {}; convert it with {name}.astype(numpy.int64)",
-            dtype_name(arr)
-        )));
-    };
-    let mut out = Vec::with_capacity(wide.len());
-    for (t, tri) in wide.iter().enumerate() {
-        let mut row = [0u32; 3];
-        for (c, &v) in tri.iter().enumerate() {
-            row[c] = u32::try_from(v).map_err(|_| {
-                mesh_error(
-                    format!(
-                        "{name}[{t}, {c}] = {v}: vertex indices count from 0 and must be below the number of vertices ({num_vertices})"
-                    ),
-                    &[],
-                )
-            })?;
-        }
-        out.push(row);
-    }
+    let below = format!("the number of vertices ({num_vertices})");
+    let out = index_rows(
+        obj,
+        name,
+        "three vertex indices per triangle",
+        ["vertex indices", &below],
+    )?;
     surfmap::mesh::check_indices(&out, num_vertices).map_err(|e| mesh_error(e.to_string(), &[]))?;
     Ok(out)
 }
 
-fn widen<T: Into<i128> + Copy>(rows: Vec<[T; 3]>) -> Vec<[i128; 3]> {
+/// Edges (seams): shape (k, 2), any integer dtype, two vertex indices per edge (whether
+/// they are edges of the mesh is the library's check).
+pub fn edges(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<[u32; 2]>> {
+    index_rows(
+        obj,
+        name,
+        "two vertex indices per edge",
+        ["vertex indices", "the number of vertices"],
+    )
+}
+
+/// Per-corner UV indices `FUV`: shape (`num_triangles`, 3), the corners of triangle `t`
+/// taking their UVs from rows `FUV[t]` of a UV array of `num_uvs` rows (OBJ's `vt`
+/// indices, from 0). Wrong counts or indices are the caller's: `ValueError`.
+pub fn uv_triangles(
+    obj: &Bound<'_, PyAny>,
+    name: &str,
+    num_uvs: usize,
+    num_triangles: usize,
+) -> PyResult<Vec<[u32; 3]>> {
+    let below = format!("the number of UV rows ({num_uvs})");
+    let out: Vec<[u32; 3]> = index_rows(
+        obj,
+        name,
+        "three UV indices per triangle",
+        ["UV indices", &below],
+    )?;
+    if out.len() != num_triangles {
+        return Err(PyValueError::new_err(format!(
+            "{name} has {} rows but F has {num_triangles} triangles; give the UV indices of each triangle's corners",
+            out.len()
+        )));
+    }
+    if let Some((t, c, v)) = out
+        .iter()
+        .enumerate()
+        .flat_map(|(t, row)| row.iter().enumerate().map(move |(c, &v)| (t, c, v)))
+        .find(|&(_, _, v)| v as usize >= num_uvs)
+    {
+        return Err(PyValueError::new_err(format!(
+            "{name}[{t}, {c}] = {v}: UV indices count from 0 and must be below {below}"
+        )));
+    }
+    Ok(out)
+}
+
+fn widen<T: Into<i128> + Copy, const K: usize>(rows: Vec<[T; K]>) -> Vec<[i128; K]> {
     rows.into_iter().map(|r| r.map(Into::into)).collect()
 }
 

@@ -9,7 +9,7 @@ use std::time::Instant;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use surfmap::batch::{self, BatchRow};
-use surfmap::{FlattenOptions, FlattenReport, TriMesh, Uvs};
+use surfmap::{FlattenOptions, FlattenReport, TriMesh};
 
 use crate::advice::{defect_message, flatten_error_message};
 use crate::convert::{to_dict, to_python};
@@ -41,14 +41,9 @@ fn flatten_one(
         let json = serde_json::to_vec_pretty(&report).map_err(|e| e.to_string())?;
         surfmap::fsutil::write_atomically(&json_path, |w| w.write_all(&json))
             .map_err(|e| format!("cannot write {}: {e}", json_path.display()))?;
-        let uvs = if normalize {
-            r.normalized_uvs()
-        } else {
-            r.uvs.clone()
-        };
         let obj = dir.join(format!("{name}.obj"));
         let out = TriMesh {
-            uvs: Some(Uvs::PerVertex(uvs)),
+            uvs: Some(r.texture_coordinates(normalize)),
             ..mesh
         };
         surfmap::write_obj(&obj, &out, None).map_err(|e| e.to_string())?;
@@ -69,13 +64,17 @@ fn create_dir(dir: &Path) -> PyResult<()> {
 }
 
 /// Flattens one mesh file into the folder ``outdir``: writes ``outdir/NAME.obj`` (the
-/// mesh with one texture coordinate per vertex) and ``outdir/NAME.json`` (the report of
-/// ``surfmap flatten --report``), NAME being ``name`` or the file's stem.
+/// mesh with its texture coordinates: one per vertex, or per corner, split along the
+/// seams, when the surface was cut) and ``outdir/NAME.json`` (the report of ``surfmap
+/// flatten --report``), NAME being ``name`` or the file's stem.
 ///
 /// Never raises for a bad mesh: returns the row of the batch table (``summary.csv`` of
-/// ``flatten_many``), a dictionary with ``input``, ``status`` ("ok" or "failed"),
-/// ``output``, ``report``, the headline numbers (``vertices``, ``iterations``,
-/// ``energy``, ``angle_mean``, …), ``time_s`` and ``error`` (None, or why it failed).
+/// ``flatten_many``; columns ``BATCH_COLUMNS``), a dictionary with ``input``, ``status``
+/// ("ok" or "failed"), ``output``, ``report``, what was done (``plan``,
+/// ``holes_filled``, ``seam_edges``, ``seam_length``, ``guarantee``, the
+/// ``distortion_*`` columns of ``max_distortion``), the headline numbers of the report
+/// (``vertices``, ``iterations``, ``energy``, ``symmetric_dirichlet`` and its ``_max``,
+/// ``angle_mean``, ``area_max``, …), ``time_s`` and ``error`` (None, or why it failed).
 /// This makes it the unit of work on a cluster: see ``surfmap.distributed``.
 /// ``options`` are the keywords of ``flatten``. Releases the GIL.
 ///

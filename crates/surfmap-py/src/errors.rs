@@ -1,7 +1,8 @@
 //! The Python exceptions and how the library's errors become them.
 //!
 //! * `ValueError`: an argument is wrong (dtype, shape, an unknown option name, a number
-//!   out of range): fix the call.
+//!   out of range, seams that are no edges or do not open the surface into a disc): fix
+//!   the call.
 //! * `surfmap.MeshError` (a `ValueError`): the mesh itself cannot be used as given (not a
 //!   disc, degenerate triangles, indices out of range, a file that does not parse); the
 //!   message is the library's, naming the defect and the repair. Its `defects` attribute
@@ -18,6 +19,7 @@ use pyo3::exceptions::{
 };
 use pyo3::prelude::*;
 use pyo3::types::PyList;
+use surfmap::mesh::cut::CutError;
 use surfmap::mesh::io::{ReadError, WriteError};
 use surfmap::mesh::validate::Defect;
 use surfmap::report::ReportedDefect;
@@ -72,10 +74,14 @@ pub fn flatten_error(e: FlattenError) -> PyErr {
         FlattenError::Index(_)
         | FlattenError::Degenerate(_)
         | FlattenError::NoAdmissibleStart { .. } => mesh_error(message, &[]),
+        FlattenError::Cut(CutError::Defects(defects)) => mesh_error(message, &defects),
+        FlattenError::Cut(CutError::Index(_)) => mesh_error(message, &[]),
         FlattenError::Option(_)
         | FlattenError::GivenStartLength { .. }
         | FlattenError::GivenStartFlipped(_)
-        | FlattenError::GivenStartWithFilledHoles(_) => PyValueError::new_err(message),
+        | FlattenError::GivenStartWithFilledHoles(_)
+        | FlattenError::GivenStartWithCut(_)
+        | FlattenError::Cut(_) => PyValueError::new_err(message),
         _ => SolverError::new_err(message),
     }
 }

@@ -1,11 +1,15 @@
 //! `flatten(V, F, …)`: the one-call flattening with the command line's options as
-//! keywords, returning the UVs and the report `surfmap flatten --report` writes.
+//! keywords, returning the UVs and the report `surfmap flatten --report` writes: one UV
+//! per vertex, or, when the call lets the surface be cut open (`cut`, `seams`,
+//! `max_distortion`), per-corner UVs as the command line's OBJ writes them.
 
-use numpy::PyArray2;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
-use surfmap::{Alpha, CoarseLevel, Cut, Energy, FlattenOptions, FlattenReport, Multilevel, Start};
+use pyo3::types::{PyDict, PyTuple};
+use surfmap::{
+    Alpha, CoarseLevel, Cut, Energy, FlattenOptions, FlattenReport, MaxDistortion, Multilevel,
+    Start, Uvs,
+};
 
 use crate::advice::{defect_message, option_message};
 use crate::arrays;
@@ -23,7 +27,15 @@ pub struct FlattenArgs {
     pub start: String,
     pub multilevel: String,
     pub coarse_vertices: Option<usize>,
-    pub fill_holes: bool,
+    /// `None`: filled when holes are not cut (`cut="auto"`), else not.
+    pub fill_holes: Option<bool>,
+    /// `"never"`, `"auto"` or `"holes"`; `None`: `"never"` unless `seams` or
+    /// `max_distortion` ask for cuts, then `"auto"`.
+    pub cut: Option<String>,
+    /// The caller's seams (vertex pairs joined by an edge) instead of the automatic cut.
+    pub seams: Option<Vec<[u32; 2]>>,
+    pub max_distortion: Option<f64>,
+    pub max_cut_rounds: usize,
     pub max_iters: usize,
     pub tolerance: f64,
     pub armijo_c: f64,
@@ -40,7 +52,11 @@ impl Default for FlattenArgs {
             start: "auto".into(),
             multilevel: "auto".into(),
             coarse_vertices: None,
-            fill_holes: false,
+            fill_holes: None,
+            cut: None,
+            seams: None,
+            max_distortion: None,
+            max_cut_rounds: surfmap::param::optcuts::DEFAULT_MAX_ROUNDS,
             max_iters: 200,
             tolerance: 1e-12,
             armijo_c: 0.5,
@@ -87,7 +103,7 @@ fn alpha(what: &str, a: [f64; 3]) -> PyResult<Alpha> {
 
 impl FlattenArgs {
     /// The keyword names, in signature order.
-    pub const NAMES: [&'static str; 12] = [
+    pub const NAMES: [&'static str; 16] = [
         "preset",
         "alpha",
         "energy",
@@ -96,6 +112,10 @@ impl FlattenArgs {
         "multilevel",
         "coarse_vertices",
         "fill_holes",
+        "cut",
+        "seams",
+        "max_distortion",
+        "max_cut_rounds",
         "max_iters",
         "tolerance",
         "armijo_c",
@@ -121,6 +141,10 @@ impl FlattenArgs {
                 "multilevel" => a.multilevel = value.extract().map_err(bad)?,
                 "coarse_vertices" => a.coarse_vertices = value.extract().map_err(bad)?,
                 "fill_holes" => a.fill_holes = value.extract().map_err(bad)?,
+                "cut" => a.cut = value.extract().map_err(bad)?,
+                "seams" => a.seams = seams(Some(&value))?,
+                "max_distortion" => a.max_distortion = value.extract().map_err(bad)?,
+                "max_cut_rounds" => a.max_cut_rounds = value.extract().map_err(bad)?,
                 "max_iters" => a.max_iters = value.extract().map_err(bad)?,
                 "tolerance" => a.tolerance = value.extract().map_err(bad)?,
                 "armijo_c" => a.armijo_c = value.extract().map_err(bad)?,
@@ -182,12 +206,15 @@ impl FlattenArgs {
             "mean_value" => Start::MeanValue,
             _ => Start::Auto { multilevel },
         };
-        // The arrays returned and the OBJ written have one UV per vertex: never cut
-        // (a surface that is not a disc, once holes are filled if asked, is refused).
+        let (fill_holes, cut) = self.cut_and_fill()?;
         let mut opts = FlattenOptions::new(energy)
             .with_start(start)
-            .with_fill_holes(self.fill_holes)
-            .with_cut(Cut::Never);
+            .with_fill_holes(fill_holes)
+            .with_cut(cut);
+        opts.max_distortion = self.max_distortion.map(|bound| MaxDistortion {
+            bound,
+            max_rounds: self.max_cut_rounds,
+        });
         opts.newton.max_iterations = self.max_iters;
         opts.newton.tolerance = self.tolerance;
         opts.newton.armijo_c = self.armijo_c;
@@ -197,8 +224,69 @@ impl FlattenArgs {
     }
 }
 
-/// Flattens a disc-topology mesh to the plane without flipped triangles (Litke's
-/// projected Newton, thesis §3.1) and reports the result.
+impl FlattenArgs {
+    /// The cut asked for: `"never"` (one UV per vertex; a surface that is not a disc,
+    /// once its holes are filled if asked, is refused), `"auto"` (holes filled unless
+    /// `fill_holes=False`, the rest cut open along seams) or `"holes"` (holes cut open
+    /// too). Unset, cutting options (`seams`, `max_distortion`) make it `"auto"`.
+    pub fn cut_mode(&self) -> PyResult<&'static str> {
+        let asks_for_cuts = self.seams.is_some() || self.max_distortion.is_some();
+        let Some(cut) = &self.cut else {
+            return Ok(if asks_for_cuts { "auto" } else { "never" });
+        };
+        let mode = choice("cut", cut, &["never", "auto", "holes"])?;
+        if mode == "never" && asks_for_cuts {
+            let what = if self.seams.is_some() {
+                "seams"
+            } else {
+                "max_distortion"
+            };
+            return Err(PyValueError::new_err(format!(
+                "{what} cuts the surface open, but cut=\"never\"; pass cut=\"auto\" (or leave cut unset): the result then has per-corner UVs (UV, FUV, report)"
+            )));
+        }
+        Ok(mode)
+    }
+
+    /// Whether the result is returned per corner (`(UV, FUV, report)`): the surface may
+    /// be cut.
+    pub fn per_corner(&self) -> PyResult<bool> {
+        Ok(self.cut_mode()? != "never")
+    }
+
+    /// Whether holes are filled for the solve, and the library's cut.
+    fn cut_and_fill(&self) -> PyResult<(bool, Cut)> {
+        let mode = self.cut_mode()?;
+        let fill_holes = match (mode, self.fill_holes) {
+            ("holes", Some(true)) => {
+                return Err(PyValueError::new_err(
+                    "fill_holes=True fills the holes that cut=\"holes\" opens with seams; give one of them",
+                ));
+            }
+            ("holes", _) => false,
+            ("auto", fill) => fill.unwrap_or(true),
+            (_, fill) => fill.unwrap_or(false),
+        };
+        let cut = match (&self.seams, mode) {
+            (Some(seams), _) => Cut::Along(seams.clone()),
+            (None, "never") => Cut::Never,
+            (None, _) => Cut::Auto,
+        };
+        Ok((fill_holes, cut))
+    }
+}
+
+/// Seams given as a (k, 2) integer array of vertex pairs (or None).
+pub fn seams(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Vec<[u32; 2]>>> {
+    match obj {
+        None => Ok(None),
+        Some(o) if o.is_none() => Ok(None),
+        Some(o) => arrays::edges(o, "seams").map(Some),
+    }
+}
+
+/// Flattens a mesh to the plane without flipped triangles (Litke's projected Newton,
+/// thesis §3.1) and reports the result.
 ///
 /// V: (n, 3) float array of vertex positions; F: (m, 3) integer array of
 /// counter-clockwise triangles. Keywords are the options of `surfmap flatten`:
@@ -207,21 +295,40 @@ impl FlattenArgs {
 /// ``energy`` ("litke", "sd", "mips", "arap"); ``from_alpha`` (continuation start);
 /// ``start`` ("auto", "lscm", "mean_value"); ``multilevel`` ("auto", "on", "off") and
 /// ``coarse_vertices``; ``fill_holes`` (fill all boundary loops but the longest for the
-/// solve; they stay open in the map); Newton's ``max_iters``, ``tolerance`` and
+/// solve; they stay open in the map); ``cut``, ``seams``, ``max_distortion`` and
+/// ``max_cut_rounds`` (below); Newton's ``max_iters``, ``tolerance`` and
 /// ``armijo_c``; ``normalize`` (return UVs scaled into [0, 1]²).
 ///
 /// Returns ``(UV, report)``: UV is an (n, 2) float64 array, one row per vertex, in the
 /// mesh's length units (vertices no triangle uses are at the origin); report is the
 /// dictionary of ``surfmap flatten --report`` (start, iterations, energy, measures, the
 /// Newton log, …; ``input`` is None). The solve releases the GIL, so threads flatten
-/// meshes in parallel.
+/// meshes in parallel. Without ``cut`` the surface is never cut open: a closed surface,
+/// one with handles, or one with holes (unless ``fill_holes=True``) raises ``MeshError``.
 ///
-/// The surface is never cut open along seams (the UVs are one per vertex): a closed
-/// surface or one with handles raises; ``surfmap flatten`` on the command line cuts it.
+/// **Cutting.** ``cut="auto"`` flattens any connected, orientable, manifold mesh as the
+/// command line does: holes are filled for the solve (unless ``fill_holes=False``), a
+/// closed or higher-genus surface is cut open into a disc along seams. ``cut="holes"``
+/// opens the holes with seams to the outer boundary instead of filling them.
+/// ``seams`` ((k, 2) integer array of vertex pairs joined by an edge) cuts along these
+/// edges instead of the automatic cut graph. ``max_distortion=D`` cuts the chart
+/// open where the distortion concentrates until its mean symmetric Dirichlet
+/// distortion (area-weighted mean of (σ1² + σ2² + σ1⁻² + σ2⁻²)/4 with UV area = 3D
+/// area; 1 for an isometry) is at most D, in at most ``max_cut_rounds`` rounds (the
+/// best map is returned either way; ``report["distortion_cuts"]["met"]`` says whether
+/// the bound holds). ``seams`` or ``max_distortion`` alone imply ``cut="auto"``.
 ///
-/// Raises ``MeshError`` when the mesh is not a disc (``err.defects`` lists why, each
-/// with its repair), ``ValueError`` for bad arrays or options, ``SolverError`` when the
-/// solve fails.
+/// With any of them the result is per corner, ``(UV, FUV, report)`` — as an OBJ file's
+/// ``vt`` and ``f v/vt``: UV is a (k, 2) float64 array (a vertex on a seam has one row
+/// per side), FUV an (m, 3) int64 array, corner ``j`` of triangle ``t`` having UV
+/// ``UV[FUV[t, j]]``. A surface that needed no cut gives one row per vertex and FUV
+/// equal to F. The seams are ``report["seams"]`` (``edges``: vertex pairs of V,
+/// ``length``, ``reason``), None when nothing was cut; ``report["plan"]`` says what was
+/// done and ``report["guarantee"]`` whether the map is bijective.
+///
+/// Raises ``MeshError`` when the mesh cannot be flattened as asked (``err.defects``
+/// lists why, each with its repair), ``ValueError`` for bad arrays, options or seams,
+/// ``SolverError`` when the solve fails.
 ///
 /// >>> import numpy as np, surfmap
 /// >>> V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0.2], [0, 1, 0]], dtype=float)
@@ -229,10 +336,16 @@ impl FlattenArgs {
 /// >>> UV, report = surfmap.flatten(V, F)
 /// >>> UV.shape, report["flipped_triangles"], report["converged"]
 /// ((4, 2), 0, True)
+/// >>> V = np.array([[0, 0, 1], [1, 0, 0], [0, 1, 0], [-1, 0, 0], [0, -1, 0], [0, 0, -1]], dtype=float)
+/// >>> F = np.array([[0, 1, 2], [0, 2, 3], [0, 3, 4], [0, 4, 1], [5, 2, 1], [5, 3, 2], [5, 4, 3], [5, 1, 4]])
+/// >>> UV, FUV, report = surfmap.flatten(V, F, cut="auto")  # a closed octahedron, cut open
+/// >>> FUV.shape, len(UV) > len(V), report["plan"], report["guarantee"]
+/// ((8, 3), True, 'cut open along seams (closed, genus 0)', 'bijective')
 #[pyfunction]
 #[pyo3(signature = (V, F, *, preset="balanced", alpha=None, energy="litke", from_alpha=None,
-    start="auto", multilevel="auto", coarse_vertices=None, fill_holes=false, max_iters=200,
-    tolerance=1e-12, armijo_c=0.5, normalize=false))]
+    start="auto", multilevel="auto", coarse_vertices=None, fill_holes=None, cut=None,
+    seams=None, max_distortion=None, max_cut_rounds=30, max_iters=200, tolerance=1e-12,
+    armijo_c=0.5, normalize=false))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub fn flatten<'py>(
     py: Python<'py>,
@@ -245,12 +358,16 @@ pub fn flatten<'py>(
     start: &str,
     multilevel: &str,
     coarse_vertices: Option<usize>,
-    fill_holes: bool,
+    fill_holes: Option<bool>,
+    cut: Option<String>,
+    seams: Option<&Bound<'py, PyAny>>,
+    max_distortion: Option<f64>,
+    max_cut_rounds: usize,
     max_iters: usize,
     tolerance: f64,
     armijo_c: f64,
     normalize: bool,
-) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyDict>)> {
+) -> PyResult<Bound<'py, PyTuple>> {
     let args = FlattenArgs {
         preset: preset.into(),
         alpha: weights("alpha", alpha)?,
@@ -260,6 +377,10 @@ pub fn flatten<'py>(
         multilevel: multilevel.into(),
         coarse_vertices,
         fill_holes,
+        cut,
+        seams: self::seams(seams)?,
+        max_distortion,
+        max_cut_rounds,
         max_iters,
         tolerance,
         armijo_c,
@@ -276,6 +397,15 @@ pub fn flatten<'py>(
             .map_err(crate::errors::measure_error)?;
         to_dict(py, &report)?
     };
-    let uvs = if normalize { r.normalized_uvs() } else { r.uvs };
-    Ok((arrays::array(py, uvs), report))
+    let (uv, fuv) = match r.texture_coordinates(normalize) {
+        Uvs::PerVertex(coords) => (coords, mesh.triangles),
+        Uvs::PerCorner { coords, indices } => (coords, indices),
+    };
+    let uv = arrays::array(py, uv).into_any();
+    if args.per_corner()? {
+        let fuv = arrays::triangle_array(py, &fuv).into_any();
+        PyTuple::new(py, [uv, fuv, report.into_any()])
+    } else {
+        PyTuple::new(py, [uv, report.into_any()])
+    }
 }

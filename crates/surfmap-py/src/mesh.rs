@@ -42,7 +42,9 @@ pub fn inspect<'py>(
 ///
 /// The thesis's angle, area and length distortion (min / mean / max), symmetric
 /// Dirichlet, conformal and area distortion, Sander's stretch, flipped triangles, UV
-/// charts and the global overlap of the boundary. UV: (n, 2) floats, one per vertex.
+/// charts and the global overlap of the boundary. UV: (n, 2) floats, one per vertex;
+/// or, with ``FUV`` ((m, 3) integers, as ``flatten(..., cut="auto")`` returns), any
+/// number of rows, corner ``j`` of triangle ``t`` having UV ``UV[FUV[t, j]]``.
 /// ``normalize`` scales the UVs to the surface's area first (as the command does
 /// unless ``--raw``); ``overlap`` computes the boundary crossings and overlap area.
 ///
@@ -53,25 +55,49 @@ pub fn inspect<'py>(
 /// >>> round(m["measures"]["angle"]["max"], 12), m["flipped_triangles"]
 /// (1.0, 0)
 #[pyfunction]
-#[pyo3(signature = (V, F, UV, *, normalize=true, overlap=true))]
+#[pyo3(signature = (V, F, UV, FUV=None, *, normalize=true, overlap=true))]
 #[allow(non_snake_case)]
 pub fn measure<'py>(
     py: Python<'py>,
     V: &Bound<'py, PyAny>,
     F: &Bound<'py, PyAny>,
     UV: &Bound<'py, PyAny>,
+    FUV: Option<&Bound<'py, PyAny>>,
     normalize: bool,
     overlap: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let mesh = arrays::mesh(V, F)?;
-    let uvs = arrays::uvs(UV, "UV", mesh.num_vertices())?;
+    let uvs = texture_coordinates(&mesh, UV, FUV)?;
     let options = MeasureOptions { normalize, overlap };
+    let (p, t) = (&mesh.positions, &mesh.triangles);
     let report = py
-        .detach(|| {
-            surfmap::distortion_report_per_vertex(&mesh.positions, &mesh.triangles, &uvs, &options)
+        .detach(|| match &uvs {
+            Uvs::PerVertex(uvs) => surfmap::distortion_report_per_vertex(p, t, uvs, &options),
+            Uvs::PerCorner { coords, indices } => {
+                let corners = surfmap::measure::corner_uvs_from_indexed(t.len(), coords, indices)?;
+                surfmap::distortion_report(p, t, &corners, &options)
+            }
         })
         .map_err(measure_error)?;
     to_dict(py, &report)
+}
+
+/// The texture coordinates of `mesh` given as `UV` (one per vertex) or `UV` and `FUV`
+/// (per corner), checked.
+#[allow(non_snake_case)]
+fn texture_coordinates(
+    mesh: &TriMesh,
+    UV: &Bound<'_, PyAny>,
+    FUV: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Uvs> {
+    match FUV.filter(|f| !f.is_none()) {
+        None => Ok(Uvs::PerVertex(arrays::uvs(UV, "UV", mesh.num_vertices())?)),
+        Some(fuv) => {
+            let coords = arrays::uv_rows(UV, "UV")?;
+            let indices = arrays::uv_triangles(fuv, "FUV", coords.len(), mesh.triangles.len())?;
+            Ok(Uvs::PerCorner { coords, indices })
+        }
+    }
 }
 
 /// Reads a mesh file (OBJ, OFF or PLY, chosen by the extension; polygons are split
@@ -99,9 +125,11 @@ pub fn read_mesh(py: Python<'_>, path: PathBuf) -> PyResult<arrays::MeshArrays<'
     ))
 }
 
-/// Writes an OBJ file: vertices ``V``, triangles ``F`` and, when given, one texture
-/// coordinate ``vt`` per vertex from ``UV`` (n, 2). Written atomically (a temporary
-/// file renamed into place); the numbers are written exactly (shortest round-trip form).
+/// Writes an OBJ file: vertices ``V``, triangles ``F`` and, when given, the texture
+/// coordinates ``vt``: one per vertex from ``UV`` (n, 2), or, with ``FUV`` ((m, 3)
+/// integers: the result of ``flatten(..., cut="auto")``), the rows of ``UV`` with faces
+/// ``f v/vt`` indexing them per corner. Written atomically (a temporary file renamed into
+/// place); the numbers are written exactly (shortest round-trip form).
 ///
 /// >>> import numpy as np, os, tempfile, surfmap
 /// >>> V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], dtype=float)
@@ -111,7 +139,7 @@ pub fn read_mesh(py: Python<'_>, path: PathBuf) -> PyResult<arrays::MeshArrays<'
 /// >>> bool((W == V).all()), G.tolist()
 /// (True, [[0, 1, 2]])
 #[pyfunction]
-#[pyo3(signature = (path, V, F, UV=None))]
+#[pyo3(signature = (path, V, F, UV=None, FUV=None))]
 #[allow(non_snake_case)]
 pub fn write_obj(
     py: Python<'_>,
@@ -119,10 +147,17 @@ pub fn write_obj(
     V: &Bound<'_, PyAny>,
     F: &Bound<'_, PyAny>,
     UV: Option<&Bound<'_, PyAny>>,
+    FUV: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<()> {
     let mut mesh: TriMesh = arrays::mesh(V, F)?;
-    if let Some(uv) = UV {
-        mesh.uvs = Some(Uvs::PerVertex(arrays::uvs(uv, "UV", mesh.num_vertices())?));
+    match UV.filter(|uv| !uv.is_none()) {
+        Some(uv) => mesh.uvs = Some(texture_coordinates(&mesh, uv, FUV)?),
+        None if FUV.is_some_and(|f| !f.is_none()) => {
+            return Err(pyo3::exceptions::PyValueError::new_err(
+                "FUV indexes the rows of UV; give UV too",
+            ));
+        }
+        None => {}
     }
     py.detach(|| surfmap::write_obj(&path, &mesh, None))
         .map_err(write_error)

@@ -71,6 +71,19 @@ def read_vt(path) -> np.ndarray:
         return np.array([[float(x) for x in line.split()[1:3]] for line in f if line.startswith("vt ")])
 
 
+def read_corner_uvs(path):
+    """The texture coordinates of an OBJ file per corner: ``(UV, FUV)``, the ``vt`` rows
+    and, per face, the (0-based) ``vt`` index of each corner (``f v/vt …``)."""
+    UV, FUV = [], []
+    with open(path) as f:
+        for line in f:
+            if line.startswith("vt "):
+                UV.append([float(x) for x in line.split()[1:3]])
+            elif line.startswith("f "):
+                FUV.append([int(c.split("/")[1]) - 1 for c in line.split()[1:]])
+    return np.array(UV), np.array(FUV)
+
+
 def without_times(value, drop=("input",)):
     """A report tree without wall-clock fields (``time*`` keys) and the keys ``drop``."""
     if isinstance(value, dict):

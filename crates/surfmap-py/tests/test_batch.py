@@ -13,24 +13,10 @@ import numpy as np
 import pytest
 
 import surfmap
-from conftest import read_vt, run_cli, wavy_grid, without_times
+from conftest import read_corner_uvs, read_vt, run_cli, wavy_grid, without_times
 
-NUMBERS = [
-    "vertices",
-    "triangles",
-    "start",
-    "iterations",
-    "converged",
-    "energy",
-    "symmetric_dirichlet",
-    "angle_mean",
-    "angle_max",
-    "area_min",
-    "area_max",
-    "flipped_triangles",
-    "boundary_overlap",
-    "holes_filled",
-]
+# Every column but the files, the time and the error: what the flattening computed.
+NUMBERS = [c for c in surfmap.BATCH_COLUMNS if c not in ("input", "status", "output", "report", "time_s", "error")]
 
 
 @pytest.fixture
@@ -122,16 +108,44 @@ def test_the_command_line_batch_gives_the_same_table(cli, folder, tmp_path):
     for t, row in zip(table, rows):
         assert t["input"] == row["input"] and t["status"] == row["status"]
         for column in NUMBERS:
-            value = row[column]
-            if value is None:
-                expected = ""
-            elif isinstance(value, bool):
-                expected = str(value).lower()
-            else:
-                expected = repr(value) if isinstance(value, float) else str(value)
-            assert t[column] == expected, column
+            assert same_cell(t[column], row[column]), (column, t[column], row[column])
         if row["status"] == "ok":
             assert read_vt(t["output"]).tolist() == read_vt(row["output"]).tolist()
+
+
+def same_cell(cell, value):
+    """Whether a cell of the command line's summary.csv holds a row's value: empty for
+    None, true/false, floats exactly (Rust writes 0.0 as 0), the rest as text."""
+    if value is None:
+        return cell == ""
+    if isinstance(value, bool):
+        return cell == str(value).lower()
+    if isinstance(value, float):
+        return float(cell) == value
+    return cell == str(value)
+
+
+def test_cutting_batches_give_the_command_lines_table(cli, data, tmp_path):
+    """cut and max_distortion reach every mesh of a batch: a closed sphere cut open, and
+    the distortion columns, the same as the command line's (which cuts by default)."""
+    paths = [data / "sphere.obj", data / "hemisphere.obj", data / "nefertiti_small.off"]
+    options = {"cut": "auto", "max_distortion": 1.05, "max_cut_rounds": 2}
+    rows = surfmap.flatten_many(paths, tmp_path / "py", workers=2, **options)
+    flags = ["--max-distortion", "1.05", "--max-cut-rounds", "2"]
+    run_cli(cli, "flatten", *paths, "-o", f"{tmp_path / 'cli'}/", "--jobs", "2", "--quiet", *flags)
+    header, table = read_table(tmp_path / "cli" / "summary.csv")
+    assert header == surfmap.BATCH_COLUMNS
+    assert rows[0]["plan"].startswith("cut open along seams (closed, genus 0)")
+    assert all(r["distortion_bound"] == 1.05 for r in rows)
+    for t, row, path in zip(table, rows, paths):
+        assert row["status"] == "ok", row["error"]
+        for column in NUMBERS:
+            assert same_cell(t[column], row[column]), (column, t[column], row[column])
+        UV, FUV, report = surfmap.flatten(*surfmap.read_mesh(path), **options)
+        assert row["seam_edges"] == len((report["seams"] or {"edges": []})["edges"])
+        for output in (row["output"], t["output"]):
+            uv, fuv = read_corner_uvs(output)
+            assert np.abs(uv - UV).max() <= 1e-12 and np.array_equal(fuv, FUV)
 
 
 def test_progress_line(folder, tmp_path, capsys):

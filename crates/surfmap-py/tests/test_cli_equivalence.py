@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import surfmap
-from conftest import key_paths, read_vt, run_cli, wavy_grid, without_times
+from conftest import key_paths, read_corner_uvs, read_vt, run_cli, wavy_grid, without_times
 
 # (mesh in the shared data folder, the command line's flags, the same as keywords)
 CASES = [
@@ -36,12 +36,20 @@ CASES = [
 def compare_with_cli(cli, tmp_path, mesh_path, flags, options):
     obj, rep = tmp_path / "cli.obj", tmp_path / "cli.json"
     run_cli(cli, "flatten", mesh_path, "-o", obj, "--report", rep, "--quiet", *flags)
-    cli_uv, cli_report = read_vt(obj), json.loads(rep.read_text())
+    cli_report = json.loads(rep.read_text())
 
     V, F = surfmap.read_mesh(mesh_path)
-    UV, report = surfmap.flatten(V, F, **options)
+    if any(k in options for k in ("cut", "seams", "max_distortion")):
+        # Per corner: the vt rows and the f v/vt indices of the command line's OBJ.
+        UV, FUV, report = surfmap.flatten(V, F, **options)
+        cli_uv, cli_fuv = read_corner_uvs(obj)
+        assert np.array_equal(FUV, cli_fuv)
+    else:
+        UV, report = surfmap.flatten(V, F, **options)
+        cli_uv = read_vt(obj)
+        assert UV.shape == (len(V), 2)
 
-    assert UV.shape == cli_uv.shape == (len(V), 2)
+    assert UV.shape == cli_uv.shape
     assert np.abs(UV - cli_uv).max() <= 1e-12
     assert report["input"] is None and cli_report["input"] == str(mesh_path)
     # The same fields, in the same order, with the same values.
@@ -64,6 +72,43 @@ def test_flatten_matches_the_command_line(cli, data, tmp_path, name, flags, opti
     if "multilevel" in options:
         assert report["start"] == "multilevel"
         assert report["multilevel"]["coarse_vertices"] <= 300
+
+
+# Cutting: the command line cuts by default; the package with cut="auto" (or seams,
+# max_distortion), returning the per-corner UVs the command line's OBJ holds.
+CUT_CASES = [
+    ("sphere.obj", [], {"cut": "auto"}),  # closed, genus 0
+    ("three_holes.off", [], {"cut": "auto"}),  # closed, genus 3
+    ("halftunnel.off", [], {"cut": "auto"}),  # holes filled: FUV is F
+    ("halftunnel.off", ["--cut-holes"], {"cut": "holes"}),
+    ("hemisphere.obj", ["--max-distortion", "1.02"], {"max_distortion": 1.02}),
+    (
+        "sphere.obj",
+        ["--max-distortion", "1.05", "--max-cut-rounds", "3"],
+        {"max_distortion": 1.05, "max_cut_rounds": 3},
+    ),
+]
+
+
+@pytest.mark.parametrize("name,flags,options", CUT_CASES, ids=[f"{c[0]}{''.join(c[1])}" for c in CUT_CASES])
+def test_cutting_matches_the_command_line(cli, data, tmp_path, name, flags, options):
+    report = compare_with_cli(cli, tmp_path, data / name, flags, options)
+    assert report["flipped_triangles"] == 0
+    if "max_distortion" in options:
+        assert report["distortion_cuts"]["bound"] == options["max_distortion"]
+
+
+def test_the_callers_seams_match_the_command_lines_cut_along(cli, data, tmp_path):
+    mesh = data / "sphere.obj"
+    V, F = surfmap.read_mesh(mesh)
+    _, _, first = surfmap.flatten(V, F, cut="auto")
+    # The automatic seams given back as the caller's (0-based pairs for --cut-along).
+    seams = np.array(first["seams"]["edges"])
+    path = tmp_path / "seams.txt"
+    path.write_text("".join(f"{a} {b}\n" for a, b in seams))
+    report = compare_with_cli(cli, tmp_path, mesh, ["--cut-along", path], {"seams": seams})
+    assert report["plan"] == "cut open along the given seams"
+    assert report["seams"]["edges"] == first["seams"]["edges"]
 
 
 def test_flatten_matches_the_command_line_on_a_generated_mesh(cli, tmp_path):

@@ -52,6 +52,18 @@ def test_the_readme_python_example_runs_as_written(tmp_path, monkeypatch, capsys
     assert (tmp_path / "flat" / "summary.csv").is_file()
 
 
+def test_the_package_readme_cutting_example_runs_as_written(tmp_path, monkeypatch, capsys):
+    readme = (REPO / "crates" / "surfmap-py" / "README.md").read_text()
+    code = re.search(r"```python\n(.*?)```", readme, re.S).group(1)
+    monkeypatch.chdir(tmp_path)
+    exec(compile(code, "crates/surfmap-py/README.md", "exec"), {})
+    printed = capsys.readouterr().out.split()
+    assert " ".join(printed[:7]) == "cut open along seams (closed, genus 1)"
+    assert int(printed[7]) > 0 and printed[8] == "bijective"
+    text = (tmp_path / "torus_flat.obj").read_text()
+    assert "f 1/" in text and text.count("\nvt ") > text.count("\nv ")
+
+
 def stub_functions():
     tree = ast.parse(STUB.read_text())
     return {n.name: n for n in tree.body if isinstance(n, ast.FunctionDef)}

@@ -194,12 +194,15 @@ def test_file_errors(tmp_path):
     assert os.listdir(tmp_path) == ["bad.off"]
 
 
-def test_a_closed_surface_is_refused_not_cut(data):
-    """flatten returns one UV per vertex, so it never cuts: a closed surface is refused
-    with a remedy that says so (the command line cuts it along seams)."""
+def test_a_closed_surface_is_refused_unless_cut(data):
+    """Without cut, flatten returns one UV per vertex, so it never cuts: a closed surface
+    is refused with the keyword that cuts it (not the command line's flag); with it, the
+    surface is cut open as the command line cuts it."""
     V, F = surfmap.read_mesh(data / "sphere.obj")
     assert surfmap.inspect(V, F)["flatten_cuts"]  # what `surfmap flatten` would do
     with pytest.raises(surfmap.MeshError) as e:
         surfmap.flatten(V, F)
     assert [d["kind"] for d in e.value.defects] == ["closed_surface"]
-    assert "does not cut" in str(e.value) and "--" not in str(e.value)
+    assert 'pass cut="auto"' in str(e.value) and "--" not in str(e.value)
+    UV, FUV, report = surfmap.flatten(V, F, cut="auto")
+    assert report["plan"] == "cut open along seams (closed, genus 0)" and FUV.shape == F.shape

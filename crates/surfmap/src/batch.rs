@@ -15,8 +15,9 @@ use serde::Serialize;
 
 use crate::report::FlattenReport;
 
-/// One mesh of a batch: what was written and the headline numbers of its report, or
-/// why it failed. Numbers are `None` for a failed mesh.
+/// One mesh of a batch: what was written, what was done to it, and the headline numbers
+/// of its report (the same values as in its `NAME.json`), or why it failed. Numbers are
+/// `None` for a failed mesh.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct BatchRow {
     /// The input file, as given.
@@ -29,24 +30,46 @@ pub struct BatchRow {
     pub report: Option<String>,
     pub vertices: Option<usize>,
     pub triangles: Option<usize>,
+    /// What was done around the solve ([`FlattenReport::plan`]): `disc as is`, `fill 2
+    /// holes`, `cut open along seams (closed, genus 0)`, `…, then cut open to lower the
+    /// distortion`.
+    pub plan: Option<String>,
     /// Initial map used (`lscm`, `mean_value`, `given`, `multilevel`).
     pub start: Option<String>,
     pub iterations: Option<usize>,
     pub converged: Option<bool>,
     /// Final energy per unit 3D area.
     pub energy: Option<f64>,
-    /// Symmetric Dirichlet energy, area-weighted mean (isometry = 4).
+    /// Symmetric Dirichlet energy `σ1² + σ2² + σ1⁻² + σ2⁻²` (isometry = 4): area-weighted
+    /// mean and maximum over the triangles, after the UVs are scaled to the 3D area.
     pub symmetric_dirichlet: Option<f64>,
+    pub symmetric_dirichlet_max: Option<f64>,
     /// Thesis angle distortion `σ1/σ2`: area-weighted mean and maximum (ideal 1).
     pub angle_mean: Option<f64>,
     pub angle_max: Option<f64>,
-    /// Thesis area distortion `σ1σ2` after scaling: minimum and maximum (ideal 1).
+    /// Thesis area distortion `σ1σ2` after scaling: minimum, area-weighted mean and
+    /// maximum (ideal 1).
     pub area_min: Option<f64>,
+    pub area_mean: Option<f64>,
     pub area_max: Option<f64>,
     pub flipped_triangles: Option<usize>,
     /// Whether the boundary of the map crosses itself.
     pub boundary_overlap: Option<bool>,
+    /// `bijective` or `locally_injective` ([`crate::Guarantee`]).
+    pub guarantee: Option<String>,
     pub holes_filled: Option<usize>,
+    /// Seam edges of the map and their 3D length, all cuts together (0 for a map that
+    /// was not cut open).
+    pub seam_edges: Option<usize>,
+    pub seam_length: Option<f64>,
+    /// The distortion-driven cutting ([`crate::FlattenOptions::max_distortion`]; all
+    /// empty without it): the bound on the mean symmetric Dirichlet distortion (1 for an
+    /// isometry: the mean of [`Self::symmetric_dirichlet`]'s density over 4), whether the
+    /// map meets it, the seam paths the map has from it and their 3D length.
+    pub distortion_bound: Option<f64>,
+    pub distortion_bound_met: Option<bool>,
+    pub distortion_cuts: Option<usize>,
+    pub distortion_seam_length: Option<f64>,
     /// Wall-clock seconds for this mesh: reading, flattening, measuring, writing.
     pub time_s: f64,
     /// Why the mesh failed (the error message, remedy included).
@@ -55,30 +78,41 @@ pub struct BatchRow {
 
 impl BatchRow {
     /// The column names of [`BatchRow::csv_record`], in order (the field names).
-    pub const CSV_HEADER: [&'static str; 20] = [
+    pub const CSV_HEADER: [&'static str; 30] = [
         "input",
         "status",
         "output",
         "report",
         "vertices",
         "triangles",
+        "plan",
         "start",
         "iterations",
         "converged",
         "energy",
         "symmetric_dirichlet",
+        "symmetric_dirichlet_max",
         "angle_mean",
         "angle_max",
         "area_min",
+        "area_mean",
         "area_max",
         "flipped_triangles",
         "boundary_overlap",
+        "guarantee",
         "holes_filled",
+        "seam_edges",
+        "seam_length",
+        "distortion_bound",
+        "distortion_bound_met",
+        "distortion_cuts",
+        "distortion_seam_length",
         "time_s",
         "error",
     ];
 
-    /// A mesh flattened and written to `output`, its report to `report_file`.
+    /// A mesh flattened and written to `output`, its report to `report_file`: the
+    /// report's own numbers.
     pub fn done(
         input: &Path,
         output: &Path,
@@ -87,6 +121,10 @@ impl BatchRow {
         time_s: f64,
     ) -> Self {
         let m = &report.measures;
+        let cuts = report.distortion_cuts;
+        let as_text = |v: serde_json::Result<serde_json::Value>| {
+            v.ok().and_then(|v| v.as_str().map(str::to_owned))
+        };
         Self {
             input: input.display().to_string(),
             status: "ok",
@@ -94,20 +132,33 @@ impl BatchRow {
             report: Some(report_file.display().to_string()),
             vertices: Some(report.vertices),
             triangles: Some(report.triangles),
-            start: serde_json::to_value(report.start)
-                .ok()
-                .and_then(|v| v.as_str().map(str::to_owned)),
+            plan: Some(report.plan.clone()),
+            start: as_text(serde_json::to_value(report.start)),
             iterations: Some(report.iterations),
             converged: Some(report.converged),
             energy: Some(report.energy),
             symmetric_dirichlet: Some(report.symmetric_dirichlet),
+            symmetric_dirichlet_max: Some(m.symmetric_dirichlet_max),
             angle_mean: Some(m.measures.angle.mean),
             angle_max: Some(m.measures.angle.max),
             area_min: Some(m.measures.area.min),
+            area_mean: Some(m.measures.area.mean),
             area_max: Some(m.measures.area.max),
             flipped_triangles: Some(report.flipped_triangles),
             boundary_overlap: Some(m.boundary_overlap.self_intersecting),
+            guarantee: as_text(serde_json::to_value(report.guarantee)),
             holes_filled: Some(report.holes_filled),
+            seam_edges: Some(report.seams.map_or(0, |s| s.edges.len())),
+            seam_length: Some(report.seams.map_or(0.0, |s| s.length)),
+            distortion_bound: cuts.map(|c| c.bound),
+            distortion_bound_met: cuts.map(|c| c.met),
+            distortion_cuts: cuts.map(|c| {
+                c.history[..c.best_round]
+                    .iter()
+                    .map(|r| r.from_vertices.len())
+                    .sum()
+            }),
+            distortion_seam_length: cuts.map(|c| c.seam_length_added),
             time_s,
             error: None,
         }
@@ -122,18 +173,28 @@ impl BatchRow {
             report: None,
             vertices: None,
             triangles: None,
+            plan: None,
             start: None,
             iterations: None,
             converged: None,
             energy: None,
             symmetric_dirichlet: None,
+            symmetric_dirichlet_max: None,
             angle_mean: None,
             angle_max: None,
             area_min: None,
+            area_mean: None,
             area_max: None,
             flipped_triangles: None,
             boundary_overlap: None,
+            guarantee: None,
             holes_filled: None,
+            seam_edges: None,
+            seam_length: None,
+            distortion_bound: None,
+            distortion_bound_met: None,
+            distortion_cuts: None,
+            distortion_seam_length: None,
             time_s,
             error: Some(error),
         }
@@ -146,37 +207,48 @@ impl BatchRow {
 
     /// The row's values as CSV fields, in the order of [`BatchRow::CSV_HEADER`]:
     /// empty for `None`, floats in their shortest exact form, text quoted when needed
-    /// (an error message may span lines: a list of defects).
+    /// (an error message may span lines: a list of defects; a plan has commas).
     pub fn csv_record(&self) -> String {
         fn opt<T: ToString>(v: &Option<T>) -> String {
             v.as_ref().map(T::to_string).unwrap_or_default()
         }
-        [
+        let fields: [String; Self::CSV_HEADER.len()] = [
             self.input.clone(),
             self.status.to_owned(),
             opt(&self.output),
             opt(&self.report),
             opt(&self.vertices),
             opt(&self.triangles),
+            opt(&self.plan),
             opt(&self.start),
             opt(&self.iterations),
             opt(&self.converged),
             opt(&self.energy),
             opt(&self.symmetric_dirichlet),
+            opt(&self.symmetric_dirichlet_max),
             opt(&self.angle_mean),
             opt(&self.angle_max),
             opt(&self.area_min),
+            opt(&self.area_mean),
             opt(&self.area_max),
             opt(&self.flipped_triangles),
             opt(&self.boundary_overlap),
+            opt(&self.guarantee),
             opt(&self.holes_filled),
+            opt(&self.seam_edges),
+            opt(&self.seam_length),
+            opt(&self.distortion_bound),
+            opt(&self.distortion_bound_met),
+            opt(&self.distortion_cuts),
+            opt(&self.distortion_seam_length),
             self.time_s.to_string(),
             opt(&self.error),
-        ]
-        .iter()
-        .map(|f| csv_field(f))
-        .collect::<Vec<_>>()
-        .join(",")
+        ];
+        fields
+            .iter()
+            .map(|f| csv_field(f))
+            .collect::<Vec<_>>()
+            .join(",")
     }
 }
 
@@ -289,6 +361,86 @@ pub fn run(
 mod tests {
     use super::*;
 
+    /// The table's columns are the row's fields, in order: the dictionaries the Python
+    /// package returns and the CSV lines have the same names.
+    #[test]
+    fn the_csv_columns_are_the_fields() {
+        let row = BatchRow::failed(Path::new("m.obj"), "bad".into(), 1.0);
+        let value = serde_json::to_value(&row).unwrap();
+        assert_eq!(value.as_object().unwrap().len(), BatchRow::CSV_HEADER.len());
+        // The serialized text keeps the fields' order (what Python's dictionaries get).
+        let text = serde_json::to_string(&row).unwrap();
+        let at: Vec<usize> = BatchRow::CSV_HEADER
+            .iter()
+            .map(|name| text.find(&format!("\"{name}\":")).expect(name))
+            .collect();
+        assert!(at.windows(2).all(|w| w[0] < w[1]), "{text}");
+    }
+
+    /// A cone cut for a distortion bound: one generator from the apex to the rim unrolls
+    /// it (one cut, the slant height long, 12 edges for 12 rings); the row says so and
+    /// repeats its report's numbers.
+    #[test]
+    fn a_row_says_what_was_done_and_repeats_the_report() {
+        use crate::mesh::validate::Defect;
+        let (radius, height) = (1.0, 3.0);
+        let mesh = crate::mesh::generate::cone(radius, height, 12, 48);
+        let options = crate::FlattenOptions::default().with_max_distortion(1.01);
+        let r = crate::flatten(&mesh, &options).unwrap();
+        let report = FlattenReport::measure(None, &mesh, &r, Defect::message).unwrap();
+        let row = BatchRow::done(
+            Path::new("cone.obj"),
+            Path::new("out/cone.obj"),
+            Path::new("out/cone.json"),
+            &report,
+            0.5,
+        );
+        assert_eq!(
+            row.plan.as_deref(),
+            Some("cut open to lower the distortion")
+        );
+        assert_eq!(row.seam_edges, Some(12));
+        let slant = radius.hypot(height);
+        assert!((row.seam_length.unwrap() - slant).abs() < 1e-12);
+        assert_eq!(row.distortion_seam_length, row.seam_length);
+        assert_eq!(row.distortion_cuts, Some(1));
+        assert_eq!(row.distortion_bound, Some(1.01));
+        assert_eq!(row.distortion_bound_met, Some(true));
+        assert_eq!(row.guarantee.as_deref(), Some("bijective"));
+        assert_eq!(row.holes_filled, Some(0));
+        // The measures, as an independent measurement of the map's corners gives them.
+        let again = crate::distortion_report(
+            &mesh.positions,
+            &mesh.triangles,
+            &r.corner_uvs(&mesh.triangles),
+            &crate::MeasureOptions::default(),
+        )
+        .unwrap();
+        assert_eq!(row.symmetric_dirichlet, Some(again.symmetric_dirichlet));
+        assert_eq!(
+            row.symmetric_dirichlet_max,
+            Some(again.symmetric_dirichlet_max)
+        );
+        assert_eq!(row.area_mean, Some(again.measures.area.mean));
+        assert!(row.symmetric_dirichlet_max >= row.symmetric_dirichlet);
+        // The bound is on the mean over 4 (an isometry's density is 4).
+        assert!(row.symmetric_dirichlet.unwrap() / 4.0 <= 1.01);
+
+        // A disc as is: no seam, no distortion columns.
+        let disc = crate::mesh::generate::bumpy_disc(6, 0.3);
+        let r = crate::flatten(&disc, &crate::FlattenOptions::default()).unwrap();
+        let report = FlattenReport::measure(None, &disc, &r, Defect::message).unwrap();
+        let row = BatchRow::done(Path::new("d"), Path::new("o"), Path::new("j"), &report, 0.1);
+        assert_eq!(row.plan.as_deref(), Some("disc as is"));
+        assert_eq!((row.seam_edges, row.seam_length), (Some(0), Some(0.0)));
+        assert_eq!((row.distortion_bound, row.distortion_cuts), (None, None));
+        let fields = row.csv_record();
+        assert!(
+            fields.contains(",disc as is,") && fields.contains(",bijective,"),
+            "{fields}"
+        );
+    }
+
     #[test]
     fn output_names_are_unique_stems() {
         let inputs: Vec<PathBuf> = ["a/x.obj", "b/x.off", "y.ply", "c/x.obj", "x-2.obj"]
@@ -311,9 +463,10 @@ mod tests {
         assert_eq!(fields.len(), BatchRow::CSV_HEADER.len());
         assert_eq!(fields[0], "dir,with comma/m.obj");
         assert_eq!(fields[1], "failed");
-        assert_eq!(fields[18], "0.25");
-        assert_eq!(fields[19], row.error.as_deref().unwrap());
-        assert!(fields[2..18].iter().all(String::is_empty));
+        let n = BatchRow::CSV_HEADER.len();
+        assert_eq!(fields[n - 2], "0.25");
+        assert_eq!(fields[n - 1], row.error.as_deref().unwrap());
+        assert!(fields[2..n - 2].iter().all(String::is_empty));
     }
 
     /// A minimal RFC 4180 reader for one record (the test's oracle).

@@ -1,8 +1,10 @@
 """Variational surface maps on numpy arrays.
 
-Flip-free flattening of disc-like triangle meshes (N. Litke, *Variational Methods in
-Surface Parameterization*, 2005), distortion measures and geometry images; batches of
-mesh files on a thread pool (``flatten_many``) or a cluster (``surfmap.distributed``).
+Flip-free flattening of triangle meshes (N. Litke, *Variational Methods in Surface
+Parameterization*, 2005): discs as they are, and with ``cut="auto"`` closed, holed and
+higher-genus surfaces cut open along seams (per-corner UVs); distortion measures and
+geometry images; batches of mesh files on a thread pool (``flatten_many``) or a cluster
+(``surfmap.distributed``).
 
 Meshes are numpy arrays: ``V`` (n, 3) floats, one vertex position per row, and ``F``
 (m, 3) integers, one counter-clockwise triangle per row. Reports are the dictionaries
@@ -108,7 +110,9 @@ def flatten_many(
     ``workers``: meshes flattened at once, and the threads used in total (None: one
     per core). ``progress``: True draws a progress line on stderr; a callable is called
     with each row as its mesh finishes (from a worker thread). ``options``: the
-    keywords of ``flatten`` (``preset``, ``alpha``, ``fill_holes``, ``normalize``, …).
+    keywords of ``flatten`` (``preset``, ``alpha``, ``fill_holes``, ``cut``,
+    ``max_distortion``, ``normalize``, …); with ``cut`` the OBJ files have per-corner
+    UVs, split along the seams.
 
     The same as ``surfmap flatten A B … -o OUTDIR/ --jobs WORKERS`` on the command
     line, which writes the same table.

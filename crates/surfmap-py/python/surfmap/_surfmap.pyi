@@ -32,6 +32,7 @@ def measure(
     V: FloatArray,
     F: IndexArray,
     UV: FloatArray,
+    FUV: Optional[IndexArray] = None,
     *,
     normalize: bool = True,
     overlap: bool = True,
@@ -47,12 +48,21 @@ def flatten(
     start: Literal["auto", "lscm", "mean_value"] = "auto",
     multilevel: Literal["auto", "on", "off"] = "auto",
     coarse_vertices: Optional[int] = None,
-    fill_holes: bool = False,
+    fill_holes: Optional[bool] = None,
+    cut: Optional[Literal["never", "auto", "holes"]] = None,
+    seams: Optional[IndexArray] = None,
+    max_distortion: Optional[float] = None,
+    max_cut_rounds: int = 30,
     max_iters: int = 200,
     tolerance: float = 1e-12,
     armijo_c: float = 0.5,
     normalize: bool = False,
-) -> Tuple[npt.NDArray[np.float64], Report]: ...
+) -> Union[
+    # Without cut, seams or max_distortion: (UV, report), one UV per vertex.
+    Tuple[npt.NDArray[np.float64], Report],
+    # With them: (UV, FUV, report), per-corner UVs (UV[FUV[t, j]] for corner j of F[t]).
+    Tuple[npt.NDArray[np.float64], npt.NDArray[np.int64], Report],
+]: ...
 def geometry_images(
     V: FloatArray,
     F: IndexArray,
@@ -65,7 +75,11 @@ def geometry_images(
 ) -> Dict[str, Any]: ...
 def read_mesh(path: PathLike) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]]: ...
 def write_obj(
-    path: PathLike, V: FloatArray, F: IndexArray, UV: Optional[FloatArray] = None
+    path: PathLike,
+    V: FloatArray,
+    F: IndexArray,
+    UV: Optional[FloatArray] = None,
+    FUV: Optional[IndexArray] = None,
 ) -> None: ...
 def repair(
     V: FloatArray,
@@ -80,8 +94,8 @@ def repair(
 ) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.int64], Dict[str, int]]: ...
 
 # flatten_file and flatten_many take the keywords of flatten() (preset, alpha, energy,
-# from_alpha, start, multilevel, coarse_vertices, fill_holes, max_iters, tolerance,
-# armijo_c, normalize) as **options.
+# from_alpha, start, multilevel, coarse_vertices, fill_holes, cut, seams, max_distortion,
+# max_cut_rounds, max_iters, tolerance, armijo_c, normalize) as **options.
 def flatten_file(
     path: PathLike, outdir: PathLike, name: Optional[str] = None, **options: Any
 ) -> Row: ...
