@@ -51,7 +51,8 @@ fn landmarks(d: &Bound<'_, PyDict>) -> PyResult<Landmarks> {
 /// ``"shape"`` or ``"none"``. ``keep_folds``: keep the vertices of image triangles that
 /// turn over or collapse in space (by default they are unmatched). ``complete_rings``:
 /// rings of vertices next to the matched region completed from their matched neighbours
-/// where φ just misses B (0: leave them unmatched).
+/// where φ just misses B, after smoothing the matched border (0: leave them unmatched and
+/// φ's matches as they are).
 ///
 /// Returns ``(correspondence, report)``: an (n_A, 4) float64 array of rows ``[triangle
 /// of B, b0, b1, b2]`` (triangle −1 where A's vertex has no counterpart) — the command

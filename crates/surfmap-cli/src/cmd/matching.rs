@@ -77,8 +77,9 @@ pub struct Args {
     #[arg(long)]
     pub keep_folds: bool,
     /// Rings of vertices next to the matched region that may be completed from their
-    /// matched neighbours where φ just misses B (its rim, the fill of its holes);
-    /// 0 reports them unmatched.
+    /// matched neighbours where φ just misses B (its rim, the fill of its holes), after
+    /// the two rings of matched vertices next to them are smoothed; 0 reports them
+    /// unmatched and keeps φ's matches as they are.
     #[arg(long, value_name = "N", default_value_t = surfmap::matching::complete::COMPLETE_RINGS)]
     pub complete_rings: usize,
     /// Also draw pictures: checkerboard carried across, deformed grid, energy staircase.

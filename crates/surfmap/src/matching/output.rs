@@ -267,6 +267,9 @@ pub struct MatchReport {
     /// Vertices matched by rim completion from their neighbours
     /// ([`super::complete`]; included in `matched_vertices_a`).
     pub completed_vertices: usize,
+    /// Matched vertices next to unmatched ones moved by the rim smoothing before
+    /// completion ([`super::complete::RimSmoothing`]).
+    pub smoothed_vertices: usize,
     pub alignment: super::AlignmentReport,
     /// The rigid motion (with scale) of the position term at the end, A's length units
     /// to B's (both in the shared unit ℓ).
@@ -368,6 +371,7 @@ impl SurfaceMatch {
             collapsed_triangles: folds.collapsed.len(),
             dropped_vertices: checked.dropped,
             completed_vertices: checked.completion.completed,
+            smoothed_vertices: checked.completion.smoothed,
             alignment: self.alignment.clone(),
             similarity: self.similarity,
             length_unit: self.a.length_unit,
