@@ -73,6 +73,10 @@ pub enum StopReason {
     IterationCap,
     /// The line search found no step that decreases the energy ("locking", §3.1.3).
     Locked,
+    /// The energy's relative decrease per iteration fell below a threshold without a
+    /// small Newton decrement: the scaffold iterations of the bijective mode
+    /// ([`super::scaffold`]), near but not at the minimum.
+    Stalled,
 }
 
 /// Line-search and stopping parameters.
