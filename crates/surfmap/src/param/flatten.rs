@@ -187,7 +187,9 @@ pub enum Bijective {
     #[default]
     WhenOverlapping,
     /// Always solve with the barrier, from a crossing-free start (LSCM if it is
-    /// flip-free and crossing-free, else mean-value coordinates onto a circle).
+    /// flip-free and crossing-free, else mean-value coordinates onto a circle; when
+    /// that start is crushed, scaffold iterations instead of the barrier solve,
+    /// [`super::scaffold`]).
     Always,
 }
 
@@ -364,7 +366,9 @@ pub struct Flattening {
     /// Whether the boundary barrier was used: with [`Bijective::Always`], or because
     /// the unconstrained result overlapped ([`Bijective::WhenOverlapping`]; then
     /// [`Self::iterations`] and the log are those of the barrier solve, and the times
-    /// include both).
+    /// include both). From a crushed mean-value start the scaffold iterations
+    /// ([`super::scaffold`]) take the barrier solve's place: then the iterations and
+    /// the log are theirs and the stop reason is [`StopReason::Stalled`] (or the cap).
     pub barrier: bool,
     /// Holes filled for the solve ([`FlattenOptions::fill_holes`]).
     pub holes_filled: usize,
@@ -655,13 +659,7 @@ fn solve_disc(
     let clock = Instant::now();
     // Scale normalization: work on the surface scaled to unit area, so energies and
     // tolerances are scale-free; the UVs are scaled back at the end.
-    let area = mesh.area();
-    let scale = area.sqrt();
-    let positions: Vec<[f64; 3]> = mesh
-        .positions
-        .iter()
-        .map(|p| p.map(|x| x / scale))
-        .collect();
+    let (positions, scale) = mesh.unit_area_positions();
     let rest = rest_triangles(&positions, &mesh.triangles)?;
     let boundary = disc.boundary();
 

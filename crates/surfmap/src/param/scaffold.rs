@@ -104,10 +104,7 @@ pub fn around_convex(uv: &mut Vec<[f64; 2]>, boundary: &[u32]) -> Option<Vec<[u3
             j += 1;
         }
     }
-    let flipped = triangles
-        .iter()
-        .any(|t| !(signed_uv_area(t.map(|v| uv[v as usize])) > 0.0));
-    if flipped {
+    if super::count_flipped(uv, &triangles) > 0 {
         uv.truncate(first_ring as usize);
         return None;
     }
@@ -587,12 +584,7 @@ mod tests {
         // A deep spherical cap: its mean-value map onto the circle squeezes the pole.
         let mesh = crate::mesh::generate::spherical_cap(1.0, 2.6, 12, 40);
         let disc = Disc::new(&mesh).unwrap();
-        let scale = mesh.area().sqrt();
-        let positions: Vec<[f64; 3]> = mesh
-            .positions
-            .iter()
-            .map(|p| p.map(|x| x / scale))
-            .collect();
+        let (positions, _) = mesh.unit_area_positions();
         let mut uv = crate::param::tutte::mean_value(&positions, &disc).unwrap();
         let area: f64 = mesh
             .triangles
