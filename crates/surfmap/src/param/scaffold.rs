@@ -1,6 +1,8 @@
 //! A scaffold of the free space around a chart (SCAF: Jiang, Schaefer, Zhou, Sorkine,
-//! Panozzo 2017, "Simplicial complex augmentation framework for bijective maps"): a
-//! crossing-free start near the minimum for the boundary barrier ([`super::barrier`]).
+//! Panozzo 2017, "Simplicial complex augmentation framework for bijective maps"), with
+//! progressive reference shapes (Liu, Ye, Wang, Liu 2018): the bijective mode's solve
+//! from a crushed mean-value start, in place of the boundary barrier's
+//! ([`super::barrier`]), whose steps such a start cuts short.
 //!
 //! The chart (a flip-free map of a disc) is surrounded by an annulus of *scaffold*
 //! triangles between its boundary loop and an outer ring of free vertices. Chart and
@@ -20,9 +22,12 @@
 //!
 //! The contact of two boundary parts is thus resolved by the scaffold triangles between
 //! them, which the re-meshing keeps fat, rather than by the first-contact bound of the
-//! barrier, which cut every step from a far start to 10⁻³–10⁻¹ of Newton's (measured on
-//! `elephant_holes.off`, BENCHMARKS.md "Hard discs"). The scaffold only gives the
-//! start: the barrier solve then minimizes the chart's energy alone.
+//! barrier; and the flips of crushed chart triangles, which cut every step from such a
+//! start to 10⁻³–10⁻¹ of Newton's (measured on `elephant_holes.off`, BENCHMARKS.md
+//! "Hard discs"), by the chart's reference shapes ([`reference_triangle`]): relative to
+//! them no triangle is distorted by more than `e^{±1}`, so Newton's steps are full. The
+//! iterations stop when the chart's energy stalls ([`MIN_GAIN`]): near its minimum under
+//! the scaffold, not at it (the scaffold's weight biases it slightly).
 //!
 //! Cost per iteration: the re-meshing (linear in the boundary length), a new symbolic
 //! factorization (the pattern changes with the scaffold) and one Newton step.
