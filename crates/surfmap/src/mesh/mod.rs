@@ -131,6 +131,18 @@ impl TriMesh {
             .sum()
     }
 
+    /// The positions divided by `s = √area`, so the surface has unit area, and `s`
+    /// (the flattening works on these: energies and tolerances are then scale-free).
+    pub fn unit_area_positions(&self) -> (Vec<[f64; 3]>, f64) {
+        let scale = self.area().sqrt();
+        let positions = self
+            .positions
+            .iter()
+            .map(|p| p.map(|x| x / scale))
+            .collect();
+        (positions, scale)
+    }
+
     /// Axis-aligned bounding box `(min, max)` of the finite positions; `None` when there are none.
     pub fn bounding_box(&self) -> Option<([f64; 3], [f64; 3])> {
         bounding_box(&self.positions)

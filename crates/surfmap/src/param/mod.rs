@@ -15,6 +15,7 @@ pub mod multilevel;
 pub mod newton;
 pub mod optcuts;
 pub mod plan;
+pub mod scaffold;
 pub mod tutte;
 
 use crate::linsolve::SolveError;

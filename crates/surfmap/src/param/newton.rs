@@ -73,6 +73,10 @@ pub enum StopReason {
     IterationCap,
     /// The line search found no step that decreases the energy ("locking", §3.1.3).
     Locked,
+    /// The energy's relative decrease per iteration fell below a threshold without a
+    /// small Newton decrement: the scaffold iterations of the bijective mode
+    /// ([`super::scaffold`]), near but not at the minimum.
+    Stalled,
 }
 
 /// Line-search and stopping parameters.
@@ -771,12 +775,7 @@ mod tests {
         // The stopping test after a full exact step reuses the previous factorization;
         // check its verdict against a fresh factorization at the returned map.
         let mesh = bumpy_disc(10, 0.5);
-        let scale = mesh.area().sqrt();
-        let positions: Vec<[f64; 3]> = mesh
-            .positions
-            .iter()
-            .map(|p| p.map(|x| x / scale))
-            .collect();
+        let (positions, _) = mesh.unit_area_positions();
         let disc = Disc::new(&mesh).unwrap();
         let boundary = disc.boundary();
         let mut uv = mean_value(&positions, &disc).unwrap();
