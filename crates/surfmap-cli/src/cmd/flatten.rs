@@ -485,7 +485,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 n => format!(" + {n} ARAP steps"),
             },
             result.iterations,
-            convergence(result.converged),
+            if result.stop_reason == surfmap::StopReason::Stalled {
+                "stopped near the minimum (scaffold: energy decrease below 1e-3 per step)"
+            } else {
+                convergence(result.converged)
+            },
             result.energy,
             result.flipped_triangles,
             match (result.guarantee, result.barrier) {
@@ -493,6 +497,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                     ", boundary overlaps itself ({} crossings; see --bijective)",
                     result.boundary_crossings
                 ),
+                (Guarantee::Bijective, true)
+                    if result.stop_reason == surfmap::StopReason::Stalled =>
+                {
+                    ", no overlap (scaffold)".to_string()
+                }
                 (Guarantee::Bijective, true) => ", no overlap (boundary barrier)".to_string(),
                 (Guarantee::Bijective, false) => String::new(),
             },
