@@ -52,7 +52,8 @@ fn landmarks(d: &Bound<'_, PyDict>) -> PyResult<Landmarks> {
 /// turn over or collapse in space (by default they are unmatched). ``complete_rings``:
 /// rings of vertices next to the matched region completed from their matched neighbours
 /// where φ just misses B, after smoothing the matched border (0: leave them unmatched and
-/// φ's matches as they are).
+/// φ's matches as they are). ``pin_landmarks``: match each landmark exactly to its vertex
+/// of B in the output, the vertices around it following (``False``: where φ puts it).
 ///
 /// Returns ``(correspondence, report)``: an (n_A, 4) float64 array of rows ``[triangle
 /// of B, b0, b1, b2]`` (triangle −1 where A's vertex has no counterpart) — the command
@@ -70,7 +71,7 @@ fn landmarks(d: &Bound<'_, PyDict>) -> PyResult<Landmarks> {
 /// >>> C.shape, report["min_det"] > 0, report["matched_fraction_a"] > 0.9
 /// ((289, 4), True, True)
 #[pyfunction]
-#[pyo3(name = "match", signature = (VA, FA, VB, FB, *, landmarks=None, size=257, align="auto", keep_folds=false, complete_rings=4))]
+#[pyo3(name = "match", signature = (VA, FA, VB, FB, *, landmarks=None, size=257, align="auto", keep_folds=false, complete_rings=4, pin_landmarks=true))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub fn match_meshes<'py>(
     py: Python<'py>,
@@ -83,6 +84,7 @@ pub fn match_meshes<'py>(
     align: &str,
     keep_folds: bool,
     complete_rings: usize,
+    pin_landmarks: bool,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>)> {
     surfmap::grid::grid_level(size).map_err(|e| PyValueError::new_err(format!("size: {e}")))?;
     let a = arrays::mesh(VA, FA)?;
@@ -91,6 +93,7 @@ pub fn match_meshes<'py>(
         size,
         drop_folds: !keep_folds,
         complete_rings,
+        pin_landmarks,
         align: match align {
             "auto" => Align::Auto,
             "features" => Align::Features,

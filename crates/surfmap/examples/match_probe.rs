@@ -45,6 +45,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 "itol" => options.complete_tolerance.interior = f(),
                 "smooth" => options.rim_smoothing.rings = f() as usize,
                 "smoothit" => options.rim_smoothing.iterations = f() as usize,
+                "pin" => options.pin_landmarks = f() != 0.0,
                 "holes" => {
                     options.hole_features = match v {
                         "auto" => surfmap::matching::HoleFeatures::Auto,

@@ -82,6 +82,10 @@ pub struct Args {
     /// unmatched and keeps φ's matches as they are.
     #[arg(long, value_name = "N", default_value_t = surfmap::matching::complete::COMPLETE_RINGS)]
     pub complete_rings: usize,
+    /// Leave the landmarks where φ puts them: by default each landmark of A is matched
+    /// exactly to its vertex of B in the output, and the vertices around it follow.
+    #[arg(long)]
+    pub free_landmarks: bool,
     /// Also draw pictures: checkerboard carried across, deformed grid, energy staircase.
     #[arg(long)]
     pub pictures: bool,
@@ -110,6 +114,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         fill_holes: !args.no_fill_holes,
         drop_folds: !args.keep_folds,
         complete_rings: args.complete_rings,
+        pin_landmarks: !args.free_landmarks,
         align: match args.align {
             AlignArg::Auto => Align::Auto,
             AlignArg::Features => Align::Features,
@@ -198,8 +203,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             (0, 0) => String::new(),
             (a, b) => format!(", holes filled for the solve A {a} B {b}"),
         };
+        let pinned = match report.pinned_landmarks {
+            0 => String::new(),
+            n => format!(
+                ", {n} landmarks matched exactly (φ had left them up to {:.3} of B's units off)",
+                report.largest_landmark_miss
+            ),
+        };
         outln!(
-            "match: {} levels up to {n}², {} iterations, energy {:.4e}, min det Dφ {:.3}, matched {:.1}% of A ({} of {}, {} completed at rims), {:.1}% of B covered{filled}, {} vertices unmatched for folds ({} flipped, {} collapsed), alignment {}, {:.2} s",
+            "match: {} levels up to {n}², {} iterations, energy {:.4e}, min det Dφ {:.3}, matched {:.1}% of A ({} of {}, {} completed at rims), {:.1}% of B covered{filled}, {} vertices unmatched for folds ({} flipped, {} collapsed){pinned}, alignment {}, {:.2} s",
             report.levels.len(),
             report.iterations,
             report.energy,

@@ -120,4 +120,5 @@ def match(
     align: str = "auto",
     keep_folds: bool = False,
     complete_rings: int = 4,
+    pin_landmarks: bool = True,
 ) -> Tuple[FloatArray, Report]: ...

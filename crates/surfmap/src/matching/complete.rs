@@ -436,6 +436,7 @@ impl Completer<'_> {
         &mut self,
         smoothing: RimSmoothing,
         correspondence: &mut [Option<SurfacePoint>],
+        fixed: &[u32],
     ) -> usize {
         let n = self.offset.len();
         if smoothing.rings == 0 || smoothing.iterations == 0 {
@@ -460,7 +461,9 @@ impl Completer<'_> {
             }
         }
         let band: Vec<usize> = (0..n)
-            .filter(|&v| (1..=smoothing.rings).contains(&distance[v]))
+            .filter(|&v| {
+                (1..=smoothing.rings).contains(&distance[v]) && !fixed.contains(&(v as u32))
+            })
             .collect();
         let mut smooth = self.offset.clone();
         let mut next = vec![DVec3::ZERO; band.len()];
@@ -585,7 +588,8 @@ impl Completer<'_> {
 
 /// Matches unmatched vertices of A next to matched ones by the rule in the module
 /// documentation, growing at most `rings` rings, after smoothing the matched border
-/// ([`RimSmoothing`]); returns what it did.
+/// ([`RimSmoothing`]; the `fixed` vertices, pinned landmarks, are not moved); returns
+/// what it did.
 pub fn complete_correspondence(
     a: &TriMesh,
     b: &TriMesh,
@@ -593,6 +597,7 @@ pub fn complete_correspondence(
     rings: usize,
     tolerance: Tolerance,
     smoothing: RimSmoothing,
+    fixed: &[u32],
 ) -> Completion {
     let mut done = Completion::default();
     let n = a.positions.len();
@@ -636,7 +641,7 @@ pub fn complete_correspondence(
         similarity,
         offset,
     };
-    done.smoothed = completer.smooth_rims(smoothing, correspondence);
+    done.smoothed = completer.smooth_rims(smoothing, correspondence, fixed);
     for _ in 0..rings {
         let accepted = completer.round(tolerance, correspondence);
         if accepted == 0 {
@@ -772,6 +777,7 @@ mod tests {
                 rings: 0,
                 iterations: 0,
             },
+            &[],
         );
         // All but a few of the outermost vertices, where the bend's offsets extrapolated
         // from one side miss B's outer rim by more than the strict quarter edge.
@@ -817,6 +823,7 @@ mod tests {
             COMPLETE_RINGS,
             COMPLETE_TOLERANCE,
             RIM_SMOOTHING,
+            &[],
         );
         assert!(done.completed * 100 >= before * 95, "{done:?} of {before}");
         let mut e: Vec<f64> = (0..a.num_vertices())
@@ -895,6 +902,7 @@ mod tests {
             COMPLETE_RINGS,
             COMPLETE_TOLERANCE,
             RIM_SMOOTHING,
+            &[],
         );
         let after = band_error(&corr);
         println!("{done:?}: band error {before:.5} -> {after:.5} (edge {edge})");
@@ -945,6 +953,7 @@ mod tests {
             COMPLETE_RINGS,
             COMPLETE_TOLERANCE,
             RIM_SMOOTHING,
+            &[],
         );
         let rim_count = rim.iter().filter(|&&r| r).count();
         assert!(

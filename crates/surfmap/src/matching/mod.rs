@@ -16,6 +16,7 @@ pub mod energy;
 pub mod ncg;
 pub mod output;
 pub mod pictures;
+pub mod pin;
 pub mod precondition;
 pub mod rigid;
 pub mod similarity;

@@ -18,6 +18,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::complete::{Completion, complete_correspondence};
+use super::pin::{Pinning, pin_landmarks};
 use super::solve::{MatchOptions, SurfaceMatch};
 use super::{LevelLog, MatchError};
 use crate::fsutil::write_atomically;
@@ -117,11 +118,13 @@ pub fn check_folds(a: &TriMesh, b: &TriMesh, correspondence: &[Option<SurfacePoi
 /// takes: one vertex per folded triangle, greedily the one shared by the most folded
 /// triangles not yet cleared (a vertex cover of the folded triangles). Returns how many
 /// vertices were dropped. No fully matched triangle is then flipped or collapsed: the
-/// remaining ones keep their images.
+/// remaining ones keep their images. Vertices in `keep` (pinned landmarks) are dropped
+/// only when a folded triangle has no other vertex to drop.
 pub fn drop_folds(
     a: &TriMesh,
     folds: &FoldCheck,
     correspondence: &mut [Option<SurfacePoint>],
+    keep: &[u32],
 ) -> usize {
     let folded: Vec<u32> = folds
         .flipped
@@ -152,7 +155,10 @@ pub fn drop_folds(
         if tri.iter().any(|&v| correspondence[v as usize].is_none()) {
             continue;
         }
-        let v = *tri.iter().max_by_key(|v| count[v]).expect("three vertices");
+        let v = *tri
+            .iter()
+            .max_by_key(|v| (!keep.contains(v), count[v]))
+            .expect("three vertices");
         correspondence[v as usize] = None;
         dropped += 1;
     }
@@ -270,6 +276,10 @@ pub struct MatchReport {
     /// Matched vertices next to unmatched ones moved by the rim smoothing before
     /// completion ([`super::complete::RimSmoothing`]).
     pub smoothed_vertices: usize,
+    /// Landmarks matched exactly to their vertex of B in the output ([`super::pin`]), and
+    /// the largest distance (B's units) φ had left one of them from it.
+    pub pinned_landmarks: usize,
+    pub largest_landmark_miss: f64,
     pub alignment: super::AlignmentReport,
     /// The rigid motion (with scale) of the position term at the end, A's length units
     /// to B's (both in the shared unit ℓ).
@@ -297,12 +307,16 @@ pub struct CheckedCorrespondence {
     pub dropped: usize,
     /// What rim completion added ([`super::complete`]).
     pub completion: Completion,
+    /// What pinning the landmarks did ([`super::pin`]).
+    pub pinning: Pinning,
 }
 
 impl SurfaceMatch {
     /// The per-vertex correspondence, checked: φ's correspondence
     /// ([`SurfaceMatch::correspondence`]); when `drop`, the vertices of folded image
-    /// triangles unmatched ([`drop_folds`]); then, unless
+    /// triangles unmatched ([`drop_folds`]); the landmarks pinned
+    /// ([`super::pin`], [`MatchOptions::pin_landmarks`]) and folds so made dropped
+    /// again (never a landmark); then, unless
     /// [`MatchOptions::complete_rings`] is 0, unmatched vertices next to matched ones
     /// completed from their neighbours ([`complete_correspondence`]) and the fold check
     /// run again on the result.
@@ -314,11 +328,21 @@ impl SurfaceMatch {
     ) -> Result<CheckedCorrespondence, MatchError> {
         let mut points = self.correspondence()?;
         let folds = check_folds(mesh_a, mesh_b, &points);
+        let pinned: Vec<u32> = self.pinned_landmarks.iter().map(|p| p.0).collect();
         let mut dropped = if drop {
-            drop_folds(mesh_a, &folds, &mut points)
+            drop_folds(mesh_a, &folds, &mut points, &[])
         } else {
             0
         };
+        let pinning = pin_landmarks(mesh_a, mesh_b, &mut points, &self.pinned_landmarks);
+        if drop && pinning.landmarks > 0 {
+            dropped += drop_folds(
+                mesh_a,
+                &check_folds(mesh_a, mesh_b, &points),
+                &mut points,
+                &pinned,
+            );
+        }
         let completion = complete_correspondence(
             mesh_a,
             mesh_b,
@@ -326,15 +350,22 @@ impl SurfaceMatch {
             self.complete_rings,
             self.complete_tolerance,
             self.rim_smoothing,
+            &pinned,
         );
         if drop && completion.completed > 0 {
-            dropped += drop_folds(mesh_a, &check_folds(mesh_a, mesh_b, &points), &mut points);
+            dropped += drop_folds(
+                mesh_a,
+                &check_folds(mesh_a, mesh_b, &points),
+                &mut points,
+                &pinned,
+            );
         }
         Ok(CheckedCorrespondence {
             points,
             folds,
             dropped,
             completion,
+            pinning,
         })
     }
 
@@ -372,6 +403,8 @@ impl SurfaceMatch {
             dropped_vertices: checked.dropped,
             completed_vertices: checked.completion.completed,
             smoothed_vertices: checked.completion.smoothed,
+            pinned_landmarks: checked.pinning.landmarks,
+            largest_landmark_miss: checked.pinning.largest_miss,
             alignment: self.alignment.clone(),
             similarity: self.similarity,
             length_unit: self.a.length_unit,

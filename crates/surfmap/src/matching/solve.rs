@@ -116,6 +116,9 @@ pub struct MatchOptions {
     /// Smoothing of the matched border before completion
     /// ([`super::complete::RimSmoothing`]).
     pub rim_smoothing: super::complete::RimSmoothing,
+    /// Match the landmarks exactly in the reported correspondence, carrying the
+    /// correction to the vertices around them ([`super::pin`]); φ is only guided.
+    pub pin_landmarks: bool,
 }
 
 impl Default for MatchOptions {
@@ -147,6 +150,7 @@ impl Default for MatchOptions {
             complete_rings: super::complete::COMPLETE_RINGS,
             complete_tolerance: super::complete::COMPLETE_TOLERANCE,
             rim_smoothing: super::complete::RIM_SMOOTHING,
+            pin_landmarks: true,
         }
     }
 }
@@ -276,6 +280,10 @@ pub struct SurfaceMatch {
     pub complete_tolerance: super::complete::Tolerance,
     /// See [`MatchOptions::rim_smoothing`].
     pub rim_smoothing: super::complete::RimSmoothing,
+    /// Landmark pairs `(vertex of A, vertex of B)` matched exactly in the output
+    /// ([`super::pin`]); empty without landmarks or with
+    /// [`MatchOptions::pin_landmarks`] off.
+    pub pinned_landmarks: Vec<(u32, u32)>,
 }
 
 /// Points mapped within this many finest-grid cells of B's surface are snapped onto it
@@ -413,6 +421,22 @@ pub fn match_surfaces(
     solve(sa, sb, fa.as_ref(), fb.as_ref(), options)
 }
 
+/// The landmark pairs among the paired features (point features named `landmark:NAME`,
+/// [`paired_features`]): `(vertex of A, vertex of B)`.
+fn landmark_pairs(fa: Option<&FeatureFile>, fb: Option<&FeatureFile>) -> Vec<(u32, u32)> {
+    let (Some(fa), Some(fb)) = (fa, fb) else {
+        return vec![];
+    };
+    fa.features
+        .iter()
+        .filter(|f| f.name.starts_with("landmark:") && f.vertices.len() == 1)
+        .filter_map(|f| {
+            let g = fb.features.iter().find(|g| g.name == f.name)?;
+            (g.vertices.len() == 1).then(|| (f.vertices[0], g.vertices[0]))
+        })
+        .collect()
+}
+
 /// The multiscale solve on prepared surfaces.
 pub fn solve(
     mut sa: MatchSurface,
@@ -513,6 +537,11 @@ pub fn solve(
         complete_rings: options.complete_rings,
         complete_tolerance: options.complete_tolerance,
         rim_smoothing: options.rim_smoothing,
+        pinned_landmarks: if options.pin_landmarks {
+            landmark_pairs(fa, fb)
+        } else {
+            vec![]
+        },
     })
 }
 
