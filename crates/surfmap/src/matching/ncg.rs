@@ -70,7 +70,7 @@ impl Default for NcgSettings {
             max_iterations: 300,
             armijo_c: 1e-4,
             refit_every: 10,
-            max_evaluations: 100,
+            max_evaluations: 120,
         }
     }
 }
