@@ -2,7 +2,7 @@
 //! [key=value …]` writes one 3D point per vertex of A (NaN = unmatched), the format the
 //! referee in `../shared/match_eval` scores, and prints the per-level log.
 //! Keys: size, k0, bend, reg, feat, pos, soft, tol, ftol (finest level), align (auto|search|none|features),
-//! rot (rotations tried), scale (0/1), alevels.
+//! rot (rotations tried), scale (0/1), alevels, maxev (evaluations on the finest level, 0: no cap).
 
 use std::path::Path;
 use surfmap::matching::{Align, Guidance, Landmarks, MatchOptions, match_surfaces};
@@ -32,6 +32,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 "maxit" => options.ncg.max_iterations = f() as usize,
                 "refit" => options.ncg.refit_every = f() as usize,
                 "ftol" => options.ncg.finest_tolerance = f(),
+                "maxev" => options.ncg.max_evaluations = f() as usize,
                 "rot" => options.align_rotations = f() as usize,
                 "scale" => options.allow_scale = f() != 0.0,
                 "sob" => options.sobolev_cells = f(),

@@ -5,7 +5,9 @@
 //! `σ_k = 2^−k` (the finest unfiltered) and the cut-off width `ε_k = 2^{1−k}` (thesis:
 //! `ε = 2σ_k`; on the finest level, where `σ = 0`, two grid cells). Each level is
 //! minimized by [`super::ncg`] and prolongated (exactly, as a P1 map) to the next; the
-//! finest level stops at the looser [`NcgSettings::finest_tolerance`].
+//! finest level stops at the looser [`NcgSettings::finest_tolerance`], and every level
+//! within the same cost ([`NcgSettings::max_evaluations`]: 120 evaluations at 257², 480
+//! at 129², …).
 //!
 //! Alignment: both flattenings preserve orientation, so ω_A and ω_B differ by a
 //! similarity of the plane. With paired landmarks or features it is their
@@ -678,10 +680,12 @@ impl Solver<'_> {
         if k == self.a.num_levels() - 1 {
             settings.tolerance = settings.finest_tolerance;
         }
+        let budget = settings.level_evaluations(n, self.a.level_size(self.a.num_levels() - 1));
         let log = minimize(
             &mut energy,
             phi,
             &settings,
+            budget,
             k,
             precondition.as_ref(),
             &mut refit,

@@ -254,3 +254,45 @@ fn a_closed_surface_is_refused_not_cut() {
     let message = err.to_string();
     assert!(message.contains("closed"), "{message}");
 }
+
+#[test]
+fn the_evaluation_cap_scales_with_the_level_cost() {
+    let mut s = NcgSettings {
+        max_evaluations: 100,
+        ..Default::default()
+    };
+    assert_eq!(s.level_evaluations(257, 257), 100);
+    assert_eq!(s.level_evaluations(129, 257), 400);
+    assert_eq!(s.level_evaluations(65, 257), 1600);
+    s.max_evaluations = 0;
+    assert_eq!(s.level_evaluations(65, 257), usize::MAX);
+}
+
+#[test]
+fn a_spent_budget_stops_every_level_fold_free() {
+    let a = surface(18, |p| p);
+    let motion = rigid(rotation([0.0, 0.0, 1.0], 0.3), [0.1, 0.0, 0.0]);
+    let b = surface(23, &motion);
+    let mut o = options();
+    o.ncg.max_evaluations = 3;
+    let (m, _) = run(&a, &b, &Guidance::default(), &o);
+    assert_eq!(m.levels.len(), 2);
+    for l in &m.levels {
+        let cap = o.ncg.level_evaluations(l.size, 129);
+        // No iteration starts past the cap; the last one's line search (at most 40
+        // trials) and a refit's evaluation may overrun it.
+        assert!(
+            l.evaluations < cap + 42,
+            "{} evaluations, cap {cap}",
+            l.evaluations
+        );
+        if l.stop == StopReason::Budget {
+            assert!(l.evaluations >= cap, "level {}", l.level);
+        }
+    }
+    assert!(m.levels.iter().any(|l| l.stop == StopReason::Budget));
+    // Without a cap the same start runs further.
+    o.ncg.max_evaluations = 0;
+    let free = match_surfaces(&a, &b, &Guidance::default(), &o).unwrap();
+    assert!(free.levels[1].evaluations > m.levels[1].evaluations);
+}
