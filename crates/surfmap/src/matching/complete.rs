@@ -683,15 +683,27 @@ mod tests {
 
     /// A vertex of `mesh` as a surface point (a triangle around it, weight 1 there).
     fn at_vertex(mesh: &TriMesh, v: u32) -> Option<SurfacePoint> {
-        mesh.triangles.iter().enumerate().find_map(|(t, tri)| {
-            let k = tri.iter().position(|&u| u == v)?;
-            let mut barycentric = [0.0; 3];
-            barycentric[k] = 1.0;
-            Some(SurfacePoint {
-                triangle: t as u32,
-                barycentric,
-            })
-        })
+        super::super::pin::vertex_point(mesh, v)
+    }
+
+    /// A disc with a hole (A) and the same surface bent and moved (B): every vertex of A
+    /// has a known counterpart, the vertex of the same index.
+    fn holed_disc_and_bent_copy() -> (TriMesh, TriMesh) {
+        let disc = bumpy_disc(16, 0.3);
+        let (a, _) = crop(&disc, |p| (p[0] - 0.2).hypot(p[1]) > 0.25);
+        let b = TriMesh::new(
+            a.positions.iter().map(|&p| bend(p)).collect(),
+            a.triangles.clone(),
+        );
+        (a, b)
+    }
+
+    fn assert_no_folds(a: &TriMesh, b: &TriMesh, corr: &[Option<SurfacePoint>]) {
+        let folds = super::super::output::check_folds(a, b, corr);
+        assert!(
+            folds.flipped.is_empty() && folds.collapsed.is_empty(),
+            "{folds:?}"
+        );
     }
 
     /// A smooth non-rigid bend plus a rotation and a shift: where the copy's vertices go.
@@ -744,12 +756,7 @@ mod tests {
         // A: a disc with a hole; B: the same surface bent and moved, so every vertex of A
         // has a known counterpart. The correspondence lacks the two outer rings and the
         // two rings around the hole, as φ leaves them.
-        let disc = bumpy_disc(16, 0.3);
-        let (a, _) = crop(&disc, |p| (p[0] - 0.2).hypot(p[1]) > 0.25);
-        let b = TriMesh::new(
-            a.positions.iter().map(|&p| bend(p)).collect(),
-            a.triangles.clone(),
-        );
+        let (a, b) = holed_disc_and_bent_copy();
         let edge = 1.0 / 16.0;
         let missing = |p: [f64; 3]| {
             p[0].hypot(p[1]) > 1.0 - 2.5 * edge / 1.0
@@ -806,11 +813,7 @@ mod tests {
             median < 0.1 * edge && worst < 0.5 * edge,
             "median {median} worst {worst}"
         );
-        let folds = super::super::output::check_folds(&a, &b, &corr);
-        assert!(
-            folds.flipped.is_empty() && folds.collapsed.is_empty(),
-            "{folds:?}"
-        );
+        assert_no_folds(&a, &b, &corr);
         // With the rim smoothing (the default) the exact border is smoothed too: the
         // one-sided average carries the anchors' offsets outward, off by the bend's
         // variation over two rings — bounded by a quarter edge in the median, without
@@ -840,11 +843,7 @@ mod tests {
             e.len()
         );
         assert!(median < 0.25 * edge, "median {median}");
-        let folds = super::super::output::check_folds(&a, &b, &corr);
-        assert!(
-            folds.flipped.is_empty() && folds.collapsed.is_empty(),
-            "{folds:?}"
-        );
+        assert_no_folds(&a, &b, &corr);
     }
 
     #[test]
@@ -853,12 +852,7 @@ mod tests {
         // the hole are matched off their counterparts by a quarter edge in scattered
         // directions, as φ leaves them: the smoothing must bring them closer, without a
         // fold, and completion must still fill the hole's rings.
-        let disc = bumpy_disc(16, 0.3);
-        let (a, _) = crop(&disc, |p| (p[0] - 0.2).hypot(p[1]) > 0.25);
-        let b = TriMesh::new(
-            a.positions.iter().map(|&p| bend(p)).collect(),
-            a.triangles.clone(),
-        );
+        let (a, b) = holed_disc_and_bent_copy();
         let edge = 1.0 / 16.0;
         let from_hole = |p: [f64; 3]| (p[0] - 0.2).hypot(p[1]) - 0.25;
         let projector = SurfaceProjector::new(&b);
@@ -912,11 +906,7 @@ mod tests {
             .filter(|&v| corr[v].is_none() && from_hole(a.positions[v]) < 0.3)
             .count();
         assert_eq!(left, 0, "vertices around the hole left unmatched");
-        let folds = super::super::output::check_folds(&a, &b, &corr);
-        assert!(
-            folds.flipped.is_empty() && folds.collapsed.is_empty(),
-            "{folds:?}"
-        );
+        assert_no_folds(&a, &b, &corr);
     }
 
     #[test]
