@@ -1,7 +1,7 @@
 //! Landmarks matched exactly in the output correspondence.
 //!
 //! In the energy a landmark is a point feature: its distance map (a cone) pulls φ
-//! toward the pair but pins nothing (thesis §2.2.3), and where the surfaces differ most
+//! toward the pair but pins nothing (thesis §2.2.4, eq. 2.11), and where the surfaces differ most
 //! (mouth corners of a smile, the corner of a closed eye) φ can stay a centimetre off.
 //! φ itself is not forced — a bump in φ wide enough to be smooth folds the strongly
 //! compressed filled holes around those corners (BENCHMARKS.md, "Matching") — but the
@@ -17,8 +17,10 @@
 //! correction is local to its landmark and the system is well conditioned), and is
 //! re-matched to B's closest point to `y(v) + D(x_A(v))`, searched near its former
 //! counterpart ([`SurfaceProjector::project_near`]); the landmarks get their vertices
-//! exactly. A vertex of an image triangle that this turns over or collapses is then
-//! reported unmatched (never a landmark) and left to rim completion
+//! exactly. Moves are made nearest the landmarks first, and one that would leave more
+//! image triangles around its vertex turned over or collapsed than before is not made.
+//! A vertex of an image triangle still folded afterwards is reported unmatched (never a
+//! landmark, [`super::output::drop_folds`]) and left to rim completion
 //! ([`super::complete`]), which regrows it from its neighbours.
 
 use glam::DVec3;
