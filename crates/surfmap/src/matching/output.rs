@@ -300,7 +300,8 @@ pub struct MatchReport {
 pub struct CheckedCorrespondence {
     /// One entry per vertex of A: its counterpart on B, or `None`.
     pub points: Vec<Option<SurfacePoint>>,
-    /// Folded image triangles of φ's own correspondence, before anything was dropped.
+    /// Folded image triangles of φ's own correspondence, before anything was dropped;
+    /// when folds are kept (`drop` false), those of the output itself.
     pub folds: FoldCheck,
     /// Vertices reported unmatched because a triangle around them folded (φ's folds and
     /// any that completion made).
@@ -360,6 +361,13 @@ impl SurfaceMatch {
                 &pinned,
             );
         }
+        // Kept folds are reported as they are in the output (pinning may have added some
+        // around a landmark).
+        let folds = if drop {
+            folds
+        } else {
+            check_folds(mesh_a, mesh_b, &points)
+        };
         Ok(CheckedCorrespondence {
             points,
             folds,
