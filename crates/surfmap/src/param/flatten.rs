@@ -619,21 +619,53 @@ fn flatten_disc(
         Some(topology) => Disc::with_topology(mesh, topology)?,
         None => Disc::new(mesh)?,
     };
-    let first = solve_disc(
-        mesh,
-        &disc,
-        options,
-        progress,
-        options.bijective == Bijective::Always,
-    )?;
-    if first.boundary_crossings == 0 || options.bijective != Bijective::WhenOverlapping {
-        return Ok(first);
-    }
-    // The unconstrained map overlaps itself: solve again with the boundary barrier.
-    let mut second = solve_disc(mesh, &disc, options, progress, true)?;
-    second.time_start += first.time_start + first.time_newton;
+    let solve = match options.bijective {
+        Bijective::Off => Solve::Unconstrained,
+        Bijective::WhenOverlapping => Solve::UnlessStartCrosses,
+        Bijective::Always => Solve::Barrier,
+    };
+    let first = match solve_disc(mesh, &disc, options, progress, solve)? {
+        SolveOutcome::Map(first) if first.boundary_crossings == 0 => return Ok(first),
+        SolveOutcome::Map(first) if options.bijective != Bijective::WhenOverlapping => {
+            return Ok(first);
+        }
+        SolveOutcome::Map(first) => first.time_start + first.time_newton,
+        SolveOutcome::StartCrosses { time } => time,
+    };
+    // The unconstrained map (or its start) overlaps itself: solve with the boundary
+    // barrier.
+    let SolveOutcome::Map(mut second) = solve_disc(mesh, &disc, options, progress, Solve::Barrier)?
+    else {
+        unreachable!("a barrier solve always returns a map")
+    };
+    second.time_start += first;
     second.time_total = clock.elapsed().as_secs_f64();
     Ok(second)
+}
+
+/// Which solve [`solve_disc`] does.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Solve {
+    /// Without the boundary barrier.
+    Unconstrained,
+    /// Without the barrier, unless the start map's boundary already crosses itself:
+    /// then nothing ([`SolveOutcome::StartCrosses`]), for a barrier solve instead. Measured on
+    /// every mesh in `../shared/data` (BENCHMARKS.md, "Hard discs"): each of the five
+    /// starts that crossed (elephant_holes 92 crossing pairs, beetle, holes and three
+    /// ICT faces opened with seams: 1–4) led to an overlapping minimum, so the
+    /// unconstrained solve from them (elephant: 64 iterations) was spent for nothing.
+    UnlessStartCrosses,
+    /// With the boundary barrier, from a crossing-free start.
+    Barrier,
+}
+
+/// What [`solve_disc`] returned.
+enum SolveOutcome {
+    Map(Flattening),
+    /// [`Solve::UnlessStartCrosses`] gave up after `time` seconds (building the start).
+    StartCrosses {
+        time: f64,
+    },
 }
 
 /// Number of pairs of boundary edges of the map `uv` without a common endpoint that
@@ -646,17 +678,18 @@ fn boundary_crossings(uv: &[[f64; 2]], boundary: &[u32]) -> usize {
     crate::measure::overlap::count_segment_crossings(&segments).0
 }
 
-/// One solve of [`flatten_disc`]: with the boundary barrier when `barrier` (from a
-/// crossing-free start, without the multilevel start, and with ARAP warm-start steps
-/// from a mean-value start kept short of any boundary contact).
+/// One solve of [`flatten_disc`]: with the boundary barrier for [`Solve::Barrier`]
+/// (from a crossing-free start, without the multilevel start, and with ARAP warm-start
+/// steps from a mean-value start kept short of any boundary contact).
 fn solve_disc(
     mesh: &TriMesh,
     disc: &Disc,
     options: &FlattenOptions,
     progress: &mut dyn FnMut(&IterationLog),
-    barrier: bool,
-) -> Result<Flattening, FlattenError> {
+    solve: Solve,
+) -> Result<SolveOutcome, FlattenError> {
     let clock = Instant::now();
+    let barrier = solve == Solve::Barrier;
     // Scale normalization: work on the surface scaled to unit area, so energies and
     // tolerances are scale-free; the UVs are scaled back at the end.
     let (positions, scale) = mesh.unit_area_positions();
@@ -722,6 +755,14 @@ fn solve_disc(
         }
     };
     let start_flipped = admissible(&mut uv);
+    if solve == Solve::UnlessStartCrosses
+        && start_flipped == 0
+        && boundary_crossings(&uv, boundary) > 0
+    {
+        return Ok(SolveOutcome::StartCrosses {
+            time: clock.elapsed().as_secs_f64(),
+        });
+    }
     if start_flipped > 0 && matches!(start, StartMap::Given | StartMap::Multilevel) {
         return Err(FlattenError::GivenStartFlipped(start_flipped));
     }
@@ -822,7 +863,8 @@ fn solve_disc(
                     newton_timings: NewtonTimings::default(),
                     multilevel,
                 },
-            );
+            )
+            .map(SolveOutcome::Map);
         }
     }
     if options.warm_start
@@ -968,6 +1010,7 @@ fn solve_disc(
             multilevel,
         },
     )
+    .map(SolveOutcome::Map)
 }
 
 /// What a solve of [`solve_disc`] did, for [`result_of`].
