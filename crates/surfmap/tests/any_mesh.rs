@@ -139,3 +139,59 @@ fn a_crushed_start_gets_the_scaffold_and_stays_near_the_overlapping_minimum() {
         free.energy
     );
 }
+
+#[test]
+fn a_start_that_already_crosses_goes_straight_to_the_barrier_solve() {
+    let Some(dir) = surfmap::testing::shared_data() else {
+        return;
+    };
+    // holes.off opened with seams: LSCM's boundary crosses itself (2 pairs), so the
+    // unconstrained solve from it is skipped: the default gives the same map as the
+    // barrier solve alone, with the same Newton iterations reported to the progress
+    // callback (before, the unconstrained solve's 4 came first).
+    let mesh = read_mesh(&dir.join("holes.off")).unwrap().mesh;
+    let run = |mode: Bijective| {
+        let options = FlattenOptions::default()
+            .with_fill_holes(false)
+            .with_bijective(mode);
+        let mut logged = 0;
+        let map = surfmap::flatten_with_progress(&mesh, &options, &mut |_| logged += 1)
+            .unwrap_or_else(|e| panic!("holes {mode:?}: {e}"));
+        (map, logged)
+    };
+    let (default, default_logged) = run(Bijective::WhenOverlapping);
+    let (always, always_logged) = run(Bijective::Always);
+    let (free, _) = run(Bijective::Off);
+    assert!(
+        free.boundary_crossings > 0,
+        "the unconstrained map overlaps"
+    );
+    assert!(default.barrier);
+    assert_eq!(default.uvs, always.uvs);
+    assert_eq!(default_logged, always_logged);
+    assert_eq!(default.iterations, always.iterations);
+}
+
+#[test]
+fn a_barrier_solve_starts_from_the_multilevel_start_when_it_does_not_cross() {
+    let Some(dir) = surfmap::testing::shared_data() else {
+        return;
+    };
+    // ict_jawopen opened with seams (18k faces): the unconstrained map overlaps at the
+    // mouth, the multilevel start (its coarse level solved overlap-free) does not, so
+    // the barrier solve starts from it: 6 iterations where the mean-value start took 37.
+    let mesh = read_mesh(&dir.join("faces/ict/ict_jawopen.obj"))
+        .unwrap()
+        .mesh;
+    let map = flatten(&mesh, &FlattenOptions::default().with_fill_holes(false)).unwrap();
+    assert!(map.barrier && map.converged, "{:?}", map.stop_reason);
+    assert_eq!(map.start, surfmap::StartMap::Multilevel);
+    assert!(map.iterations <= 12, "{} iterations", map.iterations);
+    assert_eq!(map.guarantee, Guarantee::Bijective);
+    let (overlap, _) = flatten_checked(
+        "ict_jawopen",
+        &mesh,
+        &FlattenOptions::default().with_fill_holes(false),
+    );
+    assert_eq!(overlap, 0.0);
+}

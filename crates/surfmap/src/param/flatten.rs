@@ -624,20 +624,23 @@ fn flatten_disc(
         Bijective::WhenOverlapping => Solve::UnlessStartCrosses,
         Bijective::Always => Solve::Barrier,
     };
-    let first = match solve_disc(mesh, &disc, options, progress, solve)? {
-        SolveOutcome::Map(first) if first.boundary_crossings == 0 => return Ok(first),
+    let mut shared = SharedStart::NotTried;
+    let first = match solve_disc(mesh, &disc, options, progress, solve, &mut shared)? {
+        SolveOutcome::Map(first) if first.boundary_crossings == 0 => return Ok(*first),
         SolveOutcome::Map(first) if options.bijective != Bijective::WhenOverlapping => {
-            return Ok(first);
+            return Ok(*first);
         }
         SolveOutcome::Map(first) => first.time_start + first.time_newton,
         SolveOutcome::StartCrosses { time } => time,
     };
     // The unconstrained map (or its start) overlaps itself: solve with the boundary
     // barrier.
-    let SolveOutcome::Map(mut second) = solve_disc(mesh, &disc, options, progress, Solve::Barrier)?
+    let SolveOutcome::Map(second) =
+        solve_disc(mesh, &disc, options, progress, Solve::Barrier, &mut shared)?
     else {
         unreachable!("a barrier solve always returns a map")
     };
+    let mut second = *second;
     second.time_start += first;
     second.time_total = clock.elapsed().as_secs_f64();
     Ok(second)
@@ -659,9 +662,20 @@ enum Solve {
     Barrier,
 }
 
+/// The multilevel start, computed once by the first solve of [`flatten_disc`] and
+/// reused by the barrier solve when its boundary does not cross itself (its coarse
+/// level was solved with the same [`Bijective`] option, so it is overlap-free there).
+enum SharedStart {
+    NotTried,
+    /// No coarse level for this mesh size or options.
+    None,
+    /// The start (`None` when abandoned) and its report.
+    Tried(Option<Vec<[f64; 2]>>, MultilevelReport),
+}
+
 /// What [`solve_disc`] returned.
 enum SolveOutcome {
-    Map(Flattening),
+    Map(Box<Flattening>),
     /// [`Solve::UnlessStartCrosses`] gave up after `time` seconds (building the start).
     StartCrosses {
         time: f64,
@@ -679,14 +693,17 @@ fn boundary_crossings(uv: &[[f64; 2]], boundary: &[u32]) -> usize {
 }
 
 /// One solve of [`flatten_disc`]: with the boundary barrier for [`Solve::Barrier`]
-/// (from a crossing-free start, without the multilevel start, and with ARAP warm-start
-/// steps from a mean-value start kept short of any boundary contact).
+/// (from a crossing-free start: the multilevel one when it is, else LSCM or mean-value
+/// coordinates, with ARAP warm-start steps from a mean-value start kept short of any
+/// boundary contact). `shared`: the multilevel start, computed by the first solve that
+/// needs it.
 fn solve_disc(
     mesh: &TriMesh,
     disc: &Disc,
     options: &FlattenOptions,
     progress: &mut dyn FnMut(&IterationLog),
     solve: Solve,
+    shared: &mut SharedStart,
 ) -> Result<SolveOutcome, FlattenError> {
     let clock = Instant::now();
     let barrier = solve == Solve::Barrier;
@@ -737,20 +754,33 @@ fn solve_disc(
         }
         Start::MeanValue => (tutte::mean_value(&positions, disc)?, StartMap::MeanValue),
         Start::Lscm => lscm_start(barrier)?,
-        Start::Auto { .. } if barrier => lscm_start(true)?,
         Start::Auto { multilevel: choice } => {
-            let coarse = choice.coarse_level(mesh.triangles.len());
-            let (uv, report) = match coarse {
-                Some(coarse) => {
-                    let (uv, report) = multilevel_start(mesh, disc, options, coarse);
-                    (uv, Some(report))
+            if matches!(shared, SharedStart::NotTried) {
+                *shared = match choice.coarse_level(mesh.triangles.len()) {
+                    Some(coarse) => {
+                        let (uv, report) = multilevel_start(mesh, disc, options, coarse);
+                        SharedStart::Tried(uv, report)
+                    }
+                    None => SharedStart::None,
+                };
+            }
+            match shared {
+                SharedStart::Tried(Some(uv), report)
+                    if !barrier || boundary_crossings(uv, boundary) == 0 =>
+                {
+                    multilevel = Some(report.clone());
+                    (uv.clone(), StartMap::Multilevel)
                 }
-                None => (None, None),
-            };
-            multilevel = report;
-            match uv {
-                Some(uv) => (uv, StartMap::Multilevel),
-                None => lscm_start(true)?,
+                SharedStart::Tried(uv, report) => {
+                    let mut report = report.clone();
+                    if uv.is_some() {
+                        report.abandoned =
+                            Some("its boundary crosses itself (a barrier solve)".into());
+                    }
+                    multilevel = Some(report);
+                    lscm_start(true)?
+                }
+                SharedStart::None | SharedStart::NotTried => lscm_start(true)?,
             }
         }
     };
@@ -864,7 +894,7 @@ fn solve_disc(
                     multilevel,
                 },
             )
-            .map(SolveOutcome::Map);
+            .map(|map| SolveOutcome::Map(Box::new(map)));
         }
     }
     if options.warm_start
@@ -1010,7 +1040,7 @@ fn solve_disc(
             multilevel,
         },
     )
-    .map(SolveOutcome::Map)
+    .map(|map| SolveOutcome::Map(Box::new(map)))
 }
 
 /// What a solve of [`solve_disc`] did, for [`result_of`].
@@ -1118,8 +1148,11 @@ fn multilevel_start(
             start: Start::Auto {
                 multilevel: Multilevel::Never,
             },
-            // Only a start: the full mesh's solve checks (and prevents) overlap.
-            bijective: Bijective::Off,
+            // Overlap-free on the coarse level unless overlap is allowed, so that a
+            // barrier solve can start from it too (the full mesh's solve checks and
+            // prevents overlap in any case).
+            bijective: options.bijective,
+            max_distortion: None,
             ..options.clone()
         };
         let flat = flatten(&coarse, &coarse_options).map_err(|e| format!("coarse mesh: {e}"))?;
