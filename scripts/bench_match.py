@@ -4,7 +4,9 @@
 Runs the surfmap binary on every pair made by ../shared/match_eval/make_pairs.py (without
 input, and with the 7 landmarks), scores each prediction with that folder's independent
 referee (score.py; the matcher never reads gt.npz) and prints one table row per track in
-the layout of match_eval/references.py, so the two tables can be read side by side.
+the layout of match_eval/references.py, so the two tables can be read side by side. The
+landmark error is in the pairs' units (index.json), except that metres are shown as mm
+(scripts/flame_pairs.py makes such pairs).
 
     /opt/peers-venv/bin/python scripts/bench_match.py --pairs /tmp/surfmap_pairs \
         --surfmap target/release/surfmap [--only identity,partial] [--out /tmp/surfmap_bench]
@@ -50,8 +52,10 @@ def main():
             report = json.load(open(os.path.join(out, "match.json")))
             s = score(Pair(d), np.load(os.path.join(out, "correspondence.npy")))
             curve = dict(zip([round(x, 2) for x in s["thresholds"]], s["curve"]))
-            row = dict(track=e["track"], pair=e["dir"], method=method, mean=s["mean_err"],
-                       p05=s["pct_005"], p02=curve[0.02], p10=s["pct_01"], lm=s["lm_err"],
+            # the landmark error in the pairs' units, metres shown as mm
+            lm_scale, units = (1000.0, "mm") if e.get("units") == "m" else (1.0, e.get("units", "cm"))
+            row = dict(track=e["track"], pair=e["dir"], method=method, units=units, mean=s["mean_err"],
+                       p05=s["pct_005"], p02=curve[0.02], p10=s["pct_01"], lm=lm_scale * s["lm_err"],
                        coverA=s["coverage_A"], coverB=s["cover_B"], flip=s["flip"],
                        collapse=s["collapse"], false_match=s["false_match"], seconds=seconds,
                        solve=report["seconds_solve"], min_det=report["min_det"])
@@ -72,7 +76,7 @@ def main():
                 continue
             m = lambda k: float(np.mean([r[k] for r in rs]))  # noqa: E731
             med = lambda k: float(np.median([r[k] for r in rs]))  # noqa: E731
-            print(f"| {track} ({len(rs)}, cm) | {method} | {m('mean'):.3f} | {100 * m('p02'):.1f} | {100 * m('p05'):.1f} "
+            print(f"| {track} ({len(rs)}, {rs[0]['units']}) | {method} | {m('mean'):.3f} | {100 * m('p02'):.1f} | {100 * m('p05'):.1f} "
                   f"| {100 * m('p10'):.1f} | {m('lm'):.2f} | {100 * m('coverA'):.1f} | {100 * m('coverB'):.1f} "
                   f"| {100 * max(r['flip'] for r in rs):.2f} | {100 * max(r['collapse'] for r in rs):.2f} "
                   f"| {100 * m('false_match'):.1f} | {med('solve'):.2f} | {med('seconds'):.2f} |")
