@@ -210,8 +210,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 report.largest_landmark_miss
             ),
         };
+        let left_out = match report.alignment.left_out.as_slice() {
+            [] => String::new(),
+            names => format!(
+                " (left out of its fit, the others disagreeing: {}; they still guide the solve)",
+                names.join(", ")
+            ),
+        };
         outln!(
-            "match: {} levels up to {n}², {} iterations, energy {:.4e}, min det Dφ {:.3}, matched {:.1}% of A ({} of {}, {} completed at rims), {:.1}% of B covered{filled}, {} vertices unmatched for folds ({} flipped, {} collapsed){pinned}, alignment {}, {:.2} s",
+            "match: {} levels up to {n}², {} iterations, energy {:.4e}, min det Dφ {:.3}, matched {:.1}% of A ({} of {}, {} completed at rims), {:.1}% of B covered{filled}, {} vertices unmatched for folds ({} flipped, {} collapsed){pinned}, alignment {}{left_out}, {:.2} s",
             report.levels.len(),
             report.iterations,
             report.energy,

@@ -24,7 +24,9 @@ use super::energy::{B_SD, B_X, Betas, LevelEnergy, Similarity3, chi, robust};
 use super::ncg::{LevelLog, NcgSettings, minimize};
 use super::precondition::SobolevPreconditioner;
 use super::rigid::{ClosestPoints, align_rigidly, vertex_normals};
-use super::similarity::{Similarity2, fit_similarity_2d, fit_similarity_3d};
+use super::similarity::{
+    Similarity2, fit_similarity_2d, fit_similarity_2d_robust, fit_similarity_3d,
+};
 use super::surface::MatchSurface;
 use crate::mesh::{SurfacePoint, TriMesh};
 use crate::raster::{FeatureCurve, FeatureFile};
@@ -165,6 +167,9 @@ pub struct AlignmentReport {
     /// Hole rims paired as features: `(hole of A, hole of B, distance of their centres
     /// in ω after the alignment)`.
     pub hole_pairs: Vec<(usize, usize, f64)>,
+    /// Features/landmarks left out of the alignment's similarity fit because the others
+    /// disagreed with them ([`fit_similarity_2d_robust`]); they still guide the solve.
+    pub left_out: Vec<String>,
 }
 
 /// Whether the rims of filled holes (eyes, mouth) are paired across the surfaces and
@@ -483,17 +488,19 @@ pub fn solve(
     let (s, mut similarity, mut alignment) = if use_features {
         let pa = feature_centroids(&sa, fa.unwrap());
         let pb = feature_centroids(&sb, fb.unwrap());
-        let s = if pa.len() >= 2 {
-            fit_similarity_2d(&pa, &pb).ok_or_else(|| {
+        let (s, left_out) = if pa.len() >= 2 {
+            fit_similarity_2d_robust(&pa, &pb).ok_or_else(|| {
                 MatchError::Guidance("the features/landmarks of A all lie at one point".into())
             })?
         } else {
-            Similarity2::about(pa[0], 0.0, scale, pb[0])
+            (Similarity2::about(pa[0], 0.0, scale, pb[0]), vec![])
         };
+        let names = &fa.unwrap().features;
         let report = AlignmentReport {
             method: "features".into(),
             similarity: s,
             hole_pairs: vec![],
+            left_out: left_out.iter().map(|&i| names[i].name.clone()).collect(),
         };
         (s, Similarity3::identity(), report)
     } else if options.align == Align::None {
@@ -502,6 +509,7 @@ pub fn solve(
             method: "none".into(),
             similarity: s,
             hole_pairs: vec![],
+            left_out: vec![],
         };
         (s, Similarity3::identity(), report)
     } else {
@@ -637,6 +645,7 @@ fn shape_alignment(
         ),
         similarity: s,
         hole_pairs: vec![],
+        left_out: vec![],
     };
     Ok((s, motion, report))
 }
