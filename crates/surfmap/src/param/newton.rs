@@ -431,7 +431,12 @@ impl<'m> NewtonSolver<'m> {
                 .map(|(g, p)| g * p)
                 .sum::<f64>();
             decrement_prev = decrement;
-            if !(decrement.is_finite()) || decrement <= 0.0 {
+            if !decrement.is_finite() {
+                // Overflow in the step: no progress is possible, and nothing says
+                // this is a minimum (it used to be reported as converged).
+                return Ok((StopReason::Locked, it - 1, energy));
+            }
+            if decrement <= 0.0 {
                 // The matrix is positive definite, so p is a descent direction unless
                 // the gradient vanished to rounding: we are at the minimum.
                 return Ok((StopReason::Converged, it - 1, energy));
