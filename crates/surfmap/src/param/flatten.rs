@@ -651,8 +651,8 @@ fn flatten_disc(
 enum Solve {
     /// Without the boundary barrier.
     Unconstrained,
-    /// Without the barrier, unless the start map's boundary already crosses itself:
-    /// then nothing ([`SolveOutcome::StartCrosses`]), for a barrier solve instead. Measured on
+    /// Without the barrier, unless the start map (not a given one) already crosses
+    /// itself: then nothing ([`SolveOutcome::StartCrosses`]), for a barrier solve instead. Measured on
     /// every mesh in `../shared/data` (BENCHMARKS.md, "Hard discs"): each of the five
     /// starts that crossed (elephant_holes 92 crossing pairs, beetle, holes and three
     /// ICT faces opened with seams: 1–4) led to an overlapping minimum, so the
@@ -785,7 +785,9 @@ fn solve_disc(
         }
     };
     let start_flipped = admissible(&mut uv);
+    // (A given start is the user's: it is solved from as given.)
     if solve == Solve::UnlessStartCrosses
+        && start != StartMap::Given
         && start_flipped == 0
         && boundary_crossings(&uv, boundary) > 0
     {
