@@ -1,0 +1,68 @@
+#!/usr/bin/env python3
+"""How much of a matching result is rounding noise: runs `surfmap match` on each referee pair
+with B.obj as made (seed 0) and with B's coordinates multiplied by (1 + 1e-12 N(0,1)) (seeds
+1, 2, ...), scores every run with ../shared/match_eval/score.py and prints the fraction within
+0.05 per run, per pair and per track.
+
+    /opt/peers-venv/bin/python scripts/match_noise.py --pairs /tmp/surfmap_pairs \\
+        --surfmap target/release/surfmap [--seeds 3] [--landmarks] [--only partial]
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "..", "shared", "match_eval"))
+
+import numpy as np  # noqa: E402
+from score import Pair, score  # noqa: E402
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--pairs", required=True)
+    ap.add_argument("--surfmap", default=os.path.join(HERE, "..", "target", "release", "surfmap"))
+    ap.add_argument("--out", default="/tmp/surfmap_noise_runs")
+    ap.add_argument("--seeds", type=int, default=3)
+    ap.add_argument("--landmarks", action="store_true")
+    ap.add_argument("--only", default=None, help="comma-separated substrings of pair names")
+    args = ap.parse_args()
+    index = json.load(open(os.path.join(args.pairs, "index.json")))
+    tracks = {}
+    for e in index:
+        if args.only and not any(o in e["dir"] for o in args.only.split(",")):
+            continue
+        d = os.path.join(args.pairs, e["dir"])
+        runs = []
+        for seed in range(args.seeds):
+            work = os.path.join(args.out, e["dir"], str(seed))
+            os.makedirs(work, exist_ok=True)
+            rng = np.random.default_rng(seed)
+            lines = []
+            for line in open(os.path.join(d, "B.obj")).read().splitlines():
+                if line.startswith("v ") and seed > 0:
+                    x = np.array([float(t) for t in line.split()[1:4]])
+                    x = x * (1 + 1e-12 * rng.standard_normal(3))
+                    line = "v %.17g %.17g %.17g" % tuple(x)
+                lines.append(line)
+            open(os.path.join(work, "B.obj"), "w").write("\n".join(lines) + "\n")
+            cmd = [args.surfmap, "match", os.path.join(d, "A.obj"), os.path.join(work, "B.obj"),
+                   "-o", os.path.join(work, "out"), "--quiet"]
+            if args.landmarks:
+                cmd += ["--landmarks", os.path.join(d, "landmarks.json")]
+            subprocess.run(cmd, check=True, capture_output=True)
+            s = score(Pair(d), np.load(os.path.join(work, "out", "correspondence.npy")))
+            runs.append(s["pct_005"])
+        tracks.setdefault(e["track"], []).append(runs)
+        print(f"{e['dir']:48s} " + " ".join(f"{100 * r:.1f}" for r in runs)
+              + f"  spread {100 * (max(runs) - min(runs)):.1f}", flush=True)
+    for track, rs in tracks.items():
+        a = 100 * np.array(rs)
+        print(f"{track:12s} per run " + " / ".join(f"{m:.1f}" for m in a.mean(0))
+              + f"  mean {a.mean():.1f}  largest spread on a pair {(a.max(1) - a.min(1)).max():.1f}")
+
+
+if __name__ == "__main__":
+    main()
