@@ -89,7 +89,7 @@ pub struct Args {
     pub similarity_search: SearchArg,
     /// Extra starts of the similarity search: rotated by ±DEG degrees and scaled by
     /// (1 ± SCALE) (the lowest energy is kept); 0,0 searches from the start alone.
-    #[arg(long, value_name = "DEG,SCALE", value_delimiter = ',', num_args = 2)]
+    #[arg(long, value_name = "DEG,SCALE", value_delimiter = ',')]
     pub search_candidates: Option<Vec<f64>>,
     /// Level k of the similarity search's energy (grid 2^k + 1; at most the solve's
     /// coarsest level, 6).
@@ -174,8 +174,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     options.similarity_search.level = args.search_level;
     if let Some(c) = &args.search_candidates {
-        if c.iter().any(|x| !x.is_finite() || *x < 0.0) || c[1] >= 1.0 {
-            bail!("--search-candidates: degrees ≥ 0 and a scale step in [0, 1), got {c:?}");
+        if c.len() != 2 || c.iter().any(|x| !x.is_finite() || *x < 0.0) || c[1] >= 1.0 {
+            bail!(
+                "--search-candidates takes DEG,SCALE: degrees ≥ 0 and a scale step in [0, 1), got {c:?}"
+            );
         }
         options.similarity_search.candidate_angle = c[0].to_radians();
         options.similarity_search.candidate_log_scale = (1.0 + c[1]).ln();
