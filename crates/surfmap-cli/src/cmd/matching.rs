@@ -7,8 +7,8 @@ use std::path::PathBuf;
 
 use anyhow::{Context, bail};
 use surfmap::matching::{
-    Align, Guidance, HoleFeatures, Landmarks, MatchOptions, match_surfaces, output, pictures,
-    write_match_folder,
+    Align, Guidance, HoleFeatures, Landmarks, MatchOptions, SearchWhen, match_surfaces, output,
+    pictures, write_match_folder,
 };
 use surfmap::raster::FeatureFile;
 use surfmap::render::save_png;
@@ -25,6 +25,16 @@ pub enum AlignArg {
     Shape,
     /// The flattened domains as placed in ω.
     None,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum SearchArg {
+    /// No search: the solve from the alignment's start.
+    Off,
+    /// Only when the start comes from the shapes in space (no features or landmarks).
+    Shape,
+    /// After every alignment.
+    Always,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -72,6 +82,19 @@ pub struct Args {
     /// Initial alignment.
     #[arg(long, value_enum, default_value = "auto")]
     pub align: AlignArg,
+    /// Search the rotation, scale and translation of φ that lowers the matching energy
+    /// per matched area on a coarse level, and go on from it when the coarsest level
+    /// solved from it ends lower without matching less.
+    #[arg(long, value_enum, default_value = "shape")]
+    pub similarity_search: SearchArg,
+    /// Extra starts of the similarity search: rotated by ±DEG degrees and scaled by
+    /// (1 ± SCALE) (the lowest energy is kept); 0,0 searches from the start alone.
+    #[arg(long, value_name = "DEG,SCALE", value_delimiter = ',')]
+    pub search_candidates: Option<Vec<f64>>,
+    /// Level k of the similarity search's energy (grid 2^k + 1; at most the solve's
+    /// coarsest level, 6).
+    #[arg(long, value_name = "K", default_value_t = 4)]
+    pub search_level: usize,
     /// Keep the vertices of image triangles that turn over or collapse in space
     /// (by default they are reported unmatched).
     #[arg(long)]
@@ -144,6 +167,21 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         options.betas.position = w;
     }
+    options.similarity_search.when = match args.similarity_search {
+        SearchArg::Off => SearchWhen::Off,
+        SearchArg::Shape => SearchWhen::Shape,
+        SearchArg::Always => SearchWhen::Always,
+    };
+    options.similarity_search.level = args.search_level;
+    if let Some(c) = &args.search_candidates {
+        if c.len() != 2 || c.iter().any(|x| !x.is_finite() || *x < 0.0) || c[1] >= 1.0 {
+            bail!(
+                "--search-candidates takes DEG,SCALE: degrees ≥ 0 and a scale step in [0, 1), got {c:?}"
+            );
+        }
+        options.similarity_search.candidate_angle = c[0].to_radians();
+        options.similarity_search.candidate_log_scale = (1.0 + c[1]).ln();
+    }
     surfmap::grid::grid_level(args.size).context("--size")?;
     let landmarks = match &args.landmarks {
         Some(p) => {
@@ -210,6 +248,22 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 report.largest_landmark_miss
             ),
         };
+        let searched = match &report.alignment.search {
+            None => String::new(),
+            Some(s) => format!(
+                ", similarity search {:+.2}°, scale {:.3} (energy per matched area {:.4e} → {:.4e}, {} evaluations; {})",
+                s.similarity.angle().to_degrees(),
+                s.similarity.scale(),
+                s.energy_start,
+                s.energy_end,
+                s.evaluations,
+                if s.kept {
+                    "kept"
+                } else {
+                    "not kept: solved from it, the coarsest level did not end lower without matching less"
+                }
+            ),
+        };
         let left_out = match report.alignment.left_out.as_slice() {
             [] => String::new(),
             names => format!(
@@ -218,7 +272,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             ),
         };
         outln!(
-            "match: {} levels up to {n}², {} iterations, energy {:.4e}, min det Dφ {:.3}, matched {:.1}% of A ({} of {}, {} completed at rims), {:.1}% of B covered{filled}, {} vertices unmatched for folds ({} flipped, {} collapsed){pinned}, alignment {}{left_out}, {:.2} s",
+            "match: {} levels up to {n}², {} iterations, energy {:.4e}, min det Dφ {:.3}, matched {:.1}% of A ({} of {}, {} completed at rims), {:.1}% of B covered{filled}, {} vertices unmatched for folds ({} flipped, {} collapsed){pinned}, alignment {}{left_out}{searched}, {:.2} s",
             report.levels.len(),
             report.iterations,
             report.energy,

@@ -651,14 +651,14 @@ impl Workspace {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::matching::deformation::{cell_triangles, node};
     use crate::testing::Rng;
 
     /// A synthetic level: smooth A and B data with boundary bands (χ between 0 and 1)
     /// crossing the grid, one feature per side, SPD metrics.
-    fn synthetic(n: usize, betas: Betas) -> LevelEnergy {
+    pub(crate) fn synthetic(n: usize, betas: Betas) -> LevelEnergy {
         let eps = 0.3;
         let xy = |q: usize| node(n, q);
         let h = 1.0 / (n - 1) as f64;
@@ -871,10 +871,9 @@ mod tests {
         assert!(e.evaluate(&u, &mut grad, &mut Workspace::default()).total > 0.0);
     }
 
-    #[test]
-    fn identity_match_of_a_surface_with_itself_has_zero_energy_and_gradient() {
-        // B = A: same curvature, metric, positions; φ = id, T = id.
-        let n = 9;
+    /// The synthetic level with B = A (same curvature, metric, positions; T = id, χ_A = 1):
+    /// φ = id is an exact match of zero energy.
+    pub(crate) fn self_match(n: usize) -> LevelEnergy {
         let mut e = synthetic(
             n,
             Betas {
@@ -910,6 +909,13 @@ mod tests {
                 }
             }
         }
+        e
+    }
+
+    #[test]
+    fn identity_match_of_a_surface_with_itself_has_zero_energy_and_gradient() {
+        let n = 9;
+        let e = self_match(n);
         let mut grad = vec![[0.0; 2]; n * n];
         let t = e.evaluate(&vec![[0.0; 2]; n * n], &mut grad, &mut Workspace::default());
         assert!(t.total.abs() < 1e-12, "{t:?}");

@@ -20,6 +20,7 @@ pub mod pin;
 pub mod precondition;
 pub mod rigid;
 pub mod similarity;
+pub mod similarity_search;
 pub mod solve;
 pub mod surface;
 
@@ -28,6 +29,7 @@ pub use energy::{Betas, EnergyTerms, Similarity3};
 pub use ncg::{LevelLog, NcgSettings, StopReason};
 pub use output::{FoldCheck, MatchReport, PointMap, check_folds, write_match_folder};
 pub use similarity::Similarity2;
+pub use similarity_search::{SearchWhen, SimilaritySearch, SimilaritySearchLog};
 pub use solve::{
     Align, AlignmentReport, Guidance, HoleFeatures, Landmarks, MatchOptions, SurfaceMatch,
     match_surfaces,

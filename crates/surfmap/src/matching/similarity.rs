@@ -40,6 +40,15 @@ impl Similarity2 {
         [q[0] + self.t[0], q[1] + self.t[1]]
     }
 
+    /// `self ∘ inner`: `p ↦ self(inner(p))`.
+    pub fn after(&self, inner: &Similarity2) -> Similarity2 {
+        let t = self.apply(inner.t);
+        Self {
+            z: mul(self.z, inner.z),
+            t,
+        }
+    }
+
     pub fn angle(&self) -> f64 {
         self.z[1].atan2(self.z[0])
     }
@@ -92,7 +101,7 @@ pub fn fit_similarity_2d(p: &[[f64; 2]], q: &[[f64; 2]]) -> Option<Similarity2> 
 /// A landmark is left out of [`fit_similarity_2d_robust`] when the fit of the others
 /// predicts it this many times farther off than their own RMS residual...
 pub const OUTLIER_RATIO: f64 = 5.0;
-/// ...and farther than this (in ω = [0,1]² units: 2 % of the domain's side), so that
+/// ...and farther than this (in `ω = [0, 1]²` units: 2 % of the domain's side), so that
 /// nearly exact fits drop nothing.
 pub const OUTLIER_FLOOR: f64 = 0.02;
 
@@ -271,6 +280,18 @@ mod tests {
         // Three pairs are never thinned (a similarity has four degrees of freedom).
         let (_, dropped) = fit_similarity_2d_robust(&p[..3], &q[..3]).unwrap();
         assert!(dropped.is_empty());
+    }
+
+    #[test]
+    fn composition_applies_the_inner_similarity_first() {
+        let outer = Similarity2::about([0.3, 0.1], 0.7, 1.3, [0.5, -0.2]);
+        let inner = Similarity2::about([-0.4, 0.2], -0.4, 0.8, [0.1, 0.9]);
+        let both = outer.after(&inner);
+        for p in [[0.0, 0.0], [1.0, -2.0], [0.25, 0.75]] {
+            let (a, b) = (both.apply(p), outer.apply(inner.apply(p)));
+            assert!((a[0] - b[0]).hypot(a[1] - b[1]) < 1e-14, "{a:?} {b:?}");
+        }
+        assert!((both.angle() - 0.3).abs() < 1e-14 && (both.scale() - 1.04).abs() < 1e-14);
     }
 
     #[test]

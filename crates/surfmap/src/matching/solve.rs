@@ -11,8 +11,10 @@
 //!
 //! Alignment: both flattenings preserve orientation, so ω_A and ω_B differ by a
 //! similarity of the plane. With paired landmarks or features it is their
-//! least-squares fit; otherwise rotations of ω_A about its centroid are tried at the
-//! coarse levels and the lowest energy (per matched area) is kept.
+//! least-squares fit; otherwise the surfaces are aligned in space and the plane
+//! similarity is fitted to the vertex pairs (`shape_alignment`). From that start a
+//! search over similarities of φ on a coarse level may propose another start, which
+//! the coarsest level's solve then accepts or rejects ([`super::similarity_search`]).
 
 use rayon::prelude::*;
 use serde::Serialize;
@@ -26,6 +28,9 @@ use super::precondition::SobolevPreconditioner;
 use super::rigid::{ClosestPoints, align_rigidly, vertex_normals};
 use super::similarity::{
     Similarity2, fit_similarity_2d, fit_similarity_2d_robust, fit_similarity_3d,
+};
+use super::similarity_search::{
+    SearchWhen, SimilaritySearch, SimilaritySearchLog, matched_area, search_similarity,
 };
 use super::surface::MatchSurface;
 use crate::mesh::{SurfacePoint, TriMesh};
@@ -87,6 +92,10 @@ pub struct MatchOptions {
     pub align: Align,
     /// Rotations tried by the alignment search.
     pub align_rotations: usize,
+    /// A search over plane similarities of φ before the solve; the solve goes on from
+    /// the similarity found only when the coarsest level solved from it ends with a
+    /// lower energy without matching less ([`super::similarity_search`]).
+    pub similarity_search: SimilaritySearch,
     /// Fill holes (eyes, mouth) for the flattenings.
     pub fill_holes: bool,
     /// Pair the rims of filled holes and match them as features.
@@ -142,6 +151,7 @@ impl Default for MatchOptions {
             ncg: NcgSettings::default(),
             align: Align::Auto,
             align_rotations: 24,
+            similarity_search: SimilaritySearch::default(),
             fill_holes: true,
             hole_features: HoleFeatures::Auto,
             allow_scale: true,
@@ -170,6 +180,10 @@ pub struct AlignmentReport {
     /// Features/landmarks left out of the alignment's similarity fit because the others
     /// disagreed with them ([`fit_similarity_2d_robust`]); they still guide the solve.
     pub left_out: Vec<String>,
+    /// The similarity search, when it ran and found a lower energy per matched area
+    /// ([`MatchOptions::similarity_search`]); `kept` says whether the solve went on
+    /// from it.
+    pub search: Option<SimilaritySearchLog>,
 }
 
 /// Whether the rims of filled holes (eyes, mouth) are paired across the surfaces and
@@ -501,6 +515,7 @@ pub fn solve(
             similarity: s,
             hole_pairs: vec![],
             left_out: left_out.iter().map(|&i| names[i].name.clone()).collect(),
+            search: None,
         };
         (s, Similarity3::identity(), report)
     } else if options.align == Align::None {
@@ -510,6 +525,7 @@ pub fn solve(
             similarity: s,
             hole_pairs: vec![],
             left_out: vec![],
+            search: None,
         };
         (s, Similarity3::identity(), report)
     } else {
@@ -525,13 +541,24 @@ pub fn solve(
         features: &features,
         options,
     };
+    let search = match options.similarity_search.when {
+        SearchWhen::Off => false,
+        SearchWhen::Shape => !use_features && options.align != Align::None,
+        SearchWhen::Always => true,
+    };
     let mut phi = Deformation::from_map(sa.level_size(k0), |p| s.apply(p));
     let mut levels = vec![];
     for k in k0..=top {
         if k > k0 {
             phi = phi.prolongate();
         }
-        levels.push(solver.level(k, &mut phi, &mut similarity));
+        if k == k0 && search {
+            let (log, searched) = solver.level_with_search(k0, s, &mut phi, &mut similarity);
+            alignment.search = searched;
+            levels.push(log);
+        } else {
+            levels.push(solver.level(k, &mut phi, &mut similarity));
+        }
     }
     let min_det = phi.min_jacobian_determinant();
     Ok(SurfaceMatch {
@@ -646,6 +673,7 @@ fn shape_alignment(
         similarity: s,
         hole_pairs: vec![],
         left_out: vec![],
+        search: None,
     };
     Ok((s, motion, report))
 }
@@ -672,16 +700,61 @@ impl Solver<'_> {
         }
     }
 
+    /// Refits the position term's similarity of `e` to `phi` (when the term is on).
+    fn refit(&self, e: &mut LevelEnergy, phi: &Deformation) {
+        if self.options.betas.position != 0.0
+            && let Some(s) = fit_position_similarity(e, phi, self.options.allow_scale)
+        {
+            e.similarity = s;
+        }
+    }
+
+    /// The coarsest level `k0` with the similarity search ([`super::similarity_search`]):
+    /// the search runs on level [`SimilaritySearch::level`] from the alignment's
+    /// similarity `s`; when it finds a lower energy per matched area, level `k0` is
+    /// solved from both starts, and the searched one is kept (in `phi` and
+    /// `similarity`) only when its solve ends with a lower energy *and* at least the
+    /// same matched area. `phi` is `s` on level `k0`'s grid.
+    fn level_with_search(
+        &self,
+        k0: usize,
+        s: Similarity2,
+        phi: &mut Deformation,
+        similarity: &mut Similarity3,
+    ) -> (LevelLog, Option<SimilaritySearchLog>) {
+        let settings = &self.options.similarity_search;
+        let ks = settings.level.min(k0);
+        let mut searched_similarity = *similarity;
+        let mut energy = self.energy(ks, searched_similarity);
+        let mut start = Deformation::from_map(self.a.level_size(ks), |p| s.apply(p));
+        let found = search_similarity(&mut energy, &mut start, settings, &mut |e, phi| {
+            self.refit(e, phi)
+        });
+        let from_alignment = self.level(k0, phi, similarity);
+        let Some(mut found) = found else {
+            return (from_alignment, None);
+        };
+        searched_similarity = energy.similarity;
+        let moved = found.similarity.after(&s);
+        let mut other = Deformation::from_map(phi.size, |p| moved.apply(p));
+        let from_search = self.level(k0, &mut other, &mut searched_similarity);
+        // Kept only when it dominates: a lower energy without matching less.
+        let matched = |phi: &Deformation, t: Similarity3| matched_area(&self.energy(k0, t), phi);
+        found.kept = from_search.end.total < from_alignment.end.total
+            && matched(&other, searched_similarity) >= matched(phi, *similarity);
+        if found.kept {
+            *phi = other;
+            *similarity = searched_similarity;
+            (from_search, Some(found))
+        } else {
+            (from_alignment, Some(found))
+        }
+    }
+
     /// Minimizes level `k` from `phi` (already on level k's grid).
     fn level(&self, k: usize, phi: &mut Deformation, similarity: &mut Similarity3) -> LevelLog {
         let mut energy = self.energy(k, *similarity);
-        let allow_scale = self.options.allow_scale;
-        let position = self.options.betas.position != 0.0;
-        let mut refit = |e: &mut LevelEnergy, phi: &Deformation| {
-            if position && let Some(s) = fit_position_similarity(e, phi, allow_scale) {
-                e.similarity = s;
-            }
-        };
+        let mut refit = |e: &mut LevelEnergy, phi: &Deformation| self.refit(e, phi);
         let n = phi.size;
         let w = self.options.sobolev_cells / (n - 1) as f64;
         let precondition = (w > 0.0).then(|| SobolevPreconditioner::new(n, w * w));
@@ -781,5 +854,68 @@ impl SurfaceMatch {
     /// Fraction of grid nodes used (for reports): ξ itself.
     pub fn node(&self, k: usize) -> [f64; 2] {
         node(self.deformation.size, k)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::generate::bumpy_disc;
+
+    /// A surface and a re-triangulated copy: the true plane similarity is fitted to
+    /// the domain positions of every vertex of A and B's nearest vertex (the same point
+    /// in space). Started 12° and 10 % in scale off it, the search must find it, and
+    /// the coarsest level must end near it from whichever start it keeps.
+    #[test]
+    fn the_search_brings_a_turned_and_scaled_start_back() {
+        let (mesh_a, mesh_b) = (bumpy_disc(18, 0.4), bumpy_disc(23, 0.4));
+        let unit = (mesh_a.area() * mesh_b.area()).sqrt().sqrt();
+        let options = MatchOptions {
+            size: 129,
+            ..Default::default()
+        };
+        let surface = |m: &TriMesh| MatchSurface::new(m, None, 129, true, unit, 0.0).unwrap();
+        let (sa, sb) = (surface(&mesh_a), surface(&mesh_b));
+        let closest = ClosestPoints::new(&sb.positions);
+        let (pa, pb): (Vec<[f64; 2]>, Vec<[f64; 2]>) = (0..sa.positions.len())
+            .map(|v| {
+                let (w, _) = closest.closest(&sa.positions[v]);
+                (sa.vertex_domain_position(v), sb.vertex_domain_position(w))
+            })
+            .unzip();
+        let truth = fit_similarity_2d(&pa, &pb).unwrap();
+        let (ca, _) = sa.domain_centroid_and_area();
+        let off = Similarity2::about(truth.apply(ca), 12f64.to_radians(), 1.1, truth.apply(ca));
+        let start = off.after(&truth);
+        let solver = Solver {
+            a: &sa,
+            b: &sb,
+            features: &[],
+            options: &options,
+        };
+        let k0 = options.coarsest_level;
+        let mut phi = Deformation::from_map(sa.level_size(k0), |p| start.apply(p));
+        let mut similarity = Similarity3::identity();
+        let (_, found) = solver.level_with_search(k0, start, &mut phi, &mut similarity);
+        let found = found.expect("the search lowers the energy");
+        let moved = found.similarity.after(&start);
+        let angle = (moved.angle() - truth.angle()).to_degrees();
+        let scale = moved.scale() / truth.scale();
+        assert!(
+            angle.abs() < 2.0 && (scale - 1.0).abs() < 0.02,
+            "{angle}° and scale {scale} off the truth ({found:?})"
+        );
+        // φ over A's vertices against the truth, in cells of the 65² grid.
+        let cell = 1.0 / (phi.size - 1) as f64;
+        let mut off_truth: Vec<f64> = pa
+            .iter()
+            .map(|&p| {
+                let (y, t) = (phi.apply(p), truth.apply(p));
+                (y[0] - t[0]).hypot(y[1] - t[1]) / cell
+            })
+            .collect();
+        off_truth.sort_by(f64::total_cmp);
+        let median = off_truth[off_truth.len() / 2];
+        assert!(median < 0.5, "median {median} cells off the truth");
     }
 }
