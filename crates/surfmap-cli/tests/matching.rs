@@ -142,6 +142,40 @@ fn bad_guidance_is_refused_by_name_and_nothing_is_written() {
     // A grid size that is not 2^k + 1.
     let err = fails(&[s, s, "--size", "100"], &out);
     assert!(err.contains("--size"), "{err}");
+    // Two weights where β takes three.
+    let err = fails(&[s, s, "--beta", "1,2"], &out);
+    assert!(err.contains("--beta takes three weights"), "{err}");
+    let _ = std::fs::remove_dir_all(&base);
+}
+
+#[test]
+fn beta_given_as_documented_is_the_default_energy() {
+    let base = temp_dir("match-beta");
+    run_demo(&base, 10);
+    let s = base.join("surface.obj");
+    let run = |extra: &[&str], name: &str| {
+        let dir = base.join(name);
+        let out = surfmap()
+            .arg("match")
+            .arg(&s)
+            .arg(&s)
+            .args(["--size", "129", "-o"])
+            .arg(&dir)
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        read_npy(&dir.join("correspondence.npy"))
+    };
+    // `--beta 1,0.01,5` (the README's form, one comma-separated value) is accepted and
+    // is the default; another β changes the result.
+    let default = run(&[], "default");
+    assert_eq!(run(&["--beta", "1,0.01,5"], "given"), default);
+    assert_ne!(run(&["--beta", "1,1,5"], "other"), default);
     let _ = std::fs::remove_dir_all(&base);
 }
 

@@ -74,7 +74,7 @@ pub struct Args {
     #[arg(long, default_value_t = 257)]
     pub size: usize,
     /// Energy weights β: bending, regularization, features (thesis 2.16).
-    #[arg(long, value_name = "B,R,F", value_delimiter = ',', num_args = 3)]
+    #[arg(long, value_name = "B,R,F", value_delimiter = ',')]
     pub beta: Option<Vec<f64>>,
     /// Weight of the 3D position term (0 = the thesis energy alone).
     #[arg(long)]
@@ -152,6 +152,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ..Default::default()
     };
     if let Some(b) = &args.beta {
+        if b.len() != 3 {
+            bail!(
+                "--beta takes three weights B,R,F (bending, regularization, features; default 1,0.01,5), got {}",
+                b.len()
+            );
+        }
         if b.iter().any(|x| !x.is_finite() || *x < 0.0) {
             bail!("--beta: weights must be finite and ≥ 0, got {b:?}");
         }
