@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{read_npy_f64 as read_npy, run_demo, shared_file, surfmap, temp_dir};
+use common::{read_npy_f64 as read_npy, run_demo, run_ok, shared_file, surfmap, temp_dir};
 use std::path::Path;
 
 #[test]
@@ -16,19 +16,14 @@ fn matching_two_registered_faces_finds_the_registration() {
         return;
     };
     let dir = temp_dir("match-ict");
-    let out = surfmap()
-        .arg("match")
-        .arg(&a)
-        .arg(&b)
-        .arg("-o")
-        .arg(&dir)
-        .arg("--pictures")
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let out = run_ok(
+        surfmap()
+            .arg("match")
+            .arg(&a)
+            .arg(&b)
+            .arg("-o")
+            .arg(&dir)
+            .arg("--pictures"),
     );
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
@@ -155,19 +150,14 @@ fn beta_given_as_documented_is_the_default_energy() {
     let s = base.join("surface.obj");
     let run = |extra: &[&str], name: &str| {
         let dir = base.join(name);
-        let out = surfmap()
-            .arg("match")
-            .arg(&s)
-            .arg(&s)
-            .args(["--size", "129", "-o"])
-            .arg(&dir)
-            .args(extra)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
+        run_ok(
+            surfmap()
+                .arg("match")
+                .arg(&s)
+                .arg(&s)
+                .args(["--size", "129", "-o"])
+                .arg(&dir)
+                .args(extra),
         );
         read_npy(&dir.join("correspondence.npy"))
     };

@@ -39,6 +39,17 @@ pub fn temp_dir(name: &str) -> PathBuf {
     d
 }
 
+/// Runs `command`, asserting that it succeeded (its stderr in the message otherwise).
+pub fn run_ok(command: &mut Command) -> std::process::Output {
+    let out = command.output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
 /// Runs `surfmap demo -o dir --rings N` and returns its stdout; `dir` then holds
 /// `surface.obj` (no texture coordinates) and `conformal.obj` / `balanced.obj` (the
 /// same surface with a flattening as `vt`).
