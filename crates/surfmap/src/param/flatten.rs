@@ -652,11 +652,12 @@ enum Solve {
     /// Without the boundary barrier.
     Unconstrained,
     /// Without the barrier, unless the start map (not a given one) already crosses
-    /// itself: then nothing ([`SolveOutcome::StartCrosses`]), for a barrier solve instead. Measured on
-    /// every mesh in `../shared/data` (BENCHMARKS.md, "Hard discs"): each of the five
-    /// starts that crossed (elephant_holes 92 crossing pairs, beetle, holes and three
-    /// ICT faces opened with seams: 1–4) led to an overlapping minimum, so the
-    /// unconstrained solve from them (elephant: 64 iterations) was spent for nothing.
+    /// itself: then nothing ([`SolveOutcome::StartCrosses`]), for a barrier solve
+    /// instead. Measured on every mesh in `../shared/data` (BENCHMARKS.md, "Hard
+    /// discs"): each of the nine starts that crossed (elephant_holes: 92 crossing pairs;
+    /// beetle, holes and six ICT faces opened with seams: 1–4) led to an overlapping
+    /// minimum, so the unconstrained solve from them (elephant: 64 iterations) was
+    /// spent for nothing.
     UnlessStartCrosses,
     /// With the boundary barrier, from a crossing-free start.
     Barrier,
