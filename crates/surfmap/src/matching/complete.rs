@@ -698,6 +698,25 @@ mod tests {
         (a, b)
     }
 
+    /// Distances from the matched points of A's vertices `v` with `keep(v)` to their
+    /// counterparts (B is A's vertex-for-vertex copy: vertex `v` of B), sorted.
+    fn counterpart_errors(
+        a: &TriMesh,
+        b: &TriMesh,
+        corr: &[Option<SurfacePoint>],
+        keep: impl Fn(usize) -> bool,
+    ) -> Vec<f64> {
+        let mut e: Vec<f64> = (0..a.num_vertices())
+            .filter(|&v| keep(v))
+            .filter_map(|v| {
+                let p = corr[v]?.position(&b.positions, &b.triangles);
+                Some(distance(p, b.positions[v]))
+            })
+            .collect();
+        e.sort_by(f64::total_cmp);
+        e
+    }
+
     fn assert_no_folds(a: &TriMesh, b: &TriMesh, corr: &[Option<SurfacePoint>]) {
         let folds = super::super::output::check_folds(a, b, corr);
         assert!(
@@ -796,14 +815,7 @@ mod tests {
         assert_eq!(left, 0, "vertices around the hole left unmatched");
         // Each completed vertex lands near its counterpart: within half an edge, most
         // much closer (the offsets of a smooth bend are extrapolated from one side).
-        let mut e: Vec<f64> = (0..a.num_vertices())
-            .filter(|&v| missing(a.positions[v]))
-            .filter_map(|v| {
-                let p = corr[v]?.position(&b.positions, &b.triangles);
-                Some(distance(p, b.positions[v]))
-            })
-            .collect();
-        e.sort_by(f64::total_cmp);
+        let e = counterpart_errors(&a, &b, &corr, |v| missing(a.positions[v]));
         let (median, worst) = (e[e.len() / 2], e[e.len() - 1]);
         println!(
             "completed {}: median error {median:.5}, worst {worst:.5} (edge {edge})",
@@ -829,14 +841,10 @@ mod tests {
             &[],
         );
         assert!(done.completed * 100 >= before * 95, "{done:?} of {before}");
-        let mut e: Vec<f64> = (0..a.num_vertices())
-            .filter_map(|v| {
-                let p = corr[v]?.position(&b.positions, &b.triangles);
-                Some(distance(p, b.positions[v]))
-            })
+        let e: Vec<f64> = counterpart_errors(&a, &b, &corr, |_| true)
+            .into_iter()
             .filter(|&d| d > 0.0)
             .collect();
-        e.sort_by(f64::total_cmp);
         let median = e[e.len() / 2];
         println!(
             "smoothed and completed {}: median error {median:.5}",
@@ -879,13 +887,7 @@ mod tests {
             })
             .collect();
         let band_error = |corr: &[Option<SurfacePoint>]| -> f64 {
-            let e: Vec<f64> = (0..a.num_vertices())
-                .filter(|&v| noisy(v))
-                .filter_map(|v| {
-                    let p = corr[v]?.position(&b.positions, &b.triangles);
-                    Some(distance(p, b.positions[v]))
-                })
-                .collect();
+            let e = counterpart_errors(&a, &b, corr, noisy);
             e.iter().sum::<f64>() / e.len() as f64
         };
         let before = band_error(&corr);

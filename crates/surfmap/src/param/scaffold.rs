@@ -343,7 +343,6 @@ pub fn solve<D: Density + ?Sized>(
     // re-meshing flips up to 6× as many edges as there are scaffold triangles, so a
     // reused ordering fills badly: 2.3× slower on elephant_holes), which costs a
     // quarter of AMD on the 2n unknowns.
-    let mut ordering: Option<VertexOrdering> = None;
     for it in 1..=MAX_ITERATIONS {
         stats.flips += make_delaunay(&all, &mut scaffold);
         let weight = SCAFFOLD_WEIGHT / scaffold.len() as f64;
@@ -367,13 +366,13 @@ pub fn solve<D: Density + ?Sized>(
             r.area = weight;
             combined_rest.push(r);
         }
-        let ordering = ordering.insert(VertexOrdering::of_triangles(all.len(), &combined)?);
+        let ordering = VertexOrdering::of_triangles(all.len(), &combined)?;
         let mut solver = NewtonSolver::new(
             all.len(),
             &combined,
             combined_rest.clone(),
             pins,
-            Some(ordering),
+            Some(&ordering),
         )?;
         let mut last = None;
         let (_, steps, _) =
