@@ -104,6 +104,9 @@ pub(crate) struct LevelA {
     pub x: Vec<[f64; 3]>,
     /// Per feature: `η^ε(d_A)` per node.
     pub feature_eta: Vec<Vec<f64>>,
+    /// Per node: the features whose `η^ε(d_A)` is not zero there
+    /// ([`FeatureSet::nonzero`] of `feature_eta`), the only ones the first feature term reads.
+    pub eta_set: Vec<FeatureSet>,
     /// Per triangle (`2·(i·(n−1) + j) + {0 lower, 1 upper}`).
     pub triangles: Vec<TriangleA>,
     /// Per feature, per triangle: `θ^ε(d_A)` at the centroid.
@@ -132,32 +135,130 @@ pub(crate) struct LevelB {
     /// The same distances node-major (`packed[node · n_features + f]`), so that one
     /// node's features are read from a few cache lines.
     packed: Vec<f64>,
+    /// Per cell (indexed by its lower-left node): the features whose `d_B` may be below
+    /// `near_distance` in the cell — a corner value is (the bilinear interpolant lies
+    /// between its corners' values), or the feature's distance is negative somewhere.
+    near: Vec<FeatureSet>,
+    /// The distance below which a feature is "near" in `near`.
+    pub near_distance: f64,
 }
 
 impl LevelB {
-    /// `features` must be on `field`'s grid.
-    pub fn new(field: Grid<[f64; B_CHANNELS]>, features: Vec<Grid<f64>>) -> Self {
-        let nodes = field.as_slice().len();
+    /// `features` must be on `field`'s grid. `near_distance` must be at least `3ε` of the
+    /// level's energy: the second feature term of a triangle is zero unless the mean of
+    /// its three nodes' `d_B` is below ε, which needs every node's `d_B` below 3ε when no
+    /// distance is negative ([`LevelEnergy::evaluate`] reads the feature only there).
+    pub fn new(
+        field: Grid<[f64; B_CHANNELS]>,
+        features: Vec<Grid<f64>>,
+        near_distance: f64,
+    ) -> Self {
+        let n = field.size();
+        let nodes = n * n;
         let packed = (0..nodes)
             .flat_map(|k| features.iter().map(move |f| f.as_slice()[k]))
+            .collect();
+        let signed: Vec<bool> = features
+            .iter()
+            .map(|f| f.as_slice().iter().any(|&d| d.is_nan() || d < 0.0))
+            .collect();
+        let near = (0..nodes)
+            .map(|k| {
+                let (i, j) = (k / n, k % n);
+                let mut set = FeatureSet::default();
+                if i + 1 < n && j + 1 < n {
+                    for (f, grid) in features.iter().enumerate() {
+                        let d = grid.as_slice();
+                        let lowest = d[k].min(d[k + 1]).min(d[k + n]).min(d[k + n + 1]);
+                        if signed[f] || lowest < near_distance {
+                            set.insert(f);
+                        }
+                    }
+                }
+                set
+            })
             .collect();
         Self {
             field,
             features,
             packed,
+            near,
+            near_distance,
         }
     }
 
-    /// Every feature distance `d_B` and its gradient at a located point (one per entry
-    /// of `out`, which has one entry per feature): the bilinear interpolant of each
-    /// feature grid, read from the node-major copy.
+    /// Feature `f`'s distance `d_B` and its gradient at a located point.
     #[inline]
-    fn sample_features(&self, at: &GridPoint, out: &mut [FeatureSample]) {
+    fn sample_feature(&self, at: &GridPoint, f: usize, out: &mut FeatureSample) {
         let nf = self.features.len();
-        let corners = at.corners().map(|c| &self.packed[c * nf..(c + 1) * nf]);
-        for (f, o) in out.iter_mut().enumerate() {
-            let (d, dx, dy) = at.interpolate_with_gradient(corners.map(|c| c[f]));
-            *o = FeatureSample { d, dx, dy };
+        let (d, dx, dy) =
+            at.interpolate_with_gradient(at.corners().map(|c| self.packed[c * nf + f]));
+        *out = FeatureSample { d, dx, dy };
+    }
+
+    /// The features that may be near (below `near_distance`) anywhere in the located cell.
+    #[inline]
+    fn near_features(&self, at: &GridPoint) -> FeatureSet {
+        self.near[at.corners()[0]]
+    }
+}
+
+/// A set of feature indices as the bits of a word; features 63 and beyond share the
+/// last bit (a set holding it holds all of them), so a set is exact for up to 63 features
+/// and conservative beyond.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) struct FeatureSet(u64);
+
+impl FeatureSet {
+    /// Per node, the features whose per-node value in `values` (one vector per feature)
+    /// is not zero.
+    pub fn nonzero(values: &[Vec<f64>], nodes: usize) -> Vec<Self> {
+        (0..nodes)
+            .map(|k| {
+                let mut s = Self::default();
+                for (f, v) in values.iter().enumerate() {
+                    if v[k] != 0.0 {
+                        s.insert(f);
+                    }
+                }
+                s
+            })
+            .collect()
+    }
+
+    #[inline]
+    pub fn insert(&mut self, f: usize) {
+        self.0 |= 1 << f.min(63);
+    }
+
+    #[inline]
+    pub fn intersection(self, other: Self) -> Self {
+        Self(self.0 & other.0)
+    }
+
+    #[inline]
+    pub fn union(self, other: Self) -> Self {
+        Self(self.0 | other.0)
+    }
+
+    #[inline]
+    pub fn is_empty(self) -> bool {
+        self.0 == 0
+    }
+
+    /// Calls `body` on every feature of the set, in increasing order (`nf`: the number of
+    /// features, for the shared last bit).
+    #[inline]
+    pub fn for_each(self, nf: usize, mut body: impl FnMut(usize)) {
+        let mut bits = self.0;
+        while bits != 0 {
+            let b = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            if b < 63 {
+                body(b);
+            } else {
+                (63..nf).for_each(&mut body);
+            }
         }
     }
 }
@@ -290,24 +391,27 @@ impl LevelEnergy {
         let nf = self.b.features.len();
         assert_eq!(u.len(), n * n);
         assert_eq!(grad.len(), n * n);
+        debug_assert!(nf == 0 || self.b.near_distance >= 3.0 * self.epsilon);
         work.resize(n * n, nf);
         let Workspace {
             samples,
             feature_samples,
+            near,
             adjoint,
             feature_adjoint,
         } = work;
+        let fstride = nf.max(1);
         let nodes = grad
             .par_chunks_mut(n)
             .zip(samples.par_chunks_mut(n))
-            .zip(feature_samples.par_chunks_mut(n * nf.max(1)))
+            .zip(feature_samples.par_chunks_mut(n * fstride))
+            .zip(near.par_chunks_mut(n))
+            .zip(feature_adjoint.par_chunks_mut(n * fstride))
             .enumerate()
-            .map(|(i, ((g, s), fs))| self.node_row(u, i, g, s, fs))
+            .map(|(i, ((((g, s), fs), near), fadj))| self.node_row(u, i, g, s, fs, near, fadj))
             .reduce(EnergyTerms::default, EnergyTerms::add);
         adjoint.iter_mut().for_each(|a| *a = [0.0; 4]);
-        feature_adjoint.iter_mut().for_each(|a| *a = 0.0);
         let mut cells = EnergyTerms::default();
-        let fstride = nf.max(1);
         for parity in 0..2 {
             let part = grad[parity * n..]
                 .par_chunks_mut(2 * n)
@@ -316,7 +420,16 @@ impl LevelEnergy {
                 .enumerate()
                 .filter(|(c, _)| 2 * c + parity < n - 1)
                 .map(|(c, ((g, adj), fadj))| {
-                    self.cell_row(2 * c + parity, u, samples, feature_samples, g, adj, fadj)
+                    self.cell_row(
+                        2 * c + parity,
+                        u,
+                        samples,
+                        feature_samples,
+                        near,
+                        g,
+                        adj,
+                        fadj,
+                    )
                 })
                 .reduce(EnergyTerms::default, EnergyTerms::add);
             cells = cells.add(part);
@@ -329,24 +442,29 @@ impl LevelEnergy {
             .zip(adjoint.par_iter())
             .zip(feature_samples.par_chunks(fstride))
             .zip(feature_adjoint.par_chunks(fstride))
-            .for_each(|((((g, s), a), fs), fa)| {
+            .zip(near.par_iter())
+            .for_each(|(((((g, s), a), fs), fa), near)| {
                 for (c, ac) in a.iter().take(3).enumerate() {
                     g[0] += ac * s.g_dx[c];
                     g[1] += ac * s.g_dy[c];
                 }
                 g[0] += a[3] * s.sd_dx;
                 g[1] += a[3] * s.sd_dy;
-                for f in 0..nf {
+                near.for_each(nf, |f| {
                     g[0] += fa[f] * fs[f].dx;
                     g[1] += fa[f] * fs[f].dy;
-                }
+                });
             });
         nodes.add(cells)
     }
 
-    /// Pass 1 for row `i`: samples B at every node's φ(ξ) into `samples` (and every
-    /// feature distance into `feature_samples`), adds the node terms (bend, position,
-    /// first feature term, uncovered area) and sets the row's gradient to theirs.
+    /// Pass 1 for row `i`: samples B at every node's φ(ξ) into `samples`, adds the node
+    /// terms (bend, position, first feature term, uncovered area) and sets the row's
+    /// gradient to theirs. Feature distances are sampled into `feature_samples` only
+    /// where a term can read them: the features near φ(ξ) in B (recorded in `near`,
+    /// their entries of `feature_adjoint` zeroed for pass 2) and those of the first term
+    /// (`η^ε(d_A) ≠ 0` at the node). The other entries keep stale values nobody reads.
+    #[allow(clippy::too_many_arguments)]
     fn node_row(
         &self,
         u: &[[f64; 2]],
@@ -354,6 +472,8 @@ impl LevelEnergy {
         grad: &mut [[f64; 2]],
         samples: &mut [NodeSample],
         feature_samples: &mut [FeatureSample],
+        near: &mut [FeatureSet],
+        feature_adjoint: &mut [f64],
     ) -> EnergyTerms {
         let n = self.size();
         let h = 1.0 / (n - 1) as f64;
@@ -375,8 +495,15 @@ impl LevelEnergy {
                 sd_dx: sdx[B_SD],
                 sd_dy: sdy[B_SD],
             };
-            self.b
-                .sample_features(&at, &mut feature_samples[j * nf..(j + 1) * nf]);
+            if nf > 0 {
+                let near_b = self.b.near_features(&at);
+                near[j] = near_b;
+                let fs = &mut feature_samples[j * nf..(j + 1) * nf];
+                near_b
+                    .union(self.a.eta_set[k])
+                    .for_each(nf, |f| self.b.sample_feature(&at, f, &mut fs[f]));
+                near_b.for_each(nf, |f| feature_adjoint[j * nf + f] = 0.0);
+            }
             let chi_a = self.a.chi[k];
             let w = self.a.weight[k];
             if chi_a == 0.0 || w == 0.0 {
@@ -422,10 +549,10 @@ impl LevelEnergy {
             }
             // Features, first term of (2.11).
             if beta.features != 0.0 {
-                for f in 0..nf {
+                self.a.eta_set[k].for_each(nf, |f| {
                     let e = self.a.feature_eta[f][k];
                     if e == 0.0 {
-                        continue;
+                        return;
                     }
                     let fs = feature_samples[j * nf + f];
                     let (th, dth) = theta(fs.d, eps);
@@ -433,7 +560,7 @@ impl LevelEnergy {
                     terms.features += c * chi_v * th;
                     g[0] += c * (dchi[0] * th + chi_v * dth * fs.dx);
                     g[1] += c * (dchi[1] * th + chi_v * dth * fs.dy);
-                }
+                });
             }
         }
         terms.total = terms.bend + terms.position + terms.features + terms.uncovered;
@@ -450,6 +577,7 @@ impl LevelEnergy {
         u: &[[f64; 2]],
         samples: &[NodeSample],
         feature_samples: &[FeatureSample],
+        near: &[FeatureSet],
         grad: &mut [[f64; 2]],
         adjoint: &mut [[f64; 4]],
         feature_adjoint: &mut [f64],
@@ -544,14 +672,22 @@ impl LevelEnergy {
                         q[m] += c * (wa * da[m] + wd * ddb[m]);
                     }
                 }
-                if with_features && ta.chi != 0.0 {
+                // Only features near all three nodes can have a mean `d_B` below ε.
+                let active = if with_features && ta.chi != 0.0 {
+                    near[tri[0]]
+                        .intersection(near[tri[1]])
+                        .intersection(near[tri[2]])
+                } else {
+                    FeatureSet::default()
+                };
+                if !active.is_empty() {
                     // χ_B and √det g_B of the triangle, computed at its first active feature.
                     let mut shared = None;
                     let cell = 2 * (i * (n - 1) + j) + t;
-                    for f in 0..nf {
+                    active.for_each(nf, |f| {
                         let th = self.a.feature_theta[f][cell];
                         if th == 0.0 {
-                            continue;
+                            return;
                         }
                         let db = tri
                             .iter()
@@ -560,7 +696,7 @@ impl LevelEnergy {
                             / 3.0;
                         let (e, de) = eta(db, eps);
                         if e == 0.0 && de == 0.0 {
-                            continue;
+                            return;
                         }
                         let (chi_v, dchi_b, sqrt_b, dsqrt) = *shared.get_or_insert_with(|| {
                             let sd = (s0.sd + s1.sd + s2.sd) / 3.0;
@@ -592,7 +728,7 @@ impl LevelEnergy {
                                 p[r][cc] += coef * cof[r][cc];
                             }
                         }
-                    }
+                    });
                 }
                 let adj = jacobian_adjoint(p, upper, inv_h);
                 let q = q.map(|x| x / 3.0);
@@ -635,6 +771,8 @@ pub(crate) struct FeatureSample {
 pub(crate) struct Workspace {
     samples: Vec<NodeSample>,
     feature_samples: Vec<FeatureSample>,
+    /// Per node: the features near φ(ξ) in B ([`LevelB::near_features`]).
+    near: Vec<FeatureSet>,
     adjoint: Vec<[f64; 4]>,
     feature_adjoint: Vec<f64>,
 }
@@ -645,6 +783,7 @@ impl Workspace {
         self.samples.resize(nodes, NodeSample::default());
         self.feature_samples
             .resize(nodes * f, FeatureSample::default());
+        self.near.resize(nodes, FeatureSet::default());
         self.adjoint.resize(nodes, [0.0; 4]);
         self.feature_adjoint.resize(nodes * f, 0.0);
     }
@@ -659,12 +798,18 @@ pub(crate) mod tests {
     /// A synthetic level: smooth A and B data with boundary bands (χ between 0 and 1)
     /// crossing the grid, one feature per side, SPD metrics.
     pub(crate) fn synthetic(n: usize, betas: Betas) -> LevelEnergy {
-        let eps = 0.3;
+        synthetic_with(n, betas, 0.3, [[0.3, 0.4], [0.35, 0.3]])
+    }
+
+    /// [`synthetic`] with another ε (the width of the boundary and feature bands) and
+    /// other feature points (of A, of B).
+    fn synthetic_with(n: usize, betas: Betas, eps: f64, points: [[f64; 2]; 2]) -> LevelEnergy {
         let xy = |q: usize| node(n, q);
         let h = 1.0 / (n - 1) as f64;
         let metric_a = |p: [f64; 2]| [1.2 + 0.3 * p[0], 0.2 * p[1] - 0.1, 0.9 + 0.4 * p[1] * p[0]];
         let sd_a = |p: [f64; 2]| p[0] - 0.6; // χ_A band over x ∈ (0.6, 0.9)
-        let d_a = |p: [f64; 2]| ((p[0] - 0.3).powi(2) + (p[1] - 0.4).powi(2)).sqrt();
+        let [fa, fb] = points;
+        let d_a = |p: [f64; 2]| ((p[0] - fa[0]).powi(2) + (p[1] - fa[1]).powi(2)).sqrt();
         let node_w = |q: usize| {
             let (i, j) = (q / n, q % n);
             let e = |t: usize| if t == 0 || t == n - 1 { 0.5 } else { 1.0 };
@@ -691,7 +836,7 @@ pub(crate) mod tests {
                 }
             }
         }
-        let a = LevelA {
+        let mut a = LevelA {
             size: n,
             h: (0..n * n)
                 .map(|q| (3.0 * xy(q)[0]).sin() + xy(q)[1])
@@ -710,9 +855,11 @@ pub(crate) mod tests {
                 })
                 .collect(),
             feature_eta: vec![(0..n * n).map(|q| eta(d_a(xy(q)), eps).0).collect()],
+            eta_set: vec![],
             triangles,
             feature_theta,
         };
+        a.eta_set = FeatureSet::nonzero(&a.feature_eta, n * n);
         let b_data = (0..n * n)
             .map(|q| {
                 let p = xy(q);
@@ -736,12 +883,13 @@ pub(crate) mod tests {
                     (0..n * n)
                         .map(|q| {
                             let p = xy(q);
-                            ((p[0] - 0.35).powi(2) + (p[1] - 0.3).powi(2)).sqrt()
+                            ((p[0] - fb[0]).powi(2) + (p[1] - fb[1]).powi(2)).sqrt()
                         })
                         .collect(),
                 )
                 .unwrap(),
             ],
+            3.0 * eps,
         );
         LevelEnergy {
             a,
@@ -936,17 +1084,70 @@ pub(crate) mod tests {
         let mut rng = Rng(8);
         let second: Vec<f64> = (0..n * n).map(|_| rng.range(0.0, 1.0)).collect();
         let features = vec![e.b.features[0].clone(), Grid::from_vec(n, second).unwrap()];
-        e.b = LevelB::new(e.b.field.clone(), features);
+        e.b = LevelB::new(e.b.field.clone(), features, 3.0 * e.epsilon);
         let mut out = [FeatureSample::default(); 2];
         for _ in 0..200 {
             // Inside ω and beyond its border (clamped).
             let p = [rng.range(-0.2, 1.2), rng.range(-0.2, 1.2)];
-            e.b.sample_features(&GridPoint::locate(n, p), &mut out);
-            for (f, o) in out.iter().enumerate() {
+            for (f, o) in out.iter_mut().enumerate() {
+                e.b.sample_feature(&GridPoint::locate(n, p), f, o);
                 let (d, dx, dy) = e.b.features[f].sample_with_gradient(p);
                 assert_eq!((o.d, o.dx, o.dy), (d, dx, dy), "feature {f} at {p:?}");
             }
         }
+    }
+
+    /// Features are read only where B's feature is near; the result is the dense
+    /// evaluation's bit for bit, also when the workspace holds another φ's stale samples.
+    #[test]
+    fn features_read_only_where_near_give_the_dense_result() {
+        let n = 33;
+        let all = Betas {
+            bend: 1.0,
+            reg: 1.0,
+            features: 1.0,
+            position: 1.0,
+            uncovered: 1.0,
+        };
+        // Both feature points inside ω_A and ω_B (χ = 1), so both feature terms are active.
+        let pruned = synthetic_with(n, all, 0.05, [[0.3, 0.6], [0.32, 0.62]]);
+        let mut dense = pruned.clone();
+        dense.b = LevelB::new(
+            pruned.b.field.clone(),
+            pruned.b.features.clone(),
+            f64::INFINITY,
+        );
+        let empty = pruned.b.near.iter().filter(|s| s.is_empty()).count();
+        assert!(empty > n * n / 2, "only {empty} of {} cells pruned", n * n);
+        let first = random_displacement(n, 11, 0.004);
+        let second = random_displacement(n, 12, 0.004);
+        let mut work = Workspace::default();
+        let mut grad = vec![[0.0; 2]; n * n];
+        pruned.evaluate(&first, &mut grad, &mut work);
+        let got = pruned.evaluate(&second, &mut grad, &mut work);
+        let mut want_grad = vec![[0.0; 2]; n * n];
+        let want = dense.evaluate(&second, &mut want_grad, &mut Workspace::default());
+        assert!(want.features > 0.0 && want.total.is_finite(), "{want:?}");
+        assert_eq!(got, want);
+        assert_eq!(grad, want_grad);
+    }
+
+    #[test]
+    fn feature_sets_share_the_last_bit_beyond_63_features() {
+        let mut set = FeatureSet::default();
+        set.insert(2);
+        set.insert(70);
+        let mut seen = vec![];
+        set.for_each(72, |f| seen.push(f));
+        let mut want = vec![2];
+        want.extend(63..72);
+        assert_eq!(seen, want);
+        let values: Vec<Vec<f64>> = (0..3).map(|f| vec![0.0, f as f64]).collect();
+        let sets = FeatureSet::nonzero(&values, 2);
+        assert!(sets[0].is_empty());
+        let mut seen = vec![];
+        sets[1].for_each(3, |f| seen.push(f));
+        assert_eq!(seen, vec![1, 2]);
     }
 
     #[test]

@@ -4,7 +4,7 @@
 //! ω, and restricted to every level of the multiscale pyramid.
 
 use super::MatchError;
-use super::energy::{B_CHANNELS, LevelA, LevelB, TriangleA, chi, eta, theta};
+use super::energy::{B_CHANNELS, FeatureSet, LevelA, LevelB, TriangleA, chi, eta, theta};
 use crate::grid::pyramid::gaussian_filter;
 use crate::grid::{Grid, Pyramid, harmonic_extension};
 use crate::mesh::TriMesh;
@@ -230,6 +230,10 @@ impl MatchSurface {
                 }
             }
         }
+        let feature_eta: Vec<Vec<f64>> = dist
+            .iter()
+            .map(|d| d.iter().map(|&v| eta(v, eps).0).collect())
+            .collect();
         LevelA {
             size: m,
             h: s.iter().map(|v| v[S_H]).collect(),
@@ -238,10 +242,8 @@ impl MatchSurface {
                 .collect(),
             chi: sd.iter().map(|&d| chi(d, eps).0).collect(),
             x: s.iter().map(|v| [v[S_X], v[S_X + 1], v[S_X + 2]]).collect(),
-            feature_eta: dist
-                .iter()
-                .map(|d| d.iter().map(|&v| eta(v, eps).0).collect())
-                .collect(),
+            eta_set: FeatureSet::nonzero(&feature_eta, m * m),
+            feature_eta,
             triangles,
             feature_theta,
         }
@@ -278,6 +280,7 @@ impl MatchSurface {
                         .expect("level size")
                 })
                 .collect(),
+            3.0 * eps,
         )
     }
 
