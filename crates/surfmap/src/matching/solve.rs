@@ -540,6 +540,7 @@ pub fn solve(
         b: &sb,
         features: &features,
         options,
+        spent: Default::default(),
     };
     let search = match options.similarity_search.when {
         SearchWhen::Off => false,
@@ -683,6 +684,9 @@ struct Solver<'s> {
     b: &'s MatchSurface,
     features: &'s [usize],
     options: &'s MatchOptions,
+    /// Energy evaluations spent so far, in finest-level evaluations (one on a grid `2^j`
+    /// times coarser counts `4^-j`), for [`NcgSettings::total_evaluations`].
+    spent: std::cell::Cell<f64>,
 }
 
 impl Solver<'_> {
@@ -762,7 +766,16 @@ impl Solver<'_> {
         if k == self.a.num_levels() - 1 {
             settings.tolerance = settings.finest_tolerance;
         }
-        let budget = settings.level_evaluations(n, self.a.level_size(self.a.num_levels() - 1));
+        if k == self.options.coarsest_level {
+            settings.window = settings.coarsest_window;
+        }
+        let finest = self.a.level_size(self.a.num_levels() - 1);
+        let cost = ((n - 1) as f64 / (finest - 1) as f64).powi(2);
+        let mut budget = settings.level_evaluations(n, finest);
+        if settings.total_evaluations > 0 {
+            let left = (settings.total_evaluations as f64 - self.spent.get()).max(0.0);
+            budget = budget.min((left / cost) as usize);
+        }
         let log = minimize(
             &mut energy,
             phi,
@@ -773,6 +786,8 @@ impl Solver<'_> {
             &mut refit,
         );
         *similarity = energy.similarity;
+        self.spent
+            .set(self.spent.get() + log.evaluations as f64 * cost);
         log
     }
 }
@@ -892,6 +907,7 @@ mod tests {
             b: &sb,
             features: &[],
             options: &options,
+            spent: Default::default(),
         };
         let k0 = options.coarsest_level;
         let mut phi = Deformation::from_map(sa.level_size(k0), |p| start.apply(p));
