@@ -272,11 +272,16 @@ fn the_evaluation_cap_scales_with_the_level_cost() {
     assert_eq!(s.level_evaluations(65, 257), usize::MAX);
 }
 
+/// A surface and a re-triangulated copy turned by 0.3 rad about z and moved: a small pair
+/// for the solver's stopping rules and budgets.
+fn turned_pair() -> (TriMesh, TriMesh) {
+    let motion = rigid(rotation([0.0, 0.0, 1.0], 0.3), [0.1, 0.0, 0.0]);
+    (surface(18, |p| p), surface(23, &motion))
+}
+
 #[test]
 fn the_coarsest_level_never_converges_within_its_window() {
-    let a = surface(18, |p| p);
-    let motion = rigid(rotation([0.0, 0.0, 1.0], 0.3), [0.1, 0.0, 0.0]);
-    let b = surface(23, &motion);
+    let (a, b) = turned_pair();
     let mut o = options();
     // A loose tolerance, so that the per-step rule would stop the coarsest level early.
     o.ncg.tolerance = 1e-3;
@@ -302,9 +307,7 @@ fn the_coarsest_level_never_converges_within_its_window() {
 
 #[test]
 fn the_total_budget_bounds_the_whole_solve() {
-    let a = surface(18, |p| p);
-    let motion = rigid(rotation([0.0, 0.0, 1.0], 0.3), [0.1, 0.0, 0.0]);
-    let b = surface(23, &motion);
+    let (a, b) = turned_pair();
     let mut o = options();
     o.ncg.total_evaluations = 0;
     let (free, _) = run(&a, &b, &Guidance::default(), &o);
@@ -332,9 +335,7 @@ fn the_total_budget_bounds_the_whole_solve() {
 
 #[test]
 fn a_spent_budget_stops_every_level_fold_free() {
-    let a = surface(18, |p| p);
-    let motion = rigid(rotation([0.0, 0.0, 1.0], 0.3), [0.1, 0.0, 0.0]);
-    let b = surface(23, &motion);
+    let (a, b) = turned_pair();
     let mut o = options();
     o.ncg.max_evaluations = 3;
     // Only the per-level caps.
