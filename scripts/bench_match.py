@@ -15,11 +15,9 @@ import argparse
 import json
 import os
 import subprocess
-import sys
 import time
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "..", "shared", "match_eval"))
+from match_common import add_common_arguments, selected_pairs
 
 import numpy as np  # noqa: E402
 from score import Pair, score  # noqa: E402
@@ -27,18 +25,12 @@ from score import Pair, score  # noqa: E402
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--pairs", required=True)
-    ap.add_argument("--surfmap", default=os.path.join(HERE, "..", "target", "release", "surfmap"))
+    add_common_arguments(ap)
     ap.add_argument("--out", default="/tmp/surfmap_bench")
-    ap.add_argument("--only", default=None, help="comma-separated substrings of pair names")
     ap.add_argument("--extra", default="", help="extra arguments for surfmap match")
     args = ap.parse_args()
-    index = json.load(open(os.path.join(args.pairs, "index.json")))
     rows = []
-    for e in index:
-        if args.only and not any(o in e["dir"] for o in args.only.split(",")):
-            continue
-        d = os.path.join(args.pairs, e["dir"])
+    for e, d in selected_pairs(args):
         for method, extra in (("surfmap", []), ("surfmap_lm", ["--landmarks", os.path.join(d, "landmarks.json")])):
             out = os.path.join(args.out, method, e["dir"])
             cmd = [args.surfmap, "match", os.path.join(d, "A.obj"), os.path.join(d, "B.obj"), "-o", out, "-q"]

@@ -8,13 +8,10 @@ with B.obj as made (seed 0) and with B's coordinates multiplied by (1 + 1e-12 N(
         --surfmap target/release/surfmap [--seeds 3] [--landmarks] [--only partial]
 """
 import argparse
-import json
 import os
 import subprocess
-import sys
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "..", "shared", "match_eval"))
+from match_common import add_common_arguments, selected_pairs
 
 import numpy as np  # noqa: E402
 from score import Pair, score  # noqa: E402
@@ -22,19 +19,13 @@ from score import Pair, score  # noqa: E402
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--pairs", required=True)
-    ap.add_argument("--surfmap", default=os.path.join(HERE, "..", "target", "release", "surfmap"))
+    add_common_arguments(ap)
     ap.add_argument("--out", default="/tmp/surfmap_noise_runs")
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--landmarks", action="store_true")
-    ap.add_argument("--only", default=None, help="comma-separated substrings of pair names")
     args = ap.parse_args()
-    index = json.load(open(os.path.join(args.pairs, "index.json")))
     tracks = {}
-    for e in index:
-        if args.only and not any(o in e["dir"] for o in args.only.split(",")):
-            continue
-        d = os.path.join(args.pairs, e["dir"])
+    for e, d in selected_pairs(args):
         runs = []
         for seed in range(args.seeds):
             work = os.path.join(args.out, e["dir"], str(seed))
