@@ -186,3 +186,87 @@ fn hole_features_on_with_different_hole_counts_is_an_error() {
     assert!(err.contains("A has 3 filled holes and B has 0"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Where each vertex of A landed on B (`None`: unmatched), from `correspondence.npy`.
+fn matched_points(dir: &Path, mesh_b: &surfmap::TriMesh) -> Vec<Option<[f64; 3]>> {
+    let (_, rows) = read_npy(&dir.join("correspondence.npy"));
+    rows.chunks_exact(4)
+        .map(|r| {
+            (r[0] >= 0.0).then(|| {
+                let t = mesh_b.triangles[r[0] as usize];
+                std::array::from_fn(|c| {
+                    (0..3)
+                        .map(|k| r[1 + k] * mesh_b.positions[t[k] as usize][c])
+                        .sum()
+                })
+            })
+        })
+        .collect()
+}
+
+#[test]
+fn an_open_mouth_is_matched_lip_to_lip() {
+    // Neutral against jaw open (registered: vertex i ↔ vertex i). The closed mouth is a
+    // slit, the open one an oval: as one closed curve A's rim may sit on either of B's
+    // lips; split at the corners (the default), upper lip goes to upper lip.
+    let (Some(a), Some(b)) = (
+        shared_file("faces/ict/ict_neutral.obj"),
+        shared_file("faces/ict/ict_jawopen.obj"),
+    ) else {
+        return;
+    };
+    let mesh_a = surfmap::read_mesh(&a).unwrap().mesh;
+    let mesh_b = surfmap::read_mesh(&b).unwrap().mesh;
+    let unit = mesh_b.area().sqrt();
+    // The mouth's rim: the longest boundary loop after the outer one.
+    let mut loops = surfmap::mesh::Topology::new(&mesh_a).boundary_loops;
+    loops.sort_by_key(|l| std::cmp::Reverse(l.vertices.len()));
+    let mouth = loops[1].vertices.clone();
+    let mut errors = vec![];
+    for (name, extra) in [("split", None), ("whole", Some("--whole-hole-rims"))] {
+        let dir = temp_dir(&format!("match-mouth-{name}"));
+        let mut cmd = surfmap();
+        cmd.arg("match")
+            .arg(&a)
+            .arg(&b)
+            .arg("-o")
+            .arg(&dir)
+            .arg("-q");
+        if let Some(x) = extra {
+            cmd.arg(x);
+        }
+        run_ok(&mut cmd);
+        let report: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("match.json")).unwrap())
+                .unwrap();
+        let split = report["alignment"]["split_holes"].as_array().unwrap().len();
+        // Only the mouth is elongated enough to split (the eyes are open on both).
+        assert_eq!(split, if extra.is_none() { 1 } else { 0 }, "{name}");
+        let points = matched_points(&dir, &mesh_b);
+        let mut e: Vec<f64> = mouth
+            .iter()
+            .map(|&v| match points[v as usize] {
+                Some(p) => {
+                    let q = mesh_b.positions[v as usize];
+                    (0..3).map(|c| (p[c] - q[c]).powi(2)).sum::<f64>().sqrt() / unit
+                }
+                None => f64::INFINITY,
+            })
+            .collect();
+        e.sort_by(f64::total_cmp);
+        errors.push(e);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+    let within = |e: &[f64]| e.iter().filter(|&&x| x < 0.05).count();
+    let median = |e: &[f64]| e[e.len() / 2];
+    let (split, whole) = (&errors[0], &errors[1]);
+    assert!(
+        median(split) < 0.75 * median(whole) && within(split) > within(whole) + mouth.len() / 20,
+        "mouth rim: split median {:.3}, {} of {} within 0.05; whole median {:.3}, {} within",
+        median(split),
+        within(split),
+        mouth.len(),
+        median(whole),
+        within(whole)
+    );
+}

@@ -40,6 +40,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 "tau" => options.position_scale = f(),
                 "hsig" => options.curvature_sigma = f(),
                 "snap" => options.snap_cells = f(),
+                "split" => options.split_hole_rims = f(),
                 "rings" => options.complete_rings = f() as usize,
                 "ctol" => options.complete_tolerance.elsewhere = f(),
                 "htol" => options.complete_tolerance.hole_rim = f(),

@@ -67,6 +67,10 @@ pub struct Args {
     /// Hole rims as paired features (after alignment).
     #[arg(long, value_enum, default_value = "auto")]
     pub hole_features: HoleArg,
+    /// Match each hole rim as one closed curve; by default an elongated pair (a mouth,
+    /// an eye) is matched as two arcs split at its corners, upper lip to upper lip.
+    #[arg(long)]
+    pub whole_hole_rims: bool,
     /// Refuse surfaces with holes instead of filling them for the solve.
     #[arg(long)]
     pub no_fill_holes: bool,
@@ -148,6 +152,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             HoleArg::Auto => HoleFeatures::Auto,
             HoleArg::On => HoleFeatures::On,
             HoleArg::Off => HoleFeatures::Off,
+        },
+        split_hole_rims: if args.whole_hole_rims {
+            0.0
+        } else {
+            surfmap::matching::holes::SPLIT_HOLE_RIMS
         },
         ..Default::default()
     };

@@ -13,6 +13,7 @@ pub mod align;
 pub mod complete;
 pub mod deformation;
 pub mod energy;
+pub mod holes;
 pub mod ncg;
 pub mod output;
 pub mod pictures;

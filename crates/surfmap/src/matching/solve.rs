@@ -23,6 +23,7 @@ use super::MatchError;
 use super::align::AlignmentScore;
 use super::deformation::{Deformation, node};
 use super::energy::{B_SD, B_X, Betas, LevelEnergy, Similarity3, chi, robust};
+use super::holes::add_hole_features;
 use super::ncg::{LevelLog, NcgSettings, minimize};
 use super::precondition::SobolevPreconditioner;
 use super::rigid::{ClosestPoints, align_rigidly, vertex_normals};
@@ -100,6 +101,11 @@ pub struct MatchOptions {
     pub fill_holes: bool,
     /// Pair the rims of filled holes and match them as features.
     pub hole_features: HoleFeatures,
+    /// Split each pair of elongated hole rims (mouth, eyes) at its two corners into two
+    /// arcs matched as separate features when the more elongated rim's principal extents
+    /// differ by at least this ratio ([`super::holes::split_rim_pair`]); 0: one closed curve
+    /// per rim.
+    pub split_hole_rims: f64,
     /// Let the position term's similarity scale (else a rigid motion).
     pub allow_scale: bool,
     /// Cut-off width (ω units) of the position term around ω_B: B's harmonically
@@ -154,6 +160,7 @@ impl Default for MatchOptions {
             similarity_search: SimilaritySearch::default(),
             fill_holes: true,
             hole_features: HoleFeatures::Auto,
+            split_hole_rims: super::holes::SPLIT_HOLE_RIMS,
             allow_scale: true,
             sobolev_cells: 4.0,
             position_band: 0.0,
@@ -176,7 +183,10 @@ pub struct AlignmentReport {
     pub similarity: Similarity2,
     /// Hole rims paired as features: `(hole of A, hole of B, distance of their centres
     /// in ω after the alignment)`.
-    pub hole_pairs: Vec<(usize, usize, f64)>,
+    pub hole_pairs: Vec<super::holes::HolePair>,
+    /// The hole pairs (indices into `hole_pairs`) matched as two arcs each, split at
+    /// their corners ([`super::holes::split_rim_pair`]); the others as one closed curve.
+    pub split_holes: Vec<usize>,
     /// Features/landmarks left out of the alignment's similarity fit because the others
     /// disagreed with them ([`fit_similarity_2d_robust`]); they still guide the solve.
     pub left_out: Vec<String>,
@@ -198,86 +208,6 @@ pub enum HoleFeatures {
     /// Always (an error when the hole counts differ or the rims do not pair up).
     On,
     Off,
-}
-
-/// Pairs the hole rims of A and B by the distance of their centres in ω after the
-/// alignment `s` (closest pairs first), adds each pair as a labelled closed feature
-/// curve `hole:k` to both surfaces, and returns the pairs.
-fn add_hole_features(
-    sa: &mut MatchSurface,
-    sb: &mut MatchSurface,
-    s: &Similarity2,
-    mode: HoleFeatures,
-) -> Result<Vec<(usize, usize, f64)>, MatchError> {
-    let (ra, rb) = (sa.hole_rims(), sb.hole_rims());
-    if ra.len() != rb.len() || ra.is_empty() {
-        return if mode == HoleFeatures::On {
-            Err(MatchError::Guidance(format!(
-                "hole features pair the rims one to one, but A has {} holes and B has {}; \
-                 fill or cut the extra holes, or turn hole features off",
-                ra.len(),
-                rb.len()
-            )))
-        } else {
-            Ok(vec![])
-        };
-    }
-    let centre = |surface: &MatchSurface, rim: &[u32]| {
-        let m = rim.iter().fold([0.0; 2], |acc, &v| {
-            let p = surface.vertex_domain_position(v as usize);
-            [acc[0] + p[0], acc[1] + p[1]]
-        });
-        [m[0] / rim.len() as f64, m[1] / rim.len() as f64]
-    };
-    let ca: Vec<[f64; 2]> = ra.iter().map(|r| s.apply(centre(sa, r))).collect();
-    let cb: Vec<[f64; 2]> = rb.iter().map(|r| centre(sb, r)).collect();
-    let mut candidates = vec![];
-    for (i, p) in ca.iter().enumerate() {
-        for (j, q) in cb.iter().enumerate() {
-            candidates.push(((p[0] - q[0]).hypot(p[1] - q[1]), i, j));
-        }
-    }
-    candidates.sort_by(|x, y| x.0.total_cmp(&y.0));
-    let (mut used_a, mut used_b) = (vec![false; ra.len()], vec![false; rb.len()]);
-    let mut pairs = vec![];
-    for (d, i, j) in candidates {
-        if !used_a[i] && !used_b[j] {
-            used_a[i] = true;
-            used_b[j] = true;
-            pairs.push((i, j, d));
-        }
-    }
-    // A rim is paired unambiguously when its partner is clearly closer than any other
-    // rim of B: the pairing distance below half the distance between B's rims.
-    let spread = (0..cb.len())
-        .flat_map(|i| (i + 1..cb.len()).map(move |j| (i, j)))
-        .map(|(i, j)| (cb[i][0] - cb[j][0]).hypot(cb[i][1] - cb[j][1]))
-        .fold(f64::INFINITY, f64::min);
-    if pairs.iter().any(|p| p.2 > 0.5 * spread) {
-        return if mode == HoleFeatures::On {
-            Err(MatchError::Guidance(
-                "the hole rims of A and B do not pair up after the alignment (a rim is as close to \
-                 two rims of the other surface); give landmarks or turn hole features off"
-                    .into(),
-            ))
-        } else {
-            Ok(vec![])
-        };
-    }
-    let file = |rims: &[Vec<u32>], pick: &dyn Fn(&(usize, usize, f64)) -> usize| FeatureFile {
-        features: pairs
-            .iter()
-            .enumerate()
-            .map(|(k, p)| FeatureCurve {
-                name: format!("hole:{k}"),
-                vertices: rims[pick(p)].clone(),
-                closed: true,
-            })
-            .collect(),
-    };
-    sa.add_curve_features(&file(&ra, &|p| p.0))?;
-    sb.add_curve_features(&file(&rb, &|p| p.1))?;
-    Ok(pairs)
 }
 
 /// A computed match.
@@ -308,8 +238,12 @@ pub struct SurfaceMatch {
 }
 
 /// Points mapped within this many finest-grid cells of B's surface are snapped onto it
-/// ([`SurfaceMatch::correspondence`]).
-pub const SNAP_CELLS: f64 = 1.5;
+/// ([`SurfaceMatch::correspondence`]). Half a cell: a vertex of A one ring past B's crop
+/// lies about one mesh edge (1–1.5 cells at 257²) outside ω_B, so a snap of 1.5 cells
+/// matched it falsely; the vertices on B's rim that φ carries farther than half a cell
+/// out are left to rim completion ([`super::complete`]), which tells the two apart by
+/// their neighbours (measured in BENCHMARKS.md, "Hole rims split at their corners").
+pub const SNAP_CELLS: f64 = 0.5;
 
 /// `ε_k` of level `k`.
 fn epsilon(k: usize) -> f64 {
@@ -514,6 +448,7 @@ pub fn solve(
             method: "features".into(),
             similarity: s,
             hole_pairs: vec![],
+            split_holes: vec![],
             left_out: left_out.iter().map(|&i| names[i].name.clone()).collect(),
             search: None,
         };
@@ -524,6 +459,7 @@ pub fn solve(
             method: "none".into(),
             similarity: s,
             hole_pairs: vec![],
+            split_holes: vec![],
             left_out: vec![],
             search: None,
         };
@@ -532,7 +468,13 @@ pub fn solve(
         shape_alignment(&sa, &sb, scale, options.align_rotations.max(1))?
     };
     if options.hole_features != HoleFeatures::Off {
-        alignment.hole_pairs = add_hole_features(&mut sa, &mut sb, &s, options.hole_features)?;
+        (alignment.hole_pairs, alignment.split_holes) = add_hole_features(
+            &mut sa,
+            &mut sb,
+            &s,
+            options.hole_features,
+            options.split_hole_rims,
+        )?;
     }
     let features: Vec<usize> = (0..sa.feature_names.len()).collect();
     let solver = Solver {
@@ -673,6 +615,7 @@ fn shape_alignment(
         ),
         similarity: s,
         hole_pairs: vec![],
+        split_holes: vec![],
         left_out: vec![],
         search: None,
     };
