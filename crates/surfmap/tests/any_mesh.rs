@@ -195,3 +195,44 @@ fn a_barrier_solve_starts_from_the_multilevel_start_when_it_does_not_cross() {
     );
     assert_eq!(overlap, 0.0);
 }
+
+#[test]
+fn an_unconstrained_attempt_that_crosses_itself_gives_way_early() {
+    let Some(dir) = surfmap::testing::shared_data() else {
+        return;
+    };
+    // An ICT face opened with seams: unconstrained, the lips fold over each other within
+    // a few iterations and stay so (24 iterations to an overlapping minimum). The
+    // default mode stops that attempt once three iterates in a row cross, and solves
+    // with the barrier.
+    let mesh = read_mesh(&dir.join("faces/ict/ict_id004.obj"))
+        .unwrap()
+        .mesh;
+    let opened = FlattenOptions::default().with_fill_holes(false);
+    let mut all = 0;
+    let map = surfmap::flatten_with_progress(&mesh, &opened, &mut |l| {
+        all += usize::from(l.iteration > 0)
+    })
+    .unwrap();
+    assert!(map.barrier, "{:?}", map.stop_reason);
+    let attempt = all - map.iterations;
+    let (overlap, guarantee) = flatten_checked("ict_id004 opened", &mesh, &opened);
+    assert_eq!((overlap, guarantee), (0.0, Guarantee::Bijective));
+    // The measure code, on the unconstrained solve run to the attempt's length and to
+    // the end: both cross, and the attempt saved most of the iterations.
+    let off = opened.clone().with_bijective(Bijective::Off);
+    let mut capped = off.clone();
+    capped.newton.max_iterations = attempt;
+    let (overlap, _) = flatten_checked("ict_id004 attempt", &mesh, &capped);
+    assert!(
+        overlap > 0.0,
+        "the attempt stopped at an iterate that does not cross"
+    );
+    let full = flatten(&mesh, &off).unwrap();
+    assert!(full.boundary_crossings > 0);
+    assert!(
+        2 * attempt < full.iterations,
+        "attempt {attempt} of {} unconstrained iterations",
+        full.iterations
+    );
+}

@@ -84,6 +84,16 @@ pub fn boundary_segments(
     out
 }
 
+/// Number of pairs of boundary edges of the map `uv` without a common endpoint that
+/// cross or touch (`boundary`: one loop of vertex ids in order).
+pub fn boundary_crossings(uv: &[[f64; 2]], boundary: &[u32]) -> usize {
+    let n = boundary.len();
+    let segments: Vec<[[f64; 2]; 2]> = (0..n)
+        .map(|i| [uv[boundary[i] as usize], uv[boundary[(i + 1) % n] as usize]])
+        .collect();
+    count_segment_crossings(&segments).0
+}
+
 /// Number of segment pairs that share no endpoint and touch or cross, and whether the
 /// search finished within its budget.
 pub fn count_segment_crossings(segments: &[[[f64; 2]; 2]]) -> (usize, bool) {

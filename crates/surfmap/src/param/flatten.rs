@@ -20,6 +20,7 @@ use super::plan::{Plan, map_back, plan_with_topology, prepare};
 use super::{InitialMapError, count_flipped, lscm, signed_uv_area, tutte};
 use crate::energy::Energy;
 use crate::linsolve::{SolveError, VertexOrdering};
+use crate::measure::overlap::boundary_crossings;
 use crate::mesh::cut::CutError;
 use crate::mesh::disc::list_defects;
 use crate::mesh::validate::Defect;
@@ -683,16 +684,6 @@ enum SolveOutcome {
     },
 }
 
-/// Number of pairs of boundary edges of the map `uv` without a common endpoint that
-/// cross or touch (`boundary`: the loop in order).
-fn boundary_crossings(uv: &[[f64; 2]], boundary: &[u32]) -> usize {
-    let n = boundary.len();
-    let segments: Vec<[[f64; 2]; 2]> = (0..n)
-        .map(|i| [uv[boundary[i] as usize], uv[boundary[(i + 1) % n] as usize]])
-        .collect();
-    crate::measure::overlap::count_segment_crossings(&segments).0
-}
-
 /// One solve of [`flatten_disc`]: with the boundary barrier for [`Solve::Barrier`]
 /// (from a crossing-free start: the multilevel one when it is, else LSCM or mean-value
 /// coordinates, with ARAP warm-start steps from a mean-value start kept short of any
@@ -964,6 +955,11 @@ fn solve_disc(
     )?;
     if barrier {
         solver.set_barrier(BoundaryBarrier::new(boundary, &uv));
+    } else if solve == Solve::UnlessStartCrosses {
+        // The bijective mode solves again with the barrier when the result overlaps
+        // itself; an iterate whose boundary crosses already says it will (BENCHMARKS.md,
+        // "Hard discs"), so the rest of this solve would be spent for nothing.
+        solver.stop_when_boundary_crosses(boundary.to_vec());
     }
     let mut log = Vec::new();
     let mut record = |entry: IterationLog| {
@@ -980,13 +976,16 @@ fn solve_disc(
             // Continuation (§3.1.3): θ from 0 to 1, halving the step when a stage locks.
             // Stage 0 only prepares a start: a locked or capped stage 0 is still a
             // valid (flip-free) start for the next stage.
-            let (_, it0, _) =
+            let (stop0, it0, e0) =
                 solver.minimize(&mut uv, from, &options.newton, 0, clock, &mut record)?;
             iterations += it0;
             continuation.push(from.alphas());
             let (mut theta, mut dtheta) = (0.0f64, 1.0f64);
             let mut stage = 1;
             let mut last = (StopReason::Converged, f64::NAN);
+            if stop0 == StopReason::BoundaryCrossed {
+                (theta, last) = (1.0, (stop0, e0));
+            }
             while theta < 1.0 {
                 let next = (theta + dtheta).min(1.0);
                 let alpha = from.blend(target, next);
@@ -1001,6 +1000,11 @@ fn solve_disc(
                 )?;
                 iterations += it;
                 stage += 1;
+                if stop == StopReason::BoundaryCrossed {
+                    uv = trial;
+                    last = (stop, e);
+                    break;
+                }
                 if stop == StopReason::Locked && dtheta > 1.0 / 64.0 {
                     dtheta *= 0.5;
                     continue;
