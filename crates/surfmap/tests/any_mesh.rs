@@ -179,7 +179,7 @@ fn a_barrier_solve_starts_from_the_multilevel_start_when_it_does_not_cross() {
     };
     // ict_jawopen opened with seams (18k faces): the unconstrained map overlaps at the
     // mouth, the multilevel start (its coarse level solved overlap-free) does not, so
-    // the barrier solve starts from it: 6 iterations where the mean-value start took 37.
+    // the barrier solve starts from it: 3 iterations where the mean-value start took 37.
     let mesh = read_mesh(&dir.join("faces/ict/ict_jawopen.obj"))
         .unwrap()
         .mesh;
