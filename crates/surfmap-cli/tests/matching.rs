@@ -27,7 +27,9 @@ fn matching_two_registered_faces_finds_the_registration() {
     );
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
-        stdout.contains("min det Dφ") && stdout.contains("holes filled"),
+        stdout.contains("min det Dφ")
+            && stdout.contains("holes filled")
+            && stdout.contains("3 hole rims paired as features"),
         "{stdout}"
     );
     let mesh_b = surfmap::read_mesh(&b).unwrap().mesh;

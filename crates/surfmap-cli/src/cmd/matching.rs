@@ -252,9 +252,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         written.push(path);
     }
     if !args.quiet {
+        let paired = match (
+            report.alignment.hole_pairs.len(),
+            report.alignment.split_holes.len(),
+        ) {
+            (0, _) => String::new(),
+            (p, 0) => format!(", {p} hole rims paired as features"),
+            (p, s) => format!(", {p} hole rims paired as features ({s} split at their corners)"),
+        };
         let filled = match (report.holes_filled_a, report.holes_filled_b) {
             (0, 0) => String::new(),
-            (a, b) => format!(", holes filled for the solve A {a} B {b}"),
+            (a, b) => format!(", holes filled for the solve A {a} B {b}{paired}"),
         };
         let pinned = match report.pinned_landmarks {
             0 => String::new(),
