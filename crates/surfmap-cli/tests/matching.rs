@@ -35,30 +35,20 @@ fn matching_two_registered_faces_finds_the_registration() {
     let mesh_b = surfmap::read_mesh(&b).unwrap().mesh;
     let (shape, rows) = read_npy(&dir.join("correspondence.npy"));
     assert_eq!(shape, vec![9409, 4]);
-    // The registration (vertex i ↔ vertex i) is the independent answer; distances in
-    // units of √area(B).
-    let unit = mesh_b.area().sqrt();
-    let mut within = 0;
     let mut matched = 0;
-    for (v, r) in rows.chunks_exact(4).enumerate() {
+    for r in rows.chunks_exact(4) {
         if r[0] < 0.0 {
             assert_eq!(&r[1..], &[0.0, 0.0, 0.0]);
             continue;
         }
         matched += 1;
-        let t = mesh_b.triangles[r[0] as usize];
         assert!((r[1] + r[2] + r[3] - 1.0).abs() < 1e-9 && r[1..].iter().all(|&b| b >= -1e-9));
-        let p: [f64; 3] = std::array::from_fn(|c| {
-            (0..3)
-                .map(|k| r[1 + k] * mesh_b.positions[t[k] as usize][c])
-                .sum()
-        });
-        let q = mesh_b.positions[v];
-        let d = ((0..3).map(|c| (p[c] - q[c]).powi(2)).sum::<f64>()).sqrt() / unit;
-        if d < 0.05 {
-            within += 1;
-        }
     }
+    let within = registration_errors(&dir, &mesh_b)
+        .into_iter()
+        .flatten()
+        .filter(|&d| d < 0.05)
+        .count();
     assert!(matched as f64 > 0.9 * 9409.0, "matched {matched}");
     assert!(within as f64 > 0.9 * 9409.0, "within 0.05: {within}");
     // The report agrees with the table, and φ has no fold.
@@ -189,18 +179,28 @@ fn hole_features_on_with_different_hole_counts_is_an_error() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// Where each vertex of A landed on B (`None`: unmatched), from `correspondence.npy`.
-fn matched_points(dir: &Path, mesh_b: &surfmap::TriMesh) -> Vec<Option<[f64; 3]>> {
+/// Per vertex `v` of A, the distance from its match on B to B's vertex `v` — its
+/// counterpart in a registered pair, the independent answer — in units of √area(B);
+/// `None` where `v` is unmatched (read from `correspondence.npy`).
+fn registration_errors(dir: &Path, mesh_b: &surfmap::TriMesh) -> Vec<Option<f64>> {
+    let unit = mesh_b.area().sqrt();
     let (_, rows) = read_npy(&dir.join("correspondence.npy"));
     rows.chunks_exact(4)
-        .map(|r| {
+        .enumerate()
+        .map(|(v, r)| {
             (r[0] >= 0.0).then(|| {
                 let t = mesh_b.triangles[r[0] as usize];
-                std::array::from_fn(|c| {
-                    (0..3)
-                        .map(|k| r[1 + k] * mesh_b.positions[t[k] as usize][c])
-                        .sum()
-                })
+                let q = mesh_b.positions[v];
+                (0..3)
+                    .map(|c| {
+                        let p: f64 = (0..3)
+                            .map(|k| r[1 + k] * mesh_b.positions[t[k] as usize][c])
+                            .sum();
+                        (p - q[c]).powi(2)
+                    })
+                    .sum::<f64>()
+                    .sqrt()
+                    / unit
             })
         })
         .collect()
@@ -219,7 +219,6 @@ fn an_open_mouth_is_matched_lip_to_lip() {
     };
     let mesh_a = surfmap::read_mesh(&a).unwrap().mesh;
     let mesh_b = surfmap::read_mesh(&b).unwrap().mesh;
-    let unit = mesh_b.area().sqrt();
     // The mouth's rim: the longest boundary loop after the outer one.
     let mut loops = surfmap::mesh::Topology::new(&mesh_a).boundary_loops;
     loops.sort_by_key(|l| std::cmp::Reverse(l.vertices.len()));
@@ -244,16 +243,10 @@ fn an_open_mouth_is_matched_lip_to_lip() {
         let split = report["alignment"]["split_holes"].as_array().unwrap().len();
         // Only the mouth is elongated enough to split (the eyes are open on both).
         assert_eq!(split, if extra.is_none() { 1 } else { 0 }, "{name}");
-        let points = matched_points(&dir, &mesh_b);
+        let errors_v = registration_errors(&dir, &mesh_b);
         let mut e: Vec<f64> = mouth
             .iter()
-            .map(|&v| match points[v as usize] {
-                Some(p) => {
-                    let q = mesh_b.positions[v as usize];
-                    (0..3).map(|c| (p[c] - q[c]).powi(2)).sum::<f64>().sqrt() / unit
-                }
-                None => f64::INFINITY,
-            })
+            .map(|&v| errors_v[v as usize].unwrap_or(f64::INFINITY))
             .collect();
         e.sort_by(f64::total_cmp);
         errors.push(e);
