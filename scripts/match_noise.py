@@ -6,7 +6,8 @@ with B.obj as made (seed 0) and with B's coordinates multiplied by (1 + 1e-12 N(
 and per track.
 
     /opt/peers-venv/bin/python scripts/match_noise.py --pairs /tmp/surfmap_pairs \\
-        --surfmap target/release/surfmap [--seeds 3] [--landmarks] [--only partial]
+        --surfmap target/release/surfmap [--seeds 3] [--landmarks] [--only partial] \\
+        [--extra "--position-weight 1000"]
 """
 import argparse
 import os
@@ -24,6 +25,7 @@ def main():
     ap.add_argument("--out", default="/tmp/surfmap_noise_runs")
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--landmarks", action="store_true")
+    ap.add_argument("--extra", default="", help="more `surfmap match` options, space-separated")
     args = ap.parse_args()
     tracks, false = {}, {}
     for e, d in selected_pairs(args):
@@ -44,6 +46,7 @@ def main():
                    "-o", os.path.join(work, "out"), "--quiet"]
             if args.landmarks:
                 cmd += ["--landmarks", os.path.join(d, "landmarks.json")]
+            cmd += args.extra.split()
             subprocess.run(cmd, check=True, capture_output=True)
             s = score(Pair(d), np.load(os.path.join(work, "out", "correspondence.npy")))
             runs.append(s["pct_005"])

@@ -25,7 +25,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 "bend" => options.betas.bend = f(),
                 "reg" => options.betas.reg = f(),
                 "feat" => options.betas.features = f(),
-                "pos" => options.betas.position = f(),
+                "pos" => {
+                    options.betas.position = f();
+                    options.position_weight = surfmap::matching::PositionWeight::Fixed;
+                }
                 "out" => options.betas.uncovered = f(),
                 "soft" => options.soft = f(),
                 "tol" => options.ncg.tolerance = f(),
@@ -48,6 +51,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 "smooth" => options.rim_smoothing.rings = f() as usize,
                 "smoothit" => options.rim_smoothing.iterations = f() as usize,
                 "pin" => options.pin_landmarks = f() != 0.0,
+                "kappa" | "pcap" => {
+                    let surfmap::matching::PositionWeight::FromShapeResidual { kappa, cap } =
+                        &mut options.position_weight
+                    else {
+                        panic!("kappa/pcap with a fixed position weight");
+                    };
+                    *if k == "kappa" { kappa } else { cap } = f();
+                }
                 "holes" => {
                     options.hole_features = match v {
                         "auto" => surfmap::matching::HoleFeatures::Auto,
@@ -98,6 +109,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         m.alignment.similarity.angle().to_degrees(),
         m.alignment.similarity.scale(),
         m.alignment.hole_pairs
+    );
+    println!(
+        "position weight {:.1} (shape residual {:?})",
+        m.position_weight, m.shape_residual
     );
     let pts = m.vertex_points();
     let matched = pts.iter().filter(|p| p.is_some()).count();

@@ -7,8 +7,8 @@ use std::path::PathBuf;
 
 use anyhow::{Context, bail};
 use surfmap::matching::{
-    Align, Guidance, HoleFeatures, Landmarks, MatchOptions, SearchWhen, match_surfaces, output,
-    pictures, write_match_folder,
+    Align, Guidance, HoleFeatures, Landmarks, MatchOptions, PositionWeight, SearchWhen,
+    match_surfaces, output, pictures, write_match_folder,
 };
 use surfmap::raster::FeatureFile;
 use surfmap::render::save_png;
@@ -80,7 +80,9 @@ pub struct Args {
     /// Energy weights β: bending, regularization, features (thesis 2.16).
     #[arg(long, value_name = "B,R,F", value_delimiter = ',')]
     pub beta: Option<Vec<f64>>,
-    /// Weight of the 3D position term (0 = the thesis energy alone).
+    /// A fixed weight of the 3D position term (0 = the thesis energy alone); by default
+    /// it is 0.1/σ², σ the surfaces' RMS distance after aligning them in space (in units
+    /// of √area, at most 0.01: so at least 1000).
     #[arg(long)]
     pub position_weight: Option<f64>,
     /// Initial alignment.
@@ -181,6 +183,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             bail!("--position-weight must be finite and ≥ 0, got {w}");
         }
         options.betas.position = w;
+        options.position_weight = PositionWeight::Fixed;
     }
     options.similarity_search.when = match args.similarity_search {
         SearchArg::Off => SearchWhen::Off,

@@ -284,6 +284,10 @@ pub struct MatchReport {
     /// The rigid motion (with scale) of the position term at the end, A's length units
     /// to B's (both in the shared unit ℓ).
     pub similarity: super::Similarity3,
+    /// The position term's weight `β_pos` used, and the surfaces' RMS distance in space
+    /// (ℓ units) it was set from ([`super::PositionWeight`]; `null` when fixed).
+    pub position_weight: f64,
+    pub shape_residual: Option<f64>,
     pub length_unit: f64,
     pub grid_size: usize,
     pub levels: Vec<LevelSummary>,
@@ -415,6 +419,8 @@ impl SurfaceMatch {
             largest_landmark_miss: checked.pinning.largest_miss,
             alignment: self.alignment.clone(),
             similarity: self.similarity,
+            position_weight: self.position_weight,
+            shape_residual: self.shape_residual,
             length_unit: self.a.length_unit,
             grid_size: self.deformation.size,
             iterations: levels.iter().map(|l| l.iterations).sum(),

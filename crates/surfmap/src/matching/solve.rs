@@ -138,6 +138,62 @@ pub struct MatchOptions {
     /// Match the landmarks exactly in the reported correspondence, carrying the
     /// correction to the vertices around them ([`super::pin`]); φ is only guided.
     pub pin_landmarks: bool,
+    /// How the position term's weight is set: from the surfaces' disagreement in space
+    /// (default) or `betas.position` as given.
+    pub position_weight: PositionWeight,
+}
+
+/// How the weight `β_pos` of the position term is set.
+///
+/// The position term `β_pos ∫ χ |T(x_A) − x_B∘φ|² dA` (ours, beyond the thesis) is a
+/// squared residual; read as a Gaussian likelihood its weight is the inverse variance of
+/// the residual one expects at the right correspondence, and that depends on the pair:
+/// two scans of one face, or registered identities that differ by millimetres, agree in
+/// space almost everywhere; two different people do not, and there positions must give
+/// way to curvature and metric. So by default
+///
+/// `β_pos = κ / min(σ, σ_max)²`,
+///
+/// `σ` the RMS distance (ℓ units) between the surfaces after their best rigid alignment
+/// in space (trimmed ICP, [`super::rigid::align_rigidly`]), `κ` = [`POSITION_KAPPA`]
+/// (the term's value per unit area at a residual of `σ` everywhere) and `σ_max` =
+/// [`POSITION_RESIDUAL_CAP`]: a larger residual is not trusted to mean "the shapes
+/// differ" — on a partial overlap it also measures how ambiguous the overlap is, where
+/// the positions are what anchors the match — so the weight never falls below
+/// `κ/σ_max²` = 1000, the fixed weight used before. Measured in BENCHMARKS.md
+/// ("Matching": "The position term weighted by the shapes' disagreement"): a fixed 1000
+/// was too weak for the ICT pairs (σ ≈ 0.003–0.008 ℓ; 10⁴ gained 2–7 points within 0.02
+/// on partial and resolution) and a fixed 10⁴ too strong for the FLAME identities
+/// (σ ≈ 0.009–0.015 ℓ; −6 points within 0.05), while `κ/σ²` without the cap lost 2.6
+/// points on the FLAME partial pairs with landmarks (σ ≈ 0.011–0.021 ℓ).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PositionWeight {
+    /// `β_pos = κ / min(σ, cap)²` (above).
+    FromShapeResidual { kappa: f64, cap: f64 },
+    /// `betas.position` as given (the thesis energy alone with 0).
+    Fixed,
+}
+
+/// `κ` of [`PositionWeight::FromShapeResidual`].
+pub const POSITION_KAPPA: f64 = 0.1;
+
+/// `σ_max` (ℓ units) of [`PositionWeight::FromShapeResidual`].
+pub const POSITION_RESIDUAL_CAP: f64 = 0.01;
+
+impl PositionWeight {
+    /// `β_pos` for the surfaces' RMS distance `sigma` in space (ℓ units), given the
+    /// options' `betas.position`: that weight when fixed, when it is 0 (the term turned
+    /// off: the thesis energy) or when `sigma` is not positive (identical surfaces, where
+    /// `κ/σ²` would be unbounded).
+    pub fn weight(self, given: f64, sigma: f64) -> f64 {
+        match self {
+            PositionWeight::FromShapeResidual { kappa, cap } if sigma > 0.0 && given != 0.0 => {
+                kappa / sigma.min(cap).powi(2)
+            }
+            _ => given,
+        }
+    }
 }
 
 impl Default for MatchOptions {
@@ -172,6 +228,10 @@ impl Default for MatchOptions {
             complete_tolerance: super::complete::COMPLETE_TOLERANCE,
             rim_smoothing: super::complete::RIM_SMOOTHING,
             pin_landmarks: true,
+            position_weight: PositionWeight::FromShapeResidual {
+                kappa: POSITION_KAPPA,
+                cap: POSITION_RESIDUAL_CAP,
+            },
         }
     }
 }
@@ -221,6 +281,11 @@ pub struct SurfaceMatch {
     pub alignment: AlignmentReport,
     /// The position term's similarity at the end (A's ℓ units → B's ℓ units).
     pub similarity: Similarity3,
+    /// The position term's weight `β_pos` used ([`PositionWeight`]).
+    pub position_weight: f64,
+    /// The surfaces' RMS distance in space after their rigid alignment (ℓ units), from
+    /// which the position weight was set (`None` with a fixed weight).
+    pub shape_residual: Option<f64>,
     pub min_det: f64,
     pub seconds_solve: f64,
     /// See [`MatchOptions::snap_cells`].
@@ -433,7 +498,7 @@ pub fn solve(
         Align::Auto => fa.is_some(),
         Align::Shape | Align::None => false,
     };
-    let (s, mut similarity, mut alignment) = if use_features {
+    let (s, mut similarity, mut alignment, residual) = if use_features {
         let pa = feature_centroids(&sa, fa.unwrap());
         let pb = feature_centroids(&sb, fb.unwrap());
         let (s, left_out) = if pa.len() >= 2 {
@@ -452,7 +517,7 @@ pub fn solve(
             left_out: left_out.iter().map(|&i| names[i].name.clone()).collect(),
             search: None,
         };
-        (s, Similarity3::identity(), report)
+        (s, Similarity3::identity(), report, None)
     } else if options.align == Align::None {
         let s = Similarity2::identity();
         let report = AlignmentReport {
@@ -463,9 +528,25 @@ pub fn solve(
             left_out: vec![],
             search: None,
         };
-        (s, Similarity3::identity(), report)
+        (s, Similarity3::identity(), report, None)
     } else {
-        shape_alignment(&sa, &sb, scale, options.align_rotations.max(1))?
+        let (s, motion, report, residual) =
+            shape_alignment(&sa, &sb, scale, options.align_rotations.max(1))?;
+        (s, motion, report, Some(residual))
+    };
+    // The position term's weight from the surfaces' disagreement in space
+    // ([`PositionWeight`]); the shape alignment measured it already.
+    let shape_residual = match (options.position_weight, residual) {
+        (PositionWeight::Fixed, _) => None,
+        _ if options.betas.position == 0.0 => None,
+        (_, Some(r)) => Some(r),
+        _ => shape_residual(&sa, &sb, fa, fb),
+    };
+    let betas = Betas {
+        position: options
+            .position_weight
+            .weight(options.betas.position, shape_residual.unwrap_or(0.0)),
+        ..options.betas
     };
     if options.hole_features != HoleFeatures::Off {
         (alignment.hole_pairs, alignment.split_holes) = add_hole_features(
@@ -482,6 +563,7 @@ pub fn solve(
         b: &sb,
         features: &features,
         options,
+        betas,
         spent: Default::default(),
     };
     let search = match options.similarity_search.when {
@@ -511,6 +593,8 @@ pub fn solve(
         levels,
         alignment,
         similarity,
+        position_weight: betas.position,
+        shape_residual,
         min_det,
         seconds_solve: clock.elapsed().as_secs_f64(),
         snap_cells: options.snap_cells,
@@ -536,7 +620,7 @@ fn shape_alignment(
     sb: &MatchSurface,
     scale: f64,
     rotations: usize,
-) -> Result<(Similarity2, Similarity3, AlignmentReport), MatchError> {
+) -> Result<(Similarity2, Similarity3, AlignmentReport, f64), MatchError> {
     // Extra ICP starts: the rigid motions of the best similarities of the planes
     // (a search over rotations, translations and scales of ω_A scored by the 3D fit,
     // [`super::align`]); they reach poses that the rotations about the centroids miss
@@ -619,7 +703,43 @@ fn shape_alignment(
         left_out: vec![],
         search: None,
     };
-    Ok((s, motion, report))
+    Ok((s, motion, report, rigid.rms / unit))
+}
+
+/// The RMS distance (ℓ units) between the surfaces after their best rigid alignment in
+/// space (trimmed ICP from the usual starts and, with paired features, from the rigid
+/// motion of their 3D centroids); `None` when they cannot be aligned.
+fn shape_residual(
+    sa: &MatchSurface,
+    sb: &MatchSurface,
+    fa: Option<&FeatureFile>,
+    fb: Option<&FeatureFile>,
+) -> Option<f64> {
+    let centroids = |s: &MatchSurface, f: &FeatureFile| -> Vec<[f64; 3]> {
+        f.features
+            .iter()
+            .map(|c| {
+                let mut m = [0.0; 3];
+                for &v in &c.vertices {
+                    let p = s.positions[v as usize];
+                    (0..3).for_each(|i| m[i] += p[i] / c.vertices.len() as f64);
+                }
+                m
+            })
+            .collect()
+    };
+    let starts: Vec<Similarity3> = match (fa, fb) {
+        (Some(fa), Some(fb)) => {
+            let (pa, pb) = (centroids(sa, fa), centroids(sb, fb));
+            fit_similarity_3d(&pa, &pb, &vec![1.0; pa.len()], false)
+                .into_iter()
+                .collect()
+        }
+        _ => vec![],
+    };
+    let normals = vertex_normals(&sb.positions, &sb.triangles);
+    align_rigidly(&sa.positions, &sb.positions, &normals, &starts)
+        .map(|rigid| rigid.rms / sa.length_unit)
 }
 
 struct Solver<'s> {
@@ -627,6 +747,9 @@ struct Solver<'s> {
     b: &'s MatchSurface,
     features: &'s [usize],
     options: &'s MatchOptions,
+    /// The energy's weights (`options.betas` with the position weight set,
+    /// [`PositionWeight`]).
+    betas: Betas,
     /// Energy evaluations spent so far, in finest-level evaluations (one on a grid `2^j`
     /// times coarser counts `4^-j`), for [`NcgSettings::total_evaluations`].
     spent: std::cell::Cell<f64>,
@@ -639,7 +762,7 @@ impl Solver<'_> {
             a: self.a.level_a(k, eps, self.features),
             b: self.b.level_b(k, eps, self.options.soft, self.features),
             epsilon: eps,
-            betas: self.options.betas,
+            betas: self.betas,
             alpha: self.options.alpha,
             similarity,
             position_band: self.options.position_band,
@@ -649,7 +772,7 @@ impl Solver<'_> {
 
     /// Refits the position term's similarity of `e` to `phi` (when the term is on).
     fn refit(&self, e: &mut LevelEnergy, phi: &Deformation) {
-        if self.options.betas.position != 0.0
+        if self.betas.position != 0.0
             && let Some(s) = fit_position_similarity(e, phi, self.options.allow_scale)
         {
             e.similarity = s;
@@ -850,6 +973,7 @@ mod tests {
             b: &sb,
             features: &[],
             options: &options,
+            betas: options.betas,
             spent: Default::default(),
         };
         let k0 = options.coarsest_level;

@@ -361,3 +361,77 @@ fn a_spent_budget_stops_every_level_fold_free() {
     let free = match_surfaces(&a, &b, &Guidance::default(), &o).unwrap();
     assert!(free.levels[1].evaluations > m.levels[1].evaluations);
 }
+
+/// The position term's weight follows the surfaces' disagreement in space
+/// ([`PositionWeight`]): a moved, re-triangulated copy agrees up to its triangulation,
+/// a copy with ripples added disagrees more and gets a lower weight; each weight is
+/// `κ/min(σ, σ_max)²` of the residual reported, and that residual is no more than the RMS distance
+/// to B's closest vertices at the true motion (the ICP minimizes it). A fixed weight,
+/// and a weight of 0 (the thesis energy), are used as given.
+#[test]
+fn the_position_weight_falls_as_the_shapes_disagree() {
+    let a = surface(18, |p| p);
+    let motion = rigid(
+        rotation([0.2, 0.9, -0.3], 70f64.to_radians()),
+        [2.0, -1.0, 0.5],
+    );
+    let copy = surface(23, &motion);
+    let rippled = surface(23, |p| {
+        motion([
+            p[0],
+            p[1],
+            p[2] + 0.15 * (4.0 * p[0]).sin() * (3.0 * p[1]).cos(),
+        ])
+    });
+    let unit = |b: &TriMesh| (a.area() * b.area()).sqrt().sqrt();
+    let (mut residuals, mut weights) = (vec![], vec![]);
+    for b in [&copy, &rippled] {
+        let m = match_surfaces(&a, b, &Guidance::default(), &options()).unwrap();
+        let sigma = m
+            .shape_residual
+            .expect("the default weight measures the shapes");
+        let capped = sigma.min(POSITION_RESIDUAL_CAP);
+        assert!(
+            (m.position_weight * capped * capped / POSITION_KAPPA - 1.0).abs() < 1e-12,
+            "weight {} for residual {sigma}",
+            m.position_weight
+        );
+        // RMS distance from A's vertices at the true motion to B's closest vertices.
+        let at_truth = (a
+            .positions
+            .iter()
+            .map(|&p| {
+                let x = motion(p);
+                b.positions
+                    .iter()
+                    .map(|q| (0..3).map(|c| (x[c] - q[c]).powi(2)).sum::<f64>())
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .sum::<f64>()
+            / a.num_vertices() as f64)
+            .sqrt()
+            / unit(b);
+        assert!(
+            sigma <= at_truth,
+            "residual {sigma} above the truth's {at_truth}"
+        );
+        residuals.push(sigma);
+        weights.push(m.position_weight);
+    }
+    // Measured 0.008 and 0.018 ℓ: the copy's weight is κ/σ² ≈ 1600, the rippled
+    // copy's residual is beyond the cap (0.01), so its weight is the floor, 1000.
+    assert!(
+        residuals[1] > 1.5 * residuals[0],
+        "residuals of the copy and the rippled copy: {residuals:?}"
+    );
+    assert!(weights[1] < weights[0], "weights {weights:?}");
+    for given in [321.0, 0.0] {
+        let mut o = options();
+        o.betas.position = given;
+        if given != 0.0 {
+            o.position_weight = PositionWeight::Fixed;
+        }
+        let m = match_surfaces(&a, &copy, &Guidance::default(), &o).unwrap();
+        assert_eq!((m.position_weight, m.shape_residual), (given, None));
+    }
+}
