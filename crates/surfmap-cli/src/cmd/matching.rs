@@ -290,6 +290,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 }
             ),
         };
+        let position = match report.shape_residual {
+            Some(sigma) => format!(
+                ", position weight {:.3e} (the surfaces {sigma:.4} of √area apart in space)",
+                report.position_weight
+            ),
+            None => format!(", position weight {:.3e} (fixed)", report.position_weight),
+        };
         let left_out = match report.alignment.left_out.as_slice() {
             [] => String::new(),
             names => format!(
@@ -298,7 +305,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             ),
         };
         outln!(
-            "match: {} levels up to {n}², {} iterations, energy {:.4e}, min det Dφ {:.3}, matched {:.1}% of A ({} of {}, {} completed at rims), {:.1}% of B covered{filled}, {} vertices unmatched for folds ({} flipped, {} collapsed){pinned}, alignment {}{left_out}{searched}, {:.2} s",
+            "match: {} levels up to {n}², {} iterations, energy {:.4e}, min det Dφ {:.3}, matched {:.1}% of A ({} of {}, {} completed at rims), {:.1}% of B covered{filled}, {} vertices unmatched for folds ({} flipped, {} collapsed){pinned}, alignment {}{left_out}{searched}{position}, {:.2} s",
             report.levels.len(),
             report.iterations,
             report.energy,
