@@ -26,7 +26,7 @@ use super::energy::{B_SD, B_X, Betas, LevelEnergy, Similarity3, chi, robust};
 use super::holes::add_hole_features;
 use super::ncg::{LevelLog, NcgSettings, minimize};
 use super::precondition::SobolevPreconditioner;
-use super::rigid::{ClosestPoints, align_rigidly, vertex_normals};
+use super::rigid::{ClosestPoints, align_rigidly, refine_rigidly, vertex_normals};
 use super::similarity::{
     Similarity2, fit_similarity_2d, fit_similarity_2d_robust, fit_similarity_3d,
 };
@@ -707,8 +707,9 @@ fn shape_alignment(
 }
 
 /// The RMS distance (ℓ units) between the surfaces after their best rigid alignment in
-/// space (trimmed ICP from the usual starts and, with paired features, from the rigid
-/// motion of their 3D centroids); `None` when they cannot be aligned.
+/// space: trimmed ICP from the rigid motion of the paired features' 3D centroids when
+/// there are three or more, else from the usual starts ([`align_rigidly`]); `None` when
+/// they cannot be aligned.
 fn shape_residual(
     sa: &MatchSurface,
     sb: &MatchSurface,
@@ -728,18 +729,19 @@ fn shape_residual(
             })
             .collect()
     };
-    let starts: Vec<Similarity3> = match (fa, fb) {
-        (Some(fa), Some(fb)) => {
+    let start = match (fa, fb) {
+        (Some(fa), Some(fb)) if fa.features.len() >= 3 => {
             let (pa, pb) = (centroids(sa, fa), centroids(sb, fb));
             fit_similarity_3d(&pa, &pb, &vec![1.0; pa.len()], false)
-                .into_iter()
-                .collect()
         }
-        _ => vec![],
+        _ => None,
     };
     let normals = vertex_normals(&sb.positions, &sb.triangles);
-    align_rigidly(&sa.positions, &sb.positions, &normals, &starts)
-        .map(|rigid| rigid.rms / sa.length_unit)
+    match start {
+        Some(start) => refine_rigidly(&sa.positions, &sb.positions, &normals, start),
+        None => align_rigidly(&sa.positions, &sb.positions, &normals, &[]),
+    }
+    .map(|rigid| rigid.rms / sa.length_unit)
 }
 
 struct Solver<'s> {
