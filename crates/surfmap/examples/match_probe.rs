@@ -52,7 +52,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 "smoothit" => options.rim_smoothing.iterations = f() as usize,
                 "pin" => options.pin_landmarks = f() != 0.0,
                 "kappa" | "pcap" => {
-                    let surfmap::matching::PositionWeight::FromShapeResidual { kappa, cap } =
+                    let surfmap::matching::PositionWeight::FromShapeResidual { kappa, cap, .. } =
                         &mut options.position_weight
                     else {
                         panic!("kappa/pcap with a fixed position weight");

@@ -82,7 +82,7 @@ pub struct Args {
     pub beta: Option<Vec<f64>>,
     /// A fixed weight of the 3D position term (0 = the thesis energy alone); by default
     /// it is 0.1/σ², σ the surfaces' RMS distance after aligning them in space (in units
-    /// of √area, at most 0.01: so at least 1000).
+    /// of √area, counted between 0.001 and 0.01: so between 1000 and 10⁵).
     #[arg(long)]
     pub position_weight: Option<f64>,
     /// Initial alignment.

@@ -33,7 +33,7 @@ pub use similarity::Similarity2;
 pub use similarity_search::{SearchWhen, SimilaritySearch, SimilaritySearchLog};
 pub use solve::{
     Align, AlignmentReport, Guidance, HoleFeatures, Landmarks, MatchOptions, POSITION_KAPPA,
-    POSITION_RESIDUAL_CAP, PositionWeight, SurfaceMatch, match_surfaces,
+    POSITION_RESIDUAL_CAP, POSITION_RESIDUAL_FLOOR, PositionWeight, SurfaceMatch, match_surfaces,
 };
 pub use surface::MatchSurface;
 

@@ -152,11 +152,13 @@ pub struct MatchOptions {
 /// space almost everywhere; two different people do not, and there positions must give
 /// way to curvature and metric. So by default
 ///
-/// `β_pos = κ / min(σ, σ_max)²`,
+/// `β_pos = κ / clamp(σ, σ_min, σ_max)²`,
 ///
 /// `σ` the RMS distance (ℓ units) between the surfaces after their best rigid alignment
 /// in space (trimmed ICP, [`super::rigid::align_rigidly`]), `κ` = [`POSITION_KAPPA`]
-/// (the term's value per unit area at a residual of `σ` everywhere) and `σ_max` =
+/// (the term's value per unit area at a residual of `σ` everywhere), `σ_min` =
+/// [`POSITION_RESIDUAL_FLOOR`] (a surface and a moved copy of itself have `σ` ≈ 10⁻¹⁶:
+/// the weight stays at most 10⁵, the largest measured) and `σ_max` =
 /// [`POSITION_RESIDUAL_CAP`]: a larger residual is not trusted to mean "the shapes
 /// differ" — on a partial overlap it also measures how ambiguous the overlap is, where
 /// the positions are what anchors the match — so the weight never falls below
@@ -169,8 +171,8 @@ pub struct MatchOptions {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum PositionWeight {
-    /// `β_pos = κ / min(σ, cap)²` (above).
-    FromShapeResidual { kappa: f64, cap: f64 },
+    /// `β_pos = κ / clamp(σ, floor, cap)²` (above).
+    FromShapeResidual { kappa: f64, floor: f64, cap: f64 },
     /// `betas.position` as given (the thesis energy alone with 0).
     Fixed,
 }
@@ -178,18 +180,23 @@ pub enum PositionWeight {
 /// `κ` of [`PositionWeight::FromShapeResidual`].
 pub const POSITION_KAPPA: f64 = 0.1;
 
+/// `σ_min` (ℓ units) of [`PositionWeight::FromShapeResidual`].
+pub const POSITION_RESIDUAL_FLOOR: f64 = 0.001;
+
 /// `σ_max` (ℓ units) of [`PositionWeight::FromShapeResidual`].
 pub const POSITION_RESIDUAL_CAP: f64 = 0.01;
 
 impl PositionWeight {
     /// `β_pos` for the surfaces' RMS distance `sigma` in space (ℓ units), given the
     /// options' `betas.position`: that weight when fixed, when it is 0 (the term turned
-    /// off: the thesis energy) or when `sigma` is not positive (identical surfaces, where
-    /// `κ/σ²` would be unbounded).
-    pub fn weight(self, given: f64, sigma: f64) -> f64 {
-        match self {
-            PositionWeight::FromShapeResidual { kappa, cap } if sigma > 0.0 && given != 0.0 => {
-                kappa / sigma.min(cap).powi(2)
+    /// off: the thesis energy) or when `sigma` is unknown (the surfaces could not be
+    /// aligned in space).
+    pub fn weight(self, given: f64, sigma: Option<f64>) -> f64 {
+        match (self, sigma) {
+            (PositionWeight::FromShapeResidual { kappa, floor, cap }, Some(sigma))
+                if given != 0.0 && sigma.is_finite() =>
+            {
+                kappa / sigma.clamp(floor, cap).powi(2)
             }
             _ => given,
         }
@@ -230,6 +237,7 @@ impl Default for MatchOptions {
             pin_landmarks: true,
             position_weight: PositionWeight::FromShapeResidual {
                 kappa: POSITION_KAPPA,
+                floor: POSITION_RESIDUAL_FLOOR,
                 cap: POSITION_RESIDUAL_CAP,
             },
         }
@@ -545,7 +553,7 @@ pub fn solve(
     let betas = Betas {
         position: options
             .position_weight
-            .weight(options.betas.position, shape_residual.unwrap_or(0.0)),
+            .weight(options.betas.position, shape_residual),
         ..options.betas
     };
     if options.hole_features != HoleFeatures::Off {

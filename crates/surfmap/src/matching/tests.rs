@@ -365,9 +365,10 @@ fn a_spent_budget_stops_every_level_fold_free() {
 /// The position term's weight follows the surfaces' disagreement in space
 /// ([`PositionWeight`]): a moved, re-triangulated copy agrees up to its triangulation,
 /// a copy with ripples added disagrees more and gets a lower weight; each weight is
-/// `κ/min(σ, σ_max)²` of the residual reported, and that residual is no more than the RMS distance
-/// to B's closest vertices at the true motion (the ICP minimizes it). A fixed weight,
-/// and a weight of 0 (the thesis energy), are used as given.
+/// `κ/clamp(σ, σ_min, σ_max)²` of the residual reported, and that residual is no more than the RMS distance
+/// to B's closest vertices at the true motion (the ICP minimizes it). A moved exact copy
+/// (residual ≈ 0) gets the largest weight, `κ/σ_min²`, not an unbounded one. A fixed
+/// weight, and a weight of 0 (the thesis energy), are used as given.
 #[test]
 fn the_position_weight_falls_as_the_shapes_disagree() {
     let a = surface(18, |p| p);
@@ -390,7 +391,7 @@ fn the_position_weight_falls_as_the_shapes_disagree() {
         let sigma = m
             .shape_residual
             .expect("the default weight measures the shapes");
-        let capped = sigma.min(POSITION_RESIDUAL_CAP);
+        let capped = sigma.clamp(POSITION_RESIDUAL_FLOOR, POSITION_RESIDUAL_CAP);
         assert!(
             (m.position_weight * capped * capped / POSITION_KAPPA - 1.0).abs() < 1e-12,
             "weight {} for residual {sigma}",
@@ -425,6 +426,12 @@ fn the_position_weight_falls_as_the_shapes_disagree() {
         "residuals of the copy and the rippled copy: {residuals:?}"
     );
     assert!(weights[1] < weights[0], "weights {weights:?}");
+    let exact = surface(18, &motion);
+    let m = match_surfaces(&a, &exact, &Guidance::default(), &options()).unwrap();
+    assert!(m.shape_residual.unwrap() < 1e-9 && m.min_det > 0.0);
+    assert!(
+        (m.position_weight * POSITION_RESIDUAL_FLOOR.powi(2) / POSITION_KAPPA - 1.0).abs() < 1e-12
+    );
     for given in [321.0, 0.0] {
         let mut o = options();
         o.betas.position = given;
