@@ -196,7 +196,8 @@ impl PositionWeight {
             (PositionWeight::FromShapeResidual { kappa, floor, cap }, Some(sigma))
                 if given != 0.0 && sigma.is_finite() =>
             {
-                kappa / sigma.clamp(floor, cap).powi(2)
+                // (not `clamp`, which panics on a floor above the cap: the cap wins)
+                kappa / sigma.max(floor).min(cap).powi(2)
             }
             _ => given,
         }
