@@ -391,11 +391,32 @@ mod tests {
         let normals = vertex_normals(b, bt);
         assert!(icp(a, b, &normals, &closest, *truth, 10).rms < 1e-9);
         let found = align_rigidly(a, b, &normals, &[]).unwrap();
+        assert_same_pose(a, &found.motion, truth, tolerance);
+    }
+
+    /// Every point of `a` lands within `tolerance` of where `truth` puts it.
+    fn assert_same_pose(a: &[[f64; 3]], found: &Similarity3, truth: &Similarity3, tolerance: f64) {
         for p in a {
-            let (x, y) = (found.motion.apply(*p), truth.apply(*p));
+            let (x, y) = (found.apply(*p), truth.apply(*p));
             let d = ((0..3).map(|c| (x[c] - y[c]).powi(2)).sum::<f64>()).sqrt();
             assert!(d < tolerance, "{x:?} vs {y:?}");
         }
+    }
+
+    /// Points of A, points and triangles of B, and the true motion A → B.
+    type Copy = (Vec<[f64; 3]>, Vec<[f64; 3]>, Vec<[u32; 3]>, Similarity3);
+
+    /// A part of the surface (A, a partial overlap, as two crops of one scan) and the
+    /// whole moved by a rigid motion turned 40° (B).
+    fn partial_copy() -> Copy {
+        let truth = Similarity3 {
+            matrix: rotation([0.3, -0.5, 0.8], 40f64.to_radians()),
+            translation: [0.4, -1.0, 2.0],
+        };
+        let (whole, triangles) = surface();
+        let b: Vec<[f64; 3]> = whole.iter().map(|&p| truth.apply(p)).collect();
+        let a: Vec<[f64; 3]> = whole.iter().copied().filter(|p| p[0] > -0.3).collect();
+        (a, b, triangles, truth)
     }
 
     #[test]
@@ -411,14 +432,7 @@ mod tests {
 
     #[test]
     fn recovers_the_pose_of_a_partial_copy() {
-        // A: a part of the surface (a partial overlap, as two crops of one scan).
-        let truth = Similarity3 {
-            matrix: rotation([0.3, -0.5, 0.8], 40f64.to_radians()),
-            translation: [0.4, -1.0, 2.0],
-        };
-        let (whole, triangles) = surface();
-        let b: Vec<[f64; 3]> = whole.iter().map(|&p| truth.apply(p)).collect();
-        let a: Vec<[f64; 3]> = whole.iter().copied().filter(|p| p[0] > -0.3).collect();
+        let (a, b, triangles, truth) = partial_copy();
         check(&a, &b, &triangles, &truth, 1e-5);
     }
 
@@ -427,13 +441,7 @@ mod tests {
     /// pose of a partial copy, with RMS ≈ 0.
     #[test]
     fn refining_from_a_rough_pose_finds_the_true_one() {
-        let truth = Similarity3 {
-            matrix: rotation([0.3, -0.5, 0.8], 40f64.to_radians()),
-            translation: [0.4, -1.0, 2.0],
-        };
-        let (whole, triangles) = surface();
-        let b: Vec<[f64; 3]> = whole.iter().map(|&p| truth.apply(p)).collect();
-        let a: Vec<[f64; 3]> = whole.iter().copied().filter(|p| p[0] > -0.3).collect();
+        let (a, b, triangles, truth) = partial_copy();
         let off = Similarity3 {
             matrix: rotation([0.3, -0.5, 0.8], 48f64.to_radians()),
             translation: [0.5, -0.9, 2.1],
@@ -441,11 +449,7 @@ mod tests {
         let normals = vertex_normals(&b, &triangles);
         let found = refine_rigidly(&a, &b, &normals, off).unwrap();
         assert!(found.rms < 1e-6, "rms {}", found.rms);
-        for p in &a {
-            let (x, y) = (found.motion.apply(*p), truth.apply(*p));
-            let d = ((0..3).map(|c| (x[c] - y[c]).powi(2)).sum::<f64>()).sqrt();
-            assert!(d < 1e-5, "{x:?} vs {y:?}");
-        }
+        assert_same_pose(&a, &found.motion, &truth, 1e-5);
     }
 
     #[test]

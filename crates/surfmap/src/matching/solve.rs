@@ -393,17 +393,23 @@ fn paired_features(
 
 /// Domain centroid of every feature of a surface.
 fn feature_centroids(s: &MatchSurface, f: &FeatureFile) -> Vec<[f64; 2]> {
+    curve_means(f, |v| s.vertex_domain_position(v))
+}
+
+/// The mean of `point(v)` over each feature curve's vertices `v`.
+fn curve_means<const N: usize>(
+    f: &FeatureFile,
+    point: impl Fn(usize) -> [f64; N],
+) -> Vec<[f64; N]> {
     f.features
         .iter()
         .map(|c| {
-            let mut m = [0.0; 2];
+            let mut m = [0.0; N];
             for &v in &c.vertices {
-                let p = s.vertex_domain_position(v as usize);
-                m[0] += p[0];
-                m[1] += p[1];
+                let p = point(v as usize);
+                (0..N).for_each(|i| m[i] += p[i]);
             }
-            let k = c.vertices.len() as f64;
-            [m[0] / k, m[1] / k]
+            m.map(|x| x / c.vertices.len() as f64)
         })
         .collect()
 }
@@ -725,22 +731,10 @@ fn shape_residual(
     fa: Option<&FeatureFile>,
     fb: Option<&FeatureFile>,
 ) -> Option<f64> {
-    let centroids = |s: &MatchSurface, f: &FeatureFile| -> Vec<[f64; 3]> {
-        f.features
-            .iter()
-            .map(|c| {
-                let mut m = [0.0; 3];
-                for &v in &c.vertices {
-                    let p = s.positions[v as usize];
-                    (0..3).for_each(|i| m[i] += p[i] / c.vertices.len() as f64);
-                }
-                m
-            })
-            .collect()
-    };
     let start = match (fa, fb) {
         (Some(fa), Some(fb)) if fa.features.len() >= 3 => {
-            let (pa, pb) = (centroids(sa, fa), centroids(sb, fb));
+            let pa = curve_means(fa, |v| sa.positions[v]);
+            let pb = curve_means(fb, |v| sb.positions[v]);
             fit_similarity_3d(&pa, &pb, &vec![1.0; pa.len()], false)
         }
         _ => None,
