@@ -44,6 +44,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 "hsig" => options.curvature_sigma = f(),
                 "snap" => options.snap_cells = f(),
                 "split" => options.split_hole_rims = f(),
+                "fit" => options.rim_fit_rings = f() as usize,
                 "rings" => options.complete_rings = f() as usize,
                 "ctol" => options.complete_tolerance.elsewhere = f(),
                 "htol" => options.complete_tolerance.hole_rim = f(),
@@ -130,8 +131,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     let checked = m.checked_correspondence(&a, &b, options.drop_folds)?;
     println!(
-        "completed {:?}, dropped {}",
-        checked.completion, checked.dropped
+        "rim fit {:?}, completed {:?}, dropped {}",
+        checked.rim_fit, checked.completion, checked.dropped
     );
     let corr = checked.points;
     let data = surfmap::matching::output::correspondence_rows(&corr);

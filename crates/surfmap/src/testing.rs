@@ -124,3 +124,28 @@ pub fn make_diagonally_dominant(sys: &mut crate::linsolve::SpdSystem) {
         v[col_ptr[j] as usize] = rowsum[j] + 1.0;
     }
 }
+
+/// The faces of `mesh` whose three vertices `keep`, with the vertices renumbered;
+/// also the new index of every old vertex (`None`: removed).
+pub fn crop(
+    mesh: &crate::TriMesh,
+    keep: impl Fn([f64; 3]) -> bool,
+) -> (crate::TriMesh, Vec<Option<u32>>) {
+    let mut index = vec![None; mesh.num_vertices()];
+    let mut positions = vec![];
+    for (v, &p) in mesh.positions.iter().enumerate() {
+        if keep(p) {
+            index[v] = Some(positions.len() as u32);
+            positions.push(p);
+        }
+    }
+    let triangles = mesh
+        .triangles
+        .iter()
+        .filter_map(|t| {
+            let [a, b, c] = t.map(|v| index[v as usize]);
+            Some([a?, b?, c?])
+        })
+        .collect();
+    (crate::TriMesh::new(positions, triangles), index)
+}

@@ -111,6 +111,11 @@ pub struct Args {
     /// unmatched and keeps φ's matches as they are.
     #[arg(long, value_name = "N", default_value_t = surfmap::matching::complete::COMPLETE_RINGS)]
     pub complete_rings: usize,
+    /// Rings of A's vertices around each hole rim that follow it when the rim is carried
+    /// exactly onto B's paired rim (holes match holes: eyes to eyes, mouth to mouth);
+    /// wider where the rim moves far; 0 leaves the rims where φ puts them.
+    #[arg(long, value_name = "N", default_value_t = surfmap::matching::rim_fit::RIM_FIT_RINGS)]
+    pub rim_fit_rings: usize,
     /// Leave the landmarks where φ puts them: by default each landmark of A is matched
     /// exactly to its vertex of B in the output, and the vertices around it follow.
     #[arg(long)]
@@ -143,6 +148,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         fill_holes: !args.no_fill_holes,
         drop_folds: !args.keep_folds,
         complete_rings: args.complete_rings,
+        rim_fit_rings: args.rim_fit_rings,
         pin_landmarks: !args.free_landmarks,
         align: match args.align {
             AlignArg::Auto => Align::Auto,
@@ -297,6 +303,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             ),
             None => format!(", position weight {:.3e} (fixed)", report.position_weight),
         };
+        let fit = report.rim_fit;
+        let rims = match (fit.holes, fit.by_arc_length) {
+            (0, _) => String::new(),
+            (h, 0) => format!(
+                ", {h} hole rims carried onto B's ({} vertices moved)",
+                fit.moved
+            ),
+            (h, l) => format!(
+                ", {h} hole rims carried onto B's ({l} by arc length alone; {} vertices moved)",
+                fit.moved
+            ),
+        };
         let left_out = match report.alignment.left_out.as_slice() {
             [] => String::new(),
             names => format!(
@@ -305,7 +323,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             ),
         };
         outln!(
-            "match: {} levels up to {n}², {} iterations, energy {:.4e}, min det Dφ {:.3}, matched {:.1}% of A ({} of {}, {} completed at rims), {:.1}% of B covered{filled}, {} vertices unmatched for folds ({} flipped, {} collapsed){pinned}, alignment {}{left_out}{searched}{position}, {:.2} s",
+            "match: {} levels up to {n}², {} iterations, energy {:.4e}, min det Dφ {:.3}, matched {:.1}% of A ({} of {}, {} completed at rims){rims}, {:.1}% of B covered{filled}, {} vertices unmatched for folds ({} flipped, {} collapsed){pinned}, alignment {}{left_out}{searched}{position}, {:.2} s",
             report.levels.len(),
             report.iterations,
             report.energy,

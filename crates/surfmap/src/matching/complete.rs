@@ -657,29 +657,7 @@ pub fn complete_correspondence(
 mod tests {
     use super::*;
     use crate::mesh::generate::bumpy_disc;
-    use crate::testing::Rng;
-
-    /// The faces of `mesh` whose three vertices `keep`, with the vertices renumbered;
-    /// also the new index of every old vertex (`None`: removed).
-    fn crop(mesh: &TriMesh, keep: impl Fn([f64; 3]) -> bool) -> (TriMesh, Vec<Option<u32>>) {
-        let mut index = vec![None; mesh.num_vertices()];
-        let mut positions = vec![];
-        for (v, &p) in mesh.positions.iter().enumerate() {
-            if keep(p) {
-                index[v] = Some(positions.len() as u32);
-                positions.push(p);
-            }
-        }
-        let triangles = mesh
-            .triangles
-            .iter()
-            .filter_map(|t| {
-                let [a, b, c] = t.map(|v| index[v as usize]);
-                Some([a?, b?, c?])
-            })
-            .collect();
-        (TriMesh::new(positions, triangles), index)
-    }
+    use crate::testing::{Rng, crop};
 
     /// A vertex of `mesh` as a surface point (a triangle around it, weight 1 there).
     fn at_vertex(mesh: &TriMesh, v: u32) -> Option<SurfacePoint> {

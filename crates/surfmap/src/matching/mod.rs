@@ -20,6 +20,7 @@ pub mod pictures;
 pub mod pin;
 pub mod precondition;
 pub mod rigid;
+pub mod rim_fit;
 pub mod similarity;
 pub mod similarity_search;
 pub mod solve;

@@ -19,6 +19,7 @@ use serde::Serialize;
 
 use super::complete::{Completion, complete_correspondence};
 use super::pin::{Pinning, pin_landmarks};
+use super::rim_fit::RimFit;
 use super::solve::{MatchOptions, SurfaceMatch};
 use super::{LevelLog, MatchError};
 use crate::fsutil::write_atomically;
@@ -190,13 +191,23 @@ impl<'a> PointMap<'a> {
     /// `None` where φ carries it off B's surface. A point that φ puts within
     /// [`MatchOptions::snap_cells`] grid cells of B's surface is snapped onto it.
     pub fn map_uv(&self, uv: [f64; 2]) -> Option<SurfacePoint> {
+        self.locate(self.image(uv))
+    }
+
+    /// Where φ carries a point of A's parameter domain `uv` (A's UV units), in B's UV
+    /// units (anywhere in the plane: off B's surface too).
+    pub fn image(&self, uv: [f64; 2]) -> [f64; 2] {
         let xi = self.matched.a.images.transform.to_domain(uv);
-        let target = self
-            .matched
+        self.matched
             .b
             .images
             .transform
-            .to_uv(self.matched.map_domain(xi));
+            .to_uv(self.matched.map_domain(xi))
+    }
+
+    /// The point of B's surface at `target` in B's UV, snapped onto it from within
+    /// [`MatchOptions::snap_cells`] grid cells; `None` farther off.
+    pub fn locate(&self, target: [f64; 2]) -> Option<SurfacePoint> {
         self.locator.locate(target).or_else(|| {
             self.locator
                 .nearest(target)
@@ -270,6 +281,9 @@ pub struct MatchReport {
     pub collapsed_triangles: usize,
     /// Vertices reported unmatched because a triangle around them folded.
     pub dropped_vertices: usize,
+    /// Holes of A whose rims were carried onto B's paired rims, and the vertices of A
+    /// so moved ([`super::rim_fit`]).
+    pub rim_fit: RimFit,
     /// Vertices matched by rim completion from their neighbours
     /// ([`super::complete`]; included in `matched_vertices_a`).
     pub completed_vertices: usize,
@@ -310,6 +324,8 @@ pub struct CheckedCorrespondence {
     /// Vertices reported unmatched because a triangle around them folded (φ's folds and
     /// any that completion made).
     pub dropped: usize,
+    /// What fitting the hole rims did ([`super::rim_fit`]).
+    pub rim_fit: RimFit,
     /// What rim completion added ([`super::complete`]).
     pub completion: Completion,
     /// What pinning the landmarks did ([`super::pin`]).
@@ -331,7 +347,7 @@ impl SurfaceMatch {
         mesh_b: &TriMesh,
         drop: bool,
     ) -> Result<CheckedCorrespondence, MatchError> {
-        let mut points = self.correspondence()?;
+        let (mut points, rim_fit) = self.fitted_correspondence()?;
         let folds = check_folds(mesh_a, mesh_b, &points);
         let pinned: Vec<u32> = self.pinned_landmarks.iter().map(|p| p.0).collect();
         let mut dropped = if drop {
@@ -376,6 +392,7 @@ impl SurfaceMatch {
             points,
             folds,
             dropped,
+            rim_fit,
             completion,
             pinning,
         })
@@ -413,6 +430,7 @@ impl SurfaceMatch {
             flipped_triangles: folds.flipped.len(),
             collapsed_triangles: folds.collapsed.len(),
             dropped_vertices: checked.dropped,
+            rim_fit: checked.rim_fit,
             completed_vertices: checked.completion.completed,
             smoothed_vertices: checked.completion.smoothed,
             pinned_landmarks: checked.pinning.landmarks,

@@ -126,6 +126,9 @@ pub struct MatchOptions {
     /// Report the vertices of image triangles that turn over or collapse in space as
     /// unmatched rather than wrong ([`super::output::check_folds`]).
     pub drop_folds: bool,
+    /// Rings of A's vertices around each hole rim that follow the rim when it is
+    /// carried exactly onto B's paired rim ([`super::rim_fit`]); 0 turns the fit off.
+    pub rim_fit_rings: usize,
     /// Rings of unmatched vertices next to matched ones that rim completion may match
     /// from their neighbours ([`super::complete`]); 0 turns it off.
     pub complete_rings: usize,
@@ -232,6 +235,7 @@ impl Default for MatchOptions {
             snap_cells: SNAP_CELLS,
             position_scale: 0.0,
             drop_folds: true,
+            rim_fit_rings: super::rim_fit::RIM_FIT_RINGS,
             complete_rings: super::complete::COMPLETE_RINGS,
             complete_tolerance: super::complete::COMPLETE_TOLERANCE,
             rim_smoothing: super::complete::RIM_SMOOTHING,
@@ -299,6 +303,8 @@ pub struct SurfaceMatch {
     pub seconds_solve: f64,
     /// See [`MatchOptions::snap_cells`].
     pub snap_cells: f64,
+    /// See [`MatchOptions::rim_fit_rings`].
+    pub rim_fit_rings: usize,
     /// See [`MatchOptions::complete_rings`].
     pub complete_rings: usize,
     /// See [`MatchOptions::complete_tolerance`].
@@ -613,6 +619,7 @@ pub fn solve(
         min_det,
         seconds_solve: clock.elapsed().as_secs_f64(),
         snap_cells: options.snap_cells,
+        rim_fit_rings: options.rim_fit_rings,
         complete_rings: options.complete_rings,
         complete_tolerance: options.complete_tolerance,
         rim_smoothing: options.rim_smoothing,
@@ -920,13 +927,20 @@ impl SurfaceMatch {
     /// or into one of B's holes). A point that φ puts within [`SNAP_CELLS`] grid cells
     /// of B's surface is snapped onto it: a vertex on A's rim lies exactly on ω_A's
     /// border, and at the grid's resolution "on the border" and "just outside" are the
-    /// same answer.
+    /// same answer. Around the holes A's rims are first carried exactly onto B's
+    /// ([`super::rim_fit`]).
     pub fn correspondence(&self) -> Result<Vec<Option<SurfacePoint>>, MatchError> {
+        Ok(self.fitted_correspondence()?.0)
+    }
+
+    /// [`SurfaceMatch::correspondence`] and what its rim fit did.
+    pub fn fitted_correspondence(
+        &self,
+    ) -> Result<(Vec<Option<SurfacePoint>>, super::rim_fit::RimFit), MatchError> {
         let map = super::output::PointMap::new(self)?;
-        Ok((0..self.a.uvs.len())
-            .into_par_iter()
-            .map(|v| map.map_uv(self.a.uvs[v]))
-            .collect())
+        let mut images: Vec<[f64; 2]> = self.a.uvs.par_iter().map(|&uv| map.image(uv)).collect();
+        let fit = super::rim_fit::fit_hole_rims(&self.a, &self.b, &mut images, self.rim_fit_rings);
+        Ok((images.par_iter().map(|&y| map.locate(y)).collect(), fit))
     }
 
     /// Node positions of φ (for pictures).
