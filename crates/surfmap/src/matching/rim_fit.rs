@@ -22,12 +22,20 @@
 //!    alone, `S_k = a_k + c`, with the offset `c` that brings the targets closest to the
 //!    images (least squares, searched over `8·max(n_A, n_B)` steps of the rim). Each
 //!    target `t(v_k)` is the point of B's rim at `S_k`.
-//! 3. **Band.** The displacement `d(v) = t(v) − y(v)` of the rim vertices is extended
-//!    harmonically over A's mesh — `Σ_{u∈N(v)} (d(u) − d(v)) = 0` at the vertices within
-//!    `w` rings of a fitted rim, `d = 0` beyond — and every vertex in the band is moved
-//!    to `y(v) + d(v)`. The band width `w` is `rings` ([`RIM_FIT_RINGS`]), or three
-//!    rings per rim edge of the rim's largest displacement if that is wider (at most
-//!    40), so the shear per ring stays small.
+//! 3. **Band.** The vertices within `w` rings of a fitted rim follow it. The band width
+//!    `w` is `rings` ([`RIM_FIT_RINGS`]), or three rings per rim edge of the rim's
+//!    largest displacement if that is wider (at most 40), so the shear per ring stays
+//!    small. First the displacement `d(v) = t(v) − y(v)` of the rim vertices is extended
+//!    harmonically over A's mesh — `Σ_{u∈N(v)} (d(u) − d(v)) = 0` in the band, `d = 0`
+//!    beyond — and every vertex in the band moved to `y(v) + d(v)`. Then the band's
+//!    vertices not on a boundary of A are placed by the mean-value map (Floater 2003)
+//!    with everything else as boundary values (the rim at its targets, φ's images beyond
+//!    the band): `p(v) = Σ_u λ_vu p(u)`, `λ_vu` the mean-value weights of A's own UV
+//!    ([`mean_value_weights`]). The weights reproduce affine maps, so where φ is affine
+//!    on A's UV at the scale of a few edges the band stays where φ put it; where φ's
+//!    images crowd against the rim or fold (a closed lower lip squeezed into an open
+//!    mouth), they are straightened — the displacement alone moves the band but keeps
+//!    its folds.
 //!
 //! The fold check after it ([`super::output::drop_folds`]) still decides what is
 //! reported; this step only changes where A's vertices land near the holes.
@@ -52,6 +60,10 @@ const MAX_RINGS: usize = 40;
 
 /// Gauss–Seidel sweeps of the band's harmonic extension, per ring of width.
 const SWEEPS_PER_RING: usize = 12;
+
+/// Gauss–Seidel sweeps of the mean-value map, per ring of width (it starts from the
+/// harmonic extension, close to its solution).
+const MEAN_VALUE_SWEEPS_PER_RING: usize = 24;
 
 /// What the rim fit did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
@@ -320,9 +332,10 @@ pub fn fit_hole_rims(
     }
     // The band: vertices within `rings` rings of a fitted rim.
     let mesh = TriMesh::new(a.positions.clone(), a.triangles.clone());
-    let edges = Topology::new(&mesh).edges;
+    let topology = Topology::new(&mesh);
+    let edges = &topology.edges;
     let mut neighbours: Vec<Vec<u32>> = vec![vec![]; n];
-    for e in &edges {
+    for e in edges {
         neighbours[e[0] as usize].push(e[1]);
         neighbours[e[1] as usize].push(e[0]);
     }
@@ -359,11 +372,71 @@ pub fn fit_hole_rims(
                 / ring.len() as f64;
         }
     }
+    let mut moved: Vec<DVec2> = (0..n).map(|v| y[v] + displacement[v]).collect();
+    let mut on_boundary = vec![false; n];
+    for l in &topology.boundary_loops {
+        for &v in &l.vertices {
+            on_boundary[v as usize] = true;
+        }
+    }
+    // The band's inner vertices placed by the mean-value map with these positions as
+    // boundary values: the rim's targets, φ's images beyond the band, A's other boundary
+    // vertices where the displacement put them.
+    let inner: Vec<usize> = band.iter().copied().filter(|&v| !on_boundary[v]).collect();
+    let weights = mean_value_weights(a, &inner);
+    for _ in 0..MEAN_VALUE_SWEEPS_PER_RING * widest {
+        for (k, &v) in inner.iter().enumerate() {
+            let p = weights[k]
+                .iter()
+                .map(|&(u, w)| w * moved[u as usize])
+                .sum::<DVec2>();
+            if p.is_finite() {
+                moved[v] = p;
+            }
+        }
+    }
     for v in (0..n).filter(|&v| distance[v] <= width[v]) {
-        images[v] = (y[v] + displacement[v]).to_array();
+        images[v] = moved[v].to_array();
         fit.moved += 1;
     }
     fit
+}
+
+/// Mean-value weights (Floater 2003) of each vertex in `members` over its neighbours, in
+/// A's UV, normalized to sum to 1: `w_vu ∝ (tan(α/2) + tan(β/2)) / |uv_u − uv_v|`, α and β
+/// the angles at v of the two triangles along the edge (positive for any triangulation;
+/// they reproduce an affine map exactly: `Σ w_vu uv_u = uv_v`).
+fn mean_value_weights(a: &MatchSurface, members: &[usize]) -> Vec<Vec<(u32, f64)>> {
+    let mut index = std::collections::HashMap::new();
+    for (k, &v) in members.iter().enumerate() {
+        index.insert(v as u32, k);
+    }
+    let mut weights: Vec<Vec<(u32, f64)>> = vec![vec![]; members.len()];
+    let uv = |v: u32| DVec2::from_array(a.uvs[v as usize]);
+    for t in &a.triangles {
+        for c in 0..3 {
+            let (v, u, w) = (t[c], t[(c + 1) % 3], t[(c + 2) % 3]);
+            let Some(&k) = index.get(&v) else { continue };
+            let (eu, ew) = (uv(u) - uv(v), uv(w) - uv(v));
+            let (lu, lw) = (eu.length(), ew.length());
+            if lu <= 0.0 || lw <= 0.0 {
+                continue;
+            }
+            let angle = (eu.dot(ew) / (lu * lw)).clamp(-1.0, 1.0).acos();
+            let half = (0.5 * angle).tan();
+            for (x, l) in [(u, lu), (w, lw)] {
+                match weights[k].iter_mut().find(|e| e.0 == x) {
+                    Some(e) => e.1 += half / l,
+                    None => weights[k].push((x, half / l)),
+                }
+            }
+        }
+    }
+    for row in &mut weights {
+        let total: f64 = row.iter().map(|e| e.1).sum();
+        row.iter_mut().for_each(|e| e.1 /= total);
+    }
+    weights
 }
 
 #[cfg(test)]
@@ -513,6 +586,29 @@ mod tests {
     }
 
     #[test]
+    fn images_folded_against_the_rim_are_straightened() {
+        // The rim pushed two edges out, into B's surface, fading out within one edge:
+        // the rim's images cross the next ring's and the triangles between turn over.
+        // The harmonic displacement alone would carry the folds along; the mean-value
+        // map must leave none.
+        let (surface, centre, edge) = holed_surface();
+        let truth = surface.uvs.clone();
+        let mut images = pulled_in(&surface, centre, -2.0 * edge, edge);
+        let turned = |y: &[[f64; 2]]| -> usize {
+            let (was, now) = (signed_areas(&surface, &truth), signed_areas(&surface, y));
+            was.iter().zip(&now).filter(|(a, b)| *a * *b <= 0.0).count()
+        };
+        assert!(turned(&images) > 0, "the set-up must fold");
+        let fit = fit_hole_rims(&surface, &surface, &mut images, RIM_FIT_RINGS);
+        assert_eq!(fit.holes, 1);
+        assert_eq!(turned(&images), 0);
+        let largest = (0..images.len())
+            .map(|v| distance(images[v], truth[v]))
+            .fold(0.0, f64::max);
+        assert!(largest < edge, "largest error {largest} (edge {edge})");
+    }
+
+    #[test]
     fn a_rim_squashed_to_a_slit_is_spread_by_arc_length() {
         // The rim's images squashed onto a line through the hole (a closed mouth carried
         // into an open one): they do not wind around B's hole, so B's rim is taken at
@@ -535,6 +631,33 @@ mod tests {
             .filter(|&v| !rim.contains(&(v as u32)) && images[v] != truth[v])
             .count();
         assert!(fit.moved > rim.len() + band / 2 && band > 0);
+    }
+
+    #[test]
+    fn images_that_already_match_are_left_where_they_are() {
+        // φ exact (A against itself, images = A's UV): the rim is on B's rim already, its
+        // displacement is 0, and the mean-value weights reproduce the (identity) map, so
+        // nothing moves beyond rounding; the same for an affine map of a copy of B.
+        let (surface, _, edge) = holed_surface();
+        let mut images = surface.uvs.clone();
+        let fit = fit_hole_rims(&surface, &surface, &mut images, RIM_FIT_RINGS);
+        assert_eq!((fit.holes, fit.by_arc_length), (1, 0));
+        assert!(fit.moved > 0);
+        let moved = (0..images.len())
+            .map(|v| distance(images[v], surface.uvs[v]))
+            .fold(0.0, f64::max);
+        assert!(moved < 1e-9 * edge, "moved {moved} (edge {edge})");
+        // B's plane an affine image of A's (sheared, turned, moved), φ that map.
+        let affine = |[u, v]: [f64; 2]| [1.3 * u + 0.4 * v + 2.0, -0.2 * u + 0.9 * v - 1.0];
+        let mut b = surface.clone();
+        b.uvs = surface.uvs.iter().map(|&p| affine(p)).collect();
+        let mut images = b.uvs.clone();
+        let fit = fit_hole_rims(&surface, &b, &mut images, RIM_FIT_RINGS);
+        assert_eq!((fit.holes, fit.by_arc_length), (1, 0));
+        let moved = (0..images.len())
+            .map(|v| distance(images[v], b.uvs[v]))
+            .fold(0.0, f64::max);
+        assert!(moved < 1e-9 * edge, "affine: moved {moved} (edge {edge})");
     }
 
     #[test]
