@@ -23,15 +23,15 @@
 //!    images (least squares, searched over `8·max(n_A, n_B)` steps of the rim). Each
 //!    target `t(v_k)` is the point of B's rim at `S_k`.
 //! 3. **Band.** The vertices within `w` rings of a fitted rim follow it. The band width
-//!    `w` is `rings` ([`RIM_FIT_RINGS`]), or three rings per rim edge of the rim's
+//!    `w` is `rings` ([`RIM_FIT_RINGS`]), or two rings per rim edge of the rim's
 //!    largest displacement if that is wider (at most 40), so the shear per ring stays
-//!    small. First the displacement `d(v) = t(v) − y(v)` of the rim vertices is extended
-//!    harmonically over A's mesh — `Σ_{u∈N(v)} (d(u) − d(v)) = 0` in the band, `d = 0`
-//!    beyond — and every vertex in the band moved to `y(v) + d(v)`. Then the band's
-//!    vertices not on a boundary of A are placed by the mean-value map (Floater 2003)
-//!    with everything else as boundary values (the rim at its targets, φ's images beyond
-//!    the band): `p(v) = Σ_u λ_vu p(u)`, `λ_vu` the mean-value weights of A's own UV
-//!    ([`mean_value_weights`]). The weights reproduce affine maps, so where φ is affine
+//!    under half an edge. First the displacement `d(v) = t(v) − y(v)` of the rim
+//!    vertices is extended harmonically over A's mesh — `Σ_{u∈N(v)} (d(u) − d(v)) = 0`
+//!    in the band, `d = 0` beyond — and every vertex in the band moved to `y(v) + d(v)`.
+//!    Then the band's vertices not on a boundary of A are placed by the mean-value map
+//!    (Floater 2003) with everything else as boundary values (the rim at its targets,
+//!    φ's images beyond the band): `p(v) = Σ_u λ_vu p(u)`, `λ_vu` the mean-value weights
+//!    of A's own UV ([`mean_value_weights`]). The weights reproduce affine maps, so where φ is affine
 //!    on A's UV at the scale of a few edges the band stays where φ put it; where φ's
 //!    images crowd against the rim or fold (a closed lower lip squeezed into an open
 //!    mouth), they are straightened — the displacement alone moves the band but keeps
@@ -50,10 +50,13 @@ use crate::mesh::{Topology, TriMesh};
 /// each ring's triangles are sheared by a small fraction of an edge.
 pub const RIM_FIT_RINGS: usize = 8;
 
-/// A rim moved farther is followed by a wider band: three rings per mean rim edge of
-/// its largest displacement, so that the shear per ring stays under a third of an edge
-/// (an open mouth's rim, carried from a closed mouth's images, moves by many edges).
-const RINGS_PER_EDGE_MOVED: f64 = 3.0;
+/// A rim moved farther is followed by a wider band: two rings per mean rim edge of its
+/// largest displacement, so that the shear per ring stays under half an edge and no
+/// ring's images cross the next's (an open mouth's rim, carried from a closed mouth's
+/// images, moves by many edges). Three (a third of an edge) did better on an open jaw
+/// but sent a coarse face's mouth band across its nose (BENCHMARKS.md, "Hole rims
+/// carried onto B's").
+const RINGS_PER_EDGE_MOVED: f64 = 2.0;
 
 /// Widest band.
 const MAX_RINGS: usize = 40;
