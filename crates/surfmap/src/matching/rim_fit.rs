@@ -31,11 +31,11 @@
 //!    Then the band's vertices not on a boundary of A are placed by the mean-value map
 //!    (Floater 2003) with everything else as boundary values (the rim at its targets,
 //!    φ's images beyond the band): `p(v) = Σ_u λ_vu p(u)`, `λ_vu` the mean-value weights
-//!    of A's own UV ([`mean_value_weights`]). The weights reproduce affine maps, so where φ is affine
-//!    on A's UV at the scale of a few edges the band stays where φ put it; where φ's
-//!    images crowd against the rim or fold (a closed lower lip squeezed into an open
-//!    mouth), they are straightened — the displacement alone moves the band but keeps
-//!    its folds.
+//!    of A's own UV ([`mean_value_weights`]). The weights reproduce affine maps, so
+//!    where φ is affine on A's UV at the scale of a few edges the band stays where φ put
+//!    it; where φ's images crowd against the rim or fold (a closed lower lip squeezed
+//!    into an open mouth), they are straightened — the displacement alone moves the band
+//!    but keeps its folds.
 //!
 //! The fold check after it ([`super::output::drop_folds`]) still decides what is
 //! reported; this step only changes where A's vertices land near the holes.
@@ -91,6 +91,20 @@ enum RimTargets {
     ArcLength,
 }
 
+/// The 3D arc length along a closed loop of the surface's vertices from its first vertex:
+/// `n + 1` values, the last the loop's length.
+fn loop_arc_length(surface: &MatchSurface, rim: &[u32]) -> Vec<f64> {
+    let n = rim.len();
+    let mut cumulative = Vec::with_capacity(n + 1);
+    cumulative.push(0.0);
+    for k in 0..n {
+        let p = DVec3::from_array(surface.positions[rim[k] as usize]);
+        let q = DVec3::from_array(surface.positions[rim[(k + 1) % n] as usize]);
+        cumulative.push(cumulative[k] + p.distance(q));
+    }
+    cumulative
+}
+
 /// A rim of B as a closed polygon in B's UV, with its 3D arc length.
 struct RimPolygon {
     uv: Vec<DVec2>,
@@ -100,18 +114,11 @@ struct RimPolygon {
 
 impl RimPolygon {
     fn new(surface: &MatchSurface, rim: &[u32]) -> Self {
-        let n = rim.len();
         let uv = rim
             .iter()
             .map(|&v| DVec2::from_array(surface.uvs[v as usize]))
             .collect();
-        let mut cumulative = Vec::with_capacity(n + 1);
-        cumulative.push(0.0);
-        for k in 0..n {
-            let p = DVec3::from_array(surface.positions[rim[k] as usize]);
-            let q = DVec3::from_array(surface.positions[rim[(k + 1) % n] as usize]);
-            cumulative.push(cumulative[k] + p.distance(q));
-        }
+        let cumulative = loop_arc_length(surface, rim);
         Self { uv, cumulative }
     }
 
@@ -183,13 +190,7 @@ fn rim_targets(
         return None;
     }
     // A's arc length, scaled to B's rim.
-    let mut arc = Vec::with_capacity(n + 1);
-    arc.push(0.0);
-    for k in 0..n {
-        let p = DVec3::from_array(a.positions[rim_a[k] as usize]);
-        let q = DVec3::from_array(a.positions[rim_a[(k + 1) % n] as usize]);
-        arc.push(arc[k] + p.distance(q));
-    }
+    let arc = loop_arc_length(a, rim_a);
     if arc[n] <= 0.0 {
         return None;
     }
