@@ -334,7 +334,7 @@ pub fn fit_hole_rims(
     if fit.holes == 0 {
         return fit;
     }
-    // The band: vertices within `rings` rings of a fitted rim.
+    // The band: the vertices within their rim's width (in rings) of a fitted rim.
     let mesh = TriMesh::new(a.positions.clone(), a.triangles.clone());
     let topology = Topology::new(&mesh);
     let edges = &topology.edges;
