@@ -49,7 +49,9 @@ fn landmarks(d: &Bound<'_, PyDict>) -> PyResult<Landmarks> {
 /// ids of A], "B": [vertex ids of B]}``. ``size``: finest grid (2^k + 1). ``align``:
 /// ``"auto"`` (landmarks when given, else the shapes in space), ``"features"``,
 /// ``"shape"`` or ``"none"``. ``keep_folds``: keep the vertices of image triangles that
-/// turn over or collapse in space (by default they are unmatched). ``complete_rings``:
+/// turn over or collapse in space (by default they are unmatched). ``rim_fit_rings``:
+/// rings of A's vertices around each hole rim that follow it when the rim is carried
+/// exactly onto B's paired rim (0: leave the rims where φ puts them). ``complete_rings``:
 /// rings of vertices next to the matched region completed from their matched neighbours
 /// where φ just misses B, after smoothing the matched border (0: leave them unmatched and
 /// φ's matches as they are). ``pin_landmarks``: match each landmark exactly to its vertex
@@ -71,7 +73,7 @@ fn landmarks(d: &Bound<'_, PyDict>) -> PyResult<Landmarks> {
 /// >>> C.shape, report["min_det"] > 0, report["matched_fraction_a"] > 0.9
 /// ((289, 4), True, True)
 #[pyfunction]
-#[pyo3(name = "match", signature = (VA, FA, VB, FB, *, landmarks=None, size=257, align="auto", keep_folds=false, complete_rings=4, pin_landmarks=true))]
+#[pyo3(name = "match", signature = (VA, FA, VB, FB, *, landmarks=None, size=257, align="auto", keep_folds=false, rim_fit_rings=8, complete_rings=4, pin_landmarks=true))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub fn match_meshes<'py>(
     py: Python<'py>,
@@ -83,6 +85,7 @@ pub fn match_meshes<'py>(
     size: usize,
     align: &str,
     keep_folds: bool,
+    rim_fit_rings: usize,
     complete_rings: usize,
     pin_landmarks: bool,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>)> {
@@ -92,6 +95,7 @@ pub fn match_meshes<'py>(
     let options = MatchOptions {
         size,
         drop_folds: !keep_folds,
+        rim_fit_rings,
         complete_rings,
         pin_landmarks,
         align: match align {

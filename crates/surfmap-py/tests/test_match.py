@@ -27,6 +27,13 @@ def test_match_equals_the_command_line(cli, data, tmp_path):
     points = np.einsum("ij,ijk->ik", C[ok, 1:], VB[tri])
     err = np.linalg.norm(points - VB[ok], axis=1) / report["length_unit"]  # ≈ √area
     assert ok.mean() > 0.9 and np.median(err) < 0.05
+    # The rim fit turned off: still the command line's table, and a different one.
+    off = tmp_path / "off"
+    run_cli(cli, "match", a, b, "-o", off, "--size", "129", "--quiet", "--rim-fit-rings", "0")
+    C0, report0 = surfmap.match(*surfmap.read_mesh(a), *surfmap.read_mesh(b), size=129, rim_fit_rings=0)
+    assert np.array_equal(C0, np.load(off / "correspondence.npy"))
+    assert report0["rim_fit"]["holes"] == 0 and report["rim_fit"]["holes"] == 3
+    assert not np.array_equal(C0, C)
 
 
 def test_match_of_a_moved_copy_recovers_the_motion():

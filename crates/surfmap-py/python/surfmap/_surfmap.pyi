@@ -119,6 +119,7 @@ def match(
     size: int = 257,
     align: str = "auto",
     keep_folds: bool = False,
+    rim_fit_rings: int = 8,
     complete_rings: int = 4,
     pin_landmarks: bool = True,
 ) -> Tuple[FloatArray, Report]: ...
