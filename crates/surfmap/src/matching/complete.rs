@@ -201,7 +201,7 @@ pub fn closest_point_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> [f64
 
 /// Compressed rows: the items `(row, value)` grouped by row, as `(start, list)` with row
 /// `r`'s values in `list[start[r]..start[r + 1]]` (in the order given).
-fn compressed_rows(
+pub(crate) fn compressed_rows(
     rows: usize,
     items: impl Iterator<Item = (u32, u32)> + Clone,
 ) -> (Vec<u32>, Vec<u32>) {

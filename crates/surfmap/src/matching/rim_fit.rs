@@ -31,7 +31,7 @@
 //!    Then the band's vertices not on a boundary of A are placed by the mean-value map
 //!    (Floater 2003) with everything else as boundary values (the rim at its targets,
 //!    φ's images beyond the band): `p(v) = Σ_u λ_vu p(u)`, `λ_vu` the mean-value weights
-//!    of A's own UV ([`mean_value_weights`]). The weights reproduce affine maps, so
+//!    of A's own UV, solved exactly ([`crate::param::tutte::mean_value_with_fixed`]). The weights reproduce affine maps, so
 //!    where φ is affine on A's UV at the scale of a few edges the band stays where φ put
 //!    it; where φ's images crowd against the rim or fold (a closed lower lip squeezed
 //!    into an open mouth), they are straightened — the displacement alone moves the band
@@ -42,8 +42,10 @@
 
 use glam::{DVec2, DVec3};
 
+use super::complete::compressed_rows;
 use super::surface::MatchSurface;
 use crate::mesh::{Topology, TriMesh};
+use crate::param::tutte::mean_value_with_fixed;
 
 /// Default (and narrowest) band: the rings of A's vertices around a fitted rim that
 /// follow it. Eight: the rim moves by a grid cell or two (about as many mesh edges), so
@@ -63,10 +65,6 @@ const MAX_RINGS: usize = 40;
 
 /// Gauss–Seidel sweeps of the band's harmonic extension, per ring of width.
 const SWEEPS_PER_RING: usize = 12;
-
-/// Gauss–Seidel sweeps of the mean-value map, per ring of width (it starts from the
-/// harmonic extension, close to its solution).
-const MEAN_VALUE_SWEEPS_PER_RING: usize = 24;
 
 /// What the rim fit did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
@@ -337,12 +335,14 @@ pub fn fit_hole_rims(
     // The band: the vertices within their rim's width (in rings) of a fitted rim.
     let mesh = TriMesh::new(a.positions.clone(), a.triangles.clone());
     let topology = Topology::new(&mesh);
-    let edges = &topology.edges;
-    let mut neighbours: Vec<Vec<u32>> = vec![vec![]; n];
-    for e in edges {
-        neighbours[e[0] as usize].push(e[1]);
-        neighbours[e[1] as usize].push(e[0]);
-    }
+    let (ring_start, ring_list) = compressed_rows(
+        n,
+        topology
+            .edges
+            .iter()
+            .flat_map(|e| [(e[0], e[1]), (e[1], e[0])]),
+    );
+    let neighbours = |v: usize| &ring_list[ring_start[v] as usize..ring_start[v + 1] as usize];
     let mut distance = vec![usize::MAX; n];
     let mut queue: std::collections::VecDeque<usize> =
         (0..n).filter(|&v| fixed[v].is_some()).collect();
@@ -353,7 +353,7 @@ pub fn fit_hole_rims(
         if distance[v] >= width[v] {
             continue;
         }
-        for &u in &neighbours[v] {
+        for &u in neighbours(v) {
             if distance[u as usize] == usize::MAX {
                 distance[u as usize] = distance[v] + 1;
                 width[u as usize] = width[v];
@@ -368,7 +368,7 @@ pub fn fit_hole_rims(
     let mut displacement: Vec<DVec2> = fixed.iter().map(|d| d.unwrap_or(DVec2::ZERO)).collect();
     for _ in 0..SWEEPS_PER_RING * widest {
         for &v in &band {
-            let ring = &neighbours[v];
+            let ring = neighbours(v);
             displacement[v] = ring
                 .iter()
                 .map(|&u| displacement[u as usize])
@@ -386,17 +386,14 @@ pub fn fit_hole_rims(
     // The band's inner vertices placed by the mean-value map with these positions as
     // boundary values: the rim's targets, φ's images beyond the band, A's other boundary
     // vertices where the displacement put them.
+    // (A's UV triangles come from a flip-free flattening; should one be degenerate, the
+    // band keeps the displacement's positions.)
     let inner: Vec<usize> = band.iter().copied().filter(|&v| !on_boundary[v]).collect();
-    let weights = mean_value_weights(a, &inner);
-    for _ in 0..MEAN_VALUE_SWEEPS_PER_RING * widest {
-        for (k, &v) in inner.iter().enumerate() {
-            let p = weights[k]
-                .iter()
-                .map(|&(u, w)| w * moved[u as usize])
-                .sum::<DVec2>();
-            if p.is_finite() {
-                moved[v] = p;
-            }
+    let uv3: Vec<[f64; 3]> = a.uvs.iter().map(|&[u, v]| [u, v, 0.0]).collect();
+    let start: Vec<[f64; 2]> = moved.iter().map(|p| p.to_array()).collect();
+    if let Ok(placed) = mean_value_with_fixed(&uv3, &a.triangles, start, &inner) {
+        for &v in &inner {
+            moved[v] = DVec2::from_array(placed[v]);
         }
     }
     for v in (0..n).filter(|&v| distance[v] <= width[v]) {
@@ -404,43 +401,6 @@ pub fn fit_hole_rims(
         fit.moved += 1;
     }
     fit
-}
-
-/// Mean-value weights (Floater 2003) of each vertex in `members` over its neighbours, in
-/// A's UV, normalized to sum to 1: `w_vu ∝ (tan(α/2) + tan(β/2)) / |uv_u − uv_v|`, α and β
-/// the angles at v of the two triangles along the edge (positive for any triangulation;
-/// they reproduce an affine map exactly: `Σ w_vu uv_u = uv_v`).
-fn mean_value_weights(a: &MatchSurface, members: &[usize]) -> Vec<Vec<(u32, f64)>> {
-    let mut index = std::collections::HashMap::new();
-    for (k, &v) in members.iter().enumerate() {
-        index.insert(v as u32, k);
-    }
-    let mut weights: Vec<Vec<(u32, f64)>> = vec![vec![]; members.len()];
-    let uv = |v: u32| DVec2::from_array(a.uvs[v as usize]);
-    for t in &a.triangles {
-        for c in 0..3 {
-            let (v, u, w) = (t[c], t[(c + 1) % 3], t[(c + 2) % 3]);
-            let Some(&k) = index.get(&v) else { continue };
-            let (eu, ew) = (uv(u) - uv(v), uv(w) - uv(v));
-            let (lu, lw) = (eu.length(), ew.length());
-            if lu <= 0.0 || lw <= 0.0 {
-                continue;
-            }
-            let angle = (eu.dot(ew) / (lu * lw)).clamp(-1.0, 1.0).acos();
-            let half = (0.5 * angle).tan();
-            for (x, l) in [(u, lu), (w, lw)] {
-                match weights[k].iter_mut().find(|e| e.0 == x) {
-                    Some(e) => e.1 += half / l,
-                    None => weights[k].push((x, half / l)),
-                }
-            }
-        }
-    }
-    for row in &mut weights {
-        let total: f64 = row.iter().map(|e| e.1).sum();
-        row.iter_mut().for_each(|e| e.1 /= total);
-    }
-    weights
 }
 
 #[cfg(test)]

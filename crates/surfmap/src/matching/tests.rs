@@ -29,6 +29,14 @@ fn rigid(r: [[f64; 3]; 3], t: [f64; 3]) -> impl Fn([f64; 3]) -> [f64; 3] {
     move |p| std::array::from_fn(|i| r[i][0] * p[0] + r[i][1] * p[1] + r[i][2] * p[2] + t[i])
 }
 
+/// The rigid motion of the moved, re-triangulated copies: turned 70° about a skew axis.
+fn moved_copy_motion() -> impl Fn([f64; 3]) -> [f64; 3] {
+    rigid(
+        rotation([0.2, 0.9, -0.3], 70f64.to_radians()),
+        [2.0, -1.0, 0.5],
+    )
+}
+
 fn options() -> MatchOptions {
     MatchOptions {
         size: 129,
@@ -90,10 +98,7 @@ const CELL: f64 = 3.0 / 128.0;
 #[test]
 fn a_retriangulated_moved_copy_matches_by_the_identity() {
     let a = surface(18, |p| p);
-    let motion = rigid(
-        rotation([0.2, 0.9, -0.3], 70f64.to_radians()),
-        [2.0, -1.0, 0.5],
-    );
+    let motion = moved_copy_motion();
     let b = surface(23, &motion);
     let (_, corr) = run(&a, &b, &Guidance::default(), &options());
     let (e, matched) = errors(&a, &b, &corr, |v| Some(motion(a.positions[v])));
@@ -365,17 +370,15 @@ fn a_spent_budget_stops_every_level_fold_free() {
 /// The position term's weight follows the surfaces' disagreement in space
 /// ([`PositionWeight`]): a moved, re-triangulated copy agrees up to its triangulation,
 /// a copy with ripples added disagrees more and gets a lower weight; each weight is
-/// `κ/clamp(σ, σ_min, σ_max)²` of the residual reported, and that residual is no more than the RMS distance
-/// to B's closest vertices at the true motion (the ICP minimizes it). A moved exact copy
-/// (residual ≈ 0) gets the largest weight, `κ/σ_min²`, not an unbounded one. A fixed
-/// weight, and a weight of 0 (the thesis energy), are used as given.
+/// `κ/clamp(σ, σ_min, σ_max)²` of the residual reported, and that residual is no more
+/// than the RMS distance to B's closest vertices at the true motion (the ICP minimizes
+/// it). A moved exact copy (residual ≈ 0) gets the largest weight, `κ/σ_min²`, not an
+/// unbounded one. A fixed weight, and a weight of 0 (the thesis energy), are used as
+/// given.
 #[test]
 fn the_position_weight_falls_as_the_shapes_disagree() {
     let a = surface(18, |p| p);
-    let motion = rigid(
-        rotation([0.2, 0.9, -0.3], 70f64.to_radians()),
-        [2.0, -1.0, 0.5],
-    );
+    let motion = moved_copy_motion();
     let copy = surface(23, &motion);
     let rippled = surface(23, |p| {
         motion([

@@ -121,8 +121,8 @@ fn tan_half_angle(e1: [f64; 3], e2: [f64; 3]) -> Option<f64> {
     (l1 > 0.0 && l2 > 0.0 && denom > 0.0 && t.is_finite()).then_some(t)
 }
 
-/// Assembles and solves `Σ_j w_ij (u_i − u_j) = 0` for the interior vertices with the
-/// boundary fixed; positions already checked.
+/// The boundary placed at `boundary_uv` and `Σ_j w_ij (u_i − u_j) = 0` solved for the
+/// interior vertices ([`solve_with_fixed`]); positions already checked.
 fn solve_fixed_boundary(
     positions: &[[f64; 3]],
     disc: &Disc,
@@ -142,6 +142,37 @@ fn solve_fixed_boundary(
         uv[v as usize] = p;
     }
     let index = Unknowns::new(n, boundary.iter().map(|&v| v as usize));
+    solve_with_fixed(positions, triangles, uv, &index, weights)
+}
+
+/// The mean-value map (weights from `positions`, as [`mean_value_with_boundary`]) that
+/// moves only the vertices `free` and keeps every other vertex at its `uv`: solves
+/// `Σ_j w_ij (u_i − u_j) = 0` for the free vertices. Each free vertex must have its whole
+/// fan of triangles in `triangles` (an interior vertex), for linear precision.
+pub(crate) fn mean_value_with_fixed(
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    uv: Vec<[f64; 2]>,
+    free: &[usize],
+) -> Result<Vec<[f64; 2]>, InitialMapError> {
+    let mut is_free = vec![false; positions.len()];
+    free.iter().for_each(|&v| is_free[v] = true);
+    let index = Unknowns::new(
+        positions.len(),
+        (0..positions.len()).filter(|&v| !is_free[v]),
+    );
+    solve_with_fixed(positions, triangles, uv, &index, Weights::MeanValue)
+}
+
+/// Assembles and solves `Σ_j w_ij (u_i − u_j) = 0` for the unknowns of `index`, the
+/// other vertices fixed at their `uv`.
+fn solve_with_fixed(
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    mut uv: Vec<[f64; 2]>,
+    index: &Unknowns,
+    weights: Weights,
+) -> Result<Vec<[f64; 2]>, InitialMapError> {
     let m = index.count();
     if m == 0 {
         return Ok(uv);
