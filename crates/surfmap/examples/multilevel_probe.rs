@@ -59,6 +59,7 @@ fn main() {
         let stats = prolongate(
             &mesh.positions,
             &dec,
+            disc.boundary(),
             &mut uv,
             &Alpha::balanced(),
             polish,

@@ -201,11 +201,74 @@ fn an_unconstrained_attempt_that_crosses_itself_gives_way_early() {
     let Some(dir) = surfmap::testing::shared_data() else {
         return;
     };
-    // An ICT face opened with seams: unconstrained, the lips fold over each other within
-    // a few iterations and stay so (24 iterations to an overlapping minimum). The
-    // default mode stops that attempt once three iterates in a row cross, and solves
-    // with the barrier.
-    let mesh = read_mesh(&dir.join("faces/ict/ict_id004.obj"))
+    // Unconstrained, these maps fold over themselves within a few iterations and stay
+    // so; the default mode stops that attempt and solves with the barrier. From a
+    // single-level start (three_holes cut open, LSCM) after three iterates in a row
+    // cross; from a multilevel start (an ICT face opened with seams), which is near the
+    // minimum already, after the first.
+    let attempt_of = |mesh: &TriMesh, options: &FlattenOptions| {
+        let mut all = 0;
+        let map = surfmap::flatten_with_progress(mesh, options, &mut |l| {
+            all += usize::from(l.iteration > 0)
+        })
+        .unwrap();
+        assert!(map.barrier, "{:?}", map.stop_reason);
+        (all - map.iterations, map.start)
+    };
+    let three_holes = read_mesh(&dir.join("three_holes.off")).unwrap().mesh;
+    let options = FlattenOptions::default();
+    let (attempt, start) = attempt_of(&three_holes, &options);
+    assert_eq!(start, surfmap::StartMap::Lscm);
+    let (overlap, guarantee) = flatten_checked("three_holes", &three_holes, &options);
+    assert_eq!((overlap, guarantee), (0.0, Guarantee::Bijective));
+    // The measure code, on the unconstrained solve run to the attempt's length and to
+    // the end: both cross, and the attempt saved most of the iterations.
+    let off = options.clone().with_bijective(Bijective::Off);
+    let mut capped = off.clone();
+    capped.newton.max_iterations = attempt;
+    let (overlap, _) = flatten_checked("three_holes attempt", &three_holes, &capped);
+    assert!(
+        overlap > 0.0,
+        "the attempt stopped at an iterate that does not cross"
+    );
+    let full = flatten(&three_holes, &off).unwrap();
+    assert!(full.boundary_crossings > 0);
+    assert!(
+        2 * attempt < full.iterations,
+        "attempt {attempt} of {} unconstrained iterations",
+        full.iterations
+    );
+
+    // (The iteration cap would also cap the coarse level of a multilevel start, so the
+    // ICT face's attempt is compared with the whole unconstrained solve only.)
+    let face = read_mesh(&dir.join("faces/ict/ict_id004.obj"))
+        .unwrap()
+        .mesh;
+    let opened = FlattenOptions::default().with_fill_holes(false);
+    let (attempt, start) = attempt_of(&face, &opened);
+    assert_eq!(start, surfmap::StartMap::Multilevel);
+    let (overlap, guarantee) = flatten_checked("ict_id004 opened", &face, &opened);
+    assert_eq!((overlap, guarantee), (0.0, Guarantee::Bijective));
+    let full = flatten(&face, &opened.clone().with_bijective(Bijective::Off)).unwrap();
+    assert!(full.boundary_crossings > 0);
+    assert!(
+        (1..=3).contains(&attempt) && 4 * attempt < full.iterations,
+        "attempt {attempt} of {} unconstrained iterations",
+        full.iterations
+    );
+}
+
+#[test]
+fn the_multilevel_start_is_kept_from_crossing_at_the_seams() {
+    let Some(dir) = surfmap::testing::shared_data() else {
+        return;
+    };
+    // ict_blink_l opened with seams: re-inserting the removed vertices one at a time
+    // made the two sides of a seam cross (the start was abandoned for mean-value
+    // coordinates: 13 barrier iterations); the re-insertion now keeps boundary vertices
+    // from crossing, so the barrier solve starts from the multilevel start. Its coarse
+    // level needed the barrier, so there is no unconstrained attempt either.
+    let mesh = read_mesh(&dir.join("faces/ict/ict_blink_l.obj"))
         .unwrap()
         .mesh;
     let opened = FlattenOptions::default().with_fill_holes(false);
@@ -214,25 +277,17 @@ fn an_unconstrained_attempt_that_crosses_itself_gives_way_early() {
         all += usize::from(l.iteration > 0)
     })
     .unwrap();
-    assert!(map.barrier, "{:?}", map.stop_reason);
-    let attempt = all - map.iterations;
-    let (overlap, guarantee) = flatten_checked("ict_id004 opened", &mesh, &opened);
+    let report = map
+        .multilevel
+        .as_ref()
+        .expect("a multilevel start was tried");
+    assert!(report.abandoned.is_none(), "{:?}", report.abandoned);
+    assert!(report.coarse_barrier);
+    assert!(report.prolongation.kept_off_the_boundary > 0);
+    assert_eq!(map.start, surfmap::StartMap::Multilevel);
+    assert!(map.barrier && map.converged, "{:?}", map.stop_reason);
+    assert_eq!(all, map.iterations, "no unconstrained attempt");
+    assert!(map.iterations <= 12, "{} iterations", map.iterations);
+    let (overlap, guarantee) = flatten_checked("ict_blink_l opened", &mesh, &opened);
     assert_eq!((overlap, guarantee), (0.0, Guarantee::Bijective));
-    // The measure code, on the unconstrained solve run to the attempt's length and to
-    // the end: both cross, and the attempt saved most of the iterations.
-    let off = opened.clone().with_bijective(Bijective::Off);
-    let mut capped = off.clone();
-    capped.newton.max_iterations = attempt;
-    let (overlap, _) = flatten_checked("ict_id004 attempt", &mesh, &capped);
-    assert!(
-        overlap > 0.0,
-        "the attempt stopped at an iterate that does not cross"
-    );
-    let full = flatten(&mesh, &off).unwrap();
-    assert!(full.boundary_crossings > 0);
-    assert!(
-        2 * attempt < full.iterations,
-        "attempt {attempt} of {} unconstrained iterations",
-        full.iterations
-    );
 }

@@ -12,7 +12,7 @@ use super::arap::ArapStep;
 use super::barrier::BoundaryBarrier;
 use super::element::{RestTriangleError, rest_triangles};
 use super::flip_free::max_flip_free_step;
-use super::newton::NewtonSolver;
+use super::newton::{CROSSING_PERSISTENCE, NewtonSolver};
 pub use super::newton::{IterationLog, NewtonSettings, NewtonTimings, StopReason};
 pub use super::optcuts::{CutRound, CutStop, DistortionCuts, MaxDistortion};
 pub use super::plan::{Cut, CutReason, Seams};
@@ -160,6 +160,10 @@ pub struct MultilevelReport {
     pub coarse_faces: usize,
     /// Newton iterations on the coarse mesh.
     pub coarse_iterations: usize,
+    /// Whether the coarse mesh's map needed the boundary barrier (its unconstrained
+    /// minimum overlapped itself): then so does the full mesh's, and the bijective mode
+    /// solves it with the barrier from the start.
+    pub coarse_barrier: bool,
     /// α values of the continuation stages solved on the coarse mesh (with a
     /// continuation start; the full mesh then goes straight to the target α).
     pub coarse_continuation: Vec<[f64; 3]>,
@@ -777,11 +781,16 @@ fn solve_disc(
         }
     };
     let start_flipped = admissible(&mut uv);
-    // (A given start is the user's: it is solved from as given.)
+    // (A given start is the user's: it is solved from as given.) A multilevel start
+    // whose coarse level needed the barrier leads to an overlapping minimum too
+    // (measured: ICT faces opened with seams, BENCHMARKS.md "Hard discs"), so it goes
+    // to the barrier solve at once.
+    let coarse_overlapped =
+        start == StartMap::Multilevel && multilevel.as_ref().is_some_and(|m| m.coarse_barrier);
     if solve == Solve::UnlessStartCrosses
         && start != StartMap::Given
         && start_flipped == 0
-        && boundary_crossings(&uv, boundary) > 0
+        && (coarse_overlapped || boundary_crossings(&uv, boundary) > 0)
     {
         return Ok(SolveOutcome::StartCrosses {
             time: clock.elapsed().as_secs_f64(),
@@ -958,8 +967,17 @@ fn solve_disc(
     } else if solve == Solve::UnlessStartCrosses {
         // The bijective mode solves again with the barrier when the result overlaps
         // itself; an iterate whose boundary crosses already says it will (BENCHMARKS.md,
-        // "Hard discs"), so the rest of this solve would be spent for nothing.
-        solver.stop_when_boundary_crosses(boundary.to_vec());
+        // "Hard discs"), so the rest of this solve would be spent for nothing. From a
+        // multilevel start (whose coarse level is solved: near the minimum) one crossing
+        // iterate says so: on the ICT faces opened with seams every such crossing lasted
+        // to the end (measured, BENCHMARKS.md); from the other starts, transient
+        // crossings happen ([`CROSSING_PERSISTENCE`]).
+        let persistence = if start == StartMap::Multilevel {
+            1
+        } else {
+            CROSSING_PERSISTENCE
+        };
+        solver.stop_when_boundary_crosses(boundary.to_vec(), persistence);
     }
     let mut log = Vec::new();
     let mut record = |entry: IterationLog| {
@@ -1164,6 +1182,7 @@ fn multilevel_start(
         };
         let flat = flatten(&coarse, &coarse_options).map_err(|e| format!("coarse mesh: {e}"))?;
         report.coarse_iterations = flat.iterations;
+        report.coarse_barrier = flat.barrier;
         report.coarse_continuation = flat.continuation;
         report.time_coarse = clock.elapsed().as_secs_f64() - report.time_decimate;
         let mut uv = vec![[f64::NAN; 2]; mesh.positions.len()];
@@ -1173,6 +1192,12 @@ fn multilevel_start(
         report.prolongation = super::multilevel::prolongate(
             &mesh.positions,
             &decimation,
+            // Kept from crossing itself where the result must not overlap.
+            if options.bijective == Bijective::Off {
+                &[]
+            } else {
+                disc.boundary()
+            },
             &mut uv,
             &options.energy,
             coarse_level.polish_steps,

@@ -28,12 +28,21 @@
 //!
 //! Every insertion is checked (all star faces strictly counter-clockwise) and every
 //! local step stays flip-free; a failure is an error, and the caller falls back to the
-//! single-level start. The prolongation needs no linear solve: cost
-//! O(faces · (polish steps + sweeps)).
+//! single-level start.
+//!
+//! Where the map must not overlap itself (the bijective modes), boundary vertices are
+//! also kept from crossing the boundary (`BoundaryGuard`): a re-inserted boundary
+//! vertex whose edges would cross a current boundary edge is drawn toward the edge its
+//! insertion split (which crossed nothing), and a local step (insertion or sweep) of a
+//! boundary vertex that would cross is not taken. A crossing that remains (no such
+//! position exists) is found by the caller, which abandons the start as before. The
+//! prolongation needs no linear solve: cost O(faces · (polish steps + sweeps)), plus
+//! O(boundary) per placement or step of a boundary vertex when guarded.
 
 use super::element::{self, RestTriangle};
 use super::signed_uv_area;
 use crate::energy::Density;
+use crate::measure::overlap::segments_intersect;
 use crate::mesh::decimate::Decimation;
 use crate::vec3::{cross3, dot3, sub3};
 
@@ -59,6 +68,189 @@ pub struct ProlongationStats {
     pub kernel_fallbacks: usize,
     /// Local Newton steps taken in total.
     pub polish_steps: usize,
+    /// Placements and local steps of boundary vertices changed or refused because the
+    /// boundary would have crossed itself (see the module docs).
+    pub kept_off_the_boundary: usize,
+}
+
+/// The boundary loop of the map during the re-insertion: the re-inserted boundary
+/// vertices linked between their present neighbours along the fine loop, so that a
+/// placement or local step of a boundary vertex can be checked against every current
+/// boundary edge (O(boundary) per check, on boundary vertices only). The coarse map is
+/// overlap-free (solved with the barrier when it needed one); one-vertex-at-a-time
+/// placement can make two sides of a seam, or the rims of a narrow slit, cross where the
+/// coarse map had them nearly touching (measured: ICT faces opened with seams, 1–2
+/// crossing pairs after the re-insertion, which made the full-size barrier solve start
+/// from mean-value coordinates instead).
+struct BoundaryGuard {
+    /// Position of each vertex in the fine loop (`u32::MAX`: not on the boundary).
+    index: Vec<u32>,
+    /// The fine loop.
+    fine: Vec<u32>,
+    /// For each loop position, the previous and next present one (valid for present
+    /// positions: those whose vertex has been placed).
+    prev: Vec<u32>,
+    next: Vec<u32>,
+    present: Vec<bool>,
+}
+
+impl BoundaryGuard {
+    fn new(boundary: &[u32], uv: &[[f64; 2]]) -> Self {
+        let n = boundary.len();
+        let mut index = vec![u32::MAX; uv.len()];
+        for (k, &v) in boundary.iter().enumerate() {
+            index[v as usize] = k as u32;
+        }
+        let present: Vec<bool> = boundary
+            .iter()
+            .map(|&v| uv[v as usize][0].is_finite())
+            .collect();
+        let (mut prev, mut next) = (vec![0u32; n], vec![0u32; n]);
+        if let Some(last) = (0..n).rev().find(|&k| present[k]) {
+            let mut before = last;
+            for k in (0..n).filter(|&k| present[k]) {
+                prev[k] = before as u32;
+                next[before] = k as u32;
+                before = k;
+            }
+        }
+        Self {
+            index,
+            fine: boundary.to_vec(),
+            prev,
+            next,
+            present,
+        }
+    }
+
+    /// Loop position of `v`, if it is a boundary vertex.
+    fn position(&self, v: u32) -> Option<usize> {
+        let k = *self.index.get(v as usize)?;
+        (k != u32::MAX).then_some(k as usize)
+    }
+
+    /// Links re-inserted vertex `v` (if on the boundary) between its present
+    /// neighbours along the loop.
+    fn insert(&mut self, v: u32) {
+        let Some(k) = self.position(v) else { return };
+        if self.present[k] {
+            return;
+        }
+        let n = self.fine.len();
+        let mut before = (k + n - 1) % n;
+        while !self.present[before] {
+            before = (before + n - 1) % n;
+        }
+        let after = self.next[before] as usize;
+        self.present[k] = true;
+        (self.prev[k], self.next[k]) = (before as u32, after as u32);
+        self.next[before] = k as u32;
+        self.prev[after] = k as u32;
+    }
+
+    /// The present neighbours of present loop position `k` (previous, next).
+    fn neighbours(&self, k: usize) -> (u32, u32) {
+        (
+            self.fine[self.prev[k] as usize],
+            self.fine[self.next[k] as usize],
+        )
+    }
+
+    /// Whether boundary vertex `v` at `p` makes one of its two boundary edges cross
+    /// (or touch) a current boundary edge without a common endpoint; `false` for a
+    /// vertex off the boundary (or not yet placed).
+    fn crosses(&self, uv: &[[f64; 2]], v: u32, p: [f64; 2]) -> bool {
+        let Some(k) = self.position(v).filter(|&k| self.present[k]) else {
+            return false;
+        };
+        let (prev, next) = self.neighbours(k);
+        let (a, b) = (uv[prev as usize], uv[next as usize]);
+        let (lo, hi) = (
+            [p[0].min(a[0]).min(b[0]), p[1].min(a[1]).min(b[1])],
+            [p[0].max(a[0]).max(b[0]), p[1].max(a[1]).max(b[1])],
+        );
+        // Every current boundary edge (x, y) from the one leaving `next` to the one
+        // entering `prev`; those sharing an endpoint with an edge of v are skipped for it.
+        let mut x = self.next[k] as usize;
+        while x != self.prev[k] as usize {
+            let y = self.next[x] as usize;
+            let (c, d) = (uv[self.fine[x] as usize], uv[self.fine[y] as usize]);
+            let outside = c[0].max(d[0]) < lo[0]
+                || c[0].min(d[0]) > hi[0]
+                || c[1].max(d[1]) < lo[1]
+                || c[1].min(d[1]) > hi[1];
+            if !outside {
+                let (cx, cy) = (self.fine[x], self.fine[y]);
+                if (cx != next && cy != next && segments_intersect(p, b, c, d))
+                    || (cx != prev && cy != prev && segments_intersect(a, p, c, d))
+                {
+                    return true;
+                }
+            }
+            x = y;
+        }
+        false
+    }
+
+    /// A position for the just re-inserted boundary vertex `v`, placed at `p` where its
+    /// edges cross the boundary, that crosses nothing: `p` drawn toward the point `q` of
+    /// the segment between its present neighbours (the boundary edge its insertion
+    /// split, which crossed nothing) at the 3D length ratio, `q + s (p − q)` for
+    /// `s = ½, ¼, …, 1/64`, else the point of that segment closest to `q` that its star
+    /// allows (every face of `star`, rotated to `(v, a, b)`, counter-clockwise, with a
+    /// tenth of the admissible interval to spare); `None` if none of these is admissible
+    /// and crossing-free.
+    fn uncrossed(
+        &self,
+        positions: &[[f64; 3]],
+        uv: &[[f64; 2]],
+        star: &[[u32; 3]],
+        v: u32,
+        p: [f64; 2],
+    ) -> Option<[f64; 2]> {
+        let k = self.position(v)?;
+        let (prev, next) = self.neighbours(k);
+        let (a, b) = (uv[prev as usize], uv[next as usize]);
+        let length = |x: u32| {
+            crate::vec3::norm3(crate::vec3::sub3(
+                positions[v as usize],
+                positions[x as usize],
+            ))
+        };
+        let (la, lb) = (length(prev), length(next));
+        let t0 = if la + lb > 0.0 { la / (la + lb) } else { 0.5 };
+        let q = [a[0] + t0 * (b[0] - a[0]), a[1] + t0 * (b[1] - a[1])];
+        let mut s = 1.0;
+        for _ in 0..6 {
+            s *= 0.5;
+            let c = [q[0] + s * (p[0] - q[0]), q[1] + s * (p[1] - q[1])];
+            if admissible(uv, star, c) && !self.crosses(uv, v, c) {
+                return Some(c);
+            }
+        }
+        // Every star face's area is affine in t along the segment.
+        let (mut lo, mut hi) = (0.0f64, 1.0f64);
+        for f in star {
+            let (x, y) = (uv[f[1] as usize], uv[f[2] as usize]);
+            let area0 = signed_uv_area([a, x, y]);
+            let area1 = signed_uv_area([b, x, y]);
+            let rate = area1 - area0;
+            if rate > 0.0 {
+                lo = lo.max(-area0 / rate);
+            } else if rate < 0.0 {
+                hi = hi.min(-area0 / rate);
+            } else if area0 <= 0.0 {
+                return None;
+            }
+        }
+        if lo >= hi || lo.is_nan() || hi.is_nan() {
+            return None;
+        }
+        let margin = 0.1 * (hi - lo);
+        let t = t0.clamp(lo + margin, hi - margin);
+        let p = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])];
+        (admissible(uv, star, p) && !self.crosses(uv, v, p)).then_some(p)
+    }
 }
 
 /// Local Newton steps per re-inserted vertex.
@@ -68,17 +260,20 @@ pub const DEFAULT_SWEEPS: usize = 8;
 
 /// Undoes every collapse of `decimation` in reverse order on `faces` (which must be
 /// the coarse state, `decimation.faces`), placing each re-inserted vertex in `uv`
-/// (module docs). `uv` holds one entry per original vertex; on entry the coarse
+/// (module docs). `boundary`: the original mesh's boundary loop, whose vertices are kept
+/// from crossing it (empty: no such guard). `uv` holds one entry per original vertex; on entry the coarse
 /// vertices must be set (a flip-free map of the coarse mesh); on success every vertex
 /// is set and the map of the original mesh is flip-free.
 pub fn prolongate<D: Density + ?Sized>(
     positions: &[[f64; 3]],
     decimation: &Decimation,
+    boundary: &[u32],
     uv: &mut [[f64; 2]],
     density: &D,
     polish_steps: usize,
     sweeps: usize,
 ) -> Result<ProlongationStats, ProlongationError> {
+    let mut guard = BoundaryGuard::new(boundary, uv);
     let mut faces = decimation.faces.clone();
     // Faces around each vertex in the current state (updated by every undo).
     let mut incident: Vec<Vec<u32>> = vec![Vec::new(); uv.len()];
@@ -112,6 +307,13 @@ pub fn prolongate<D: Density + ?Sized>(
             p = kernel_centroid(uv, &star).ok_or(ProlongationError::EmptyKernel { vertex: v })?;
             stats.kernel_fallbacks += 1;
         }
+        guard.insert(v);
+        if guard.crosses(uv, v, p)
+            && let Some(q) = guard.uncrossed(positions, uv, &star, v, p)
+        {
+            p = q;
+            stats.kept_off_the_boundary += 1;
+        }
         uv[v as usize] = p;
         // Relax the new vertex, then the one it was split from (its star shrank).
         for w in [v, u] {
@@ -122,6 +324,10 @@ pub fn prolongate<D: Density + ?Sized>(
             if !admissible(uv, &star, p) {
                 return Err(ProlongationError::EmptyKernel { vertex: w });
             }
+            if guard.crosses(uv, w, p) && !guard.crosses(uv, w, uv[w as usize]) {
+                stats.kept_off_the_boundary += 1;
+                continue;
+            }
             uv[w as usize] = p;
             stats.polish_steps += taken;
         }
@@ -130,7 +336,9 @@ pub fn prolongate<D: Density + ?Sized>(
     drop(incident);
     if sweeps > 0 {
         let triangles: Vec<[u32; 3]> = faces.iter().flatten().copied().collect();
-        stats.polish_steps += relax(positions, &triangles, uv, density, sweeps)?;
+        let (steps, refused) = relax(positions, &triangles, uv, density, sweeps, &guard)?;
+        stats.polish_steps += steps;
+        stats.kept_off_the_boundary += refused;
     }
     Ok(stats)
 }
@@ -138,14 +346,16 @@ pub fn prolongate<D: Density + ?Sized>(
 /// `sweeps` Gauss–Seidel sweeps of one local Newton step per vertex over the mesh.
 /// Vertices are greedily coloured so that no two of one colour share a face; a colour
 /// class is relaxed in parallel (each vertex reads only other colours), the classes
-/// one after the other. Returns the steps taken.
+/// one after the other; a step of a boundary vertex that would make the boundary cross
+/// itself is not taken (`guard`). Returns the steps taken and those refused.
 fn relax<D: Density + ?Sized>(
     positions: &[[f64; 3]],
     triangles: &[[u32; 3]],
     uv: &mut [[f64; 2]],
     density: &D,
     sweeps: usize,
-) -> Result<usize, ProlongationError> {
+    guard: &BoundaryGuard,
+) -> Result<(usize, usize), ProlongationError> {
     use rayon::prelude::*;
     let n = uv.len();
     // Stars as CSR: every face once per corner, rotated to start at that corner, with
@@ -208,7 +418,7 @@ fn relax<D: Density + ?Sized>(
         }
         classes[c].push(v as u32);
     }
-    let mut steps = 0;
+    let (mut steps, mut refused) = (0, 0);
     let mut moved: Vec<([f64; 2], usize)> = Vec::new();
     for _ in 0..sweeps {
         for class in &classes {
@@ -229,12 +439,19 @@ fn relax<D: Density + ?Sized>(
                 })
                 .collect_into_vec(&mut moved);
             for (&v, &(p, taken)) in class.iter().zip(&moved) {
-                uv[v as usize] = p;
-                steps += taken;
+                if taken == 0 {
+                    continue;
+                }
+                if guard.crosses(uv, v, p) {
+                    refused += 1;
+                } else {
+                    uv[v as usize] = p;
+                    steps += taken;
+                }
             }
         }
     }
-    Ok(steps)
+    Ok((steps, refused))
 }
 
 /// The current faces around `v` (from its incident face ids), each rotated to
@@ -458,6 +675,43 @@ mod tests {
         let k = ring.len() as u32;
         let star = (0..k).map(|i| [0, 1 + i, 1 + (i + 1) % k]).collect();
         (uv, star)
+    }
+
+    #[test]
+    fn the_boundary_guard_links_insertions_and_sees_crossings() {
+        // A square with a notch in its top side reaching down to (1.5, 0.1), boundary
+        // loop 0 → 4 → 1 → 2 → 6 → 3; vertex 4 (on the bottom side) not placed yet.
+        let nan = [f64::NAN; 2];
+        let uv = vec![
+            [0.0, 0.0],
+            [2.0, 0.0],
+            [2.0, 1.0],
+            [0.0, 1.0],
+            nan,
+            [0.5, 0.5],
+            [1.5, 0.1],
+        ];
+        let mut guard = BoundaryGuard::new(&[0, 4, 1, 2, 6, 3], &uv);
+        // Not yet placed, or off the boundary: never crossing.
+        assert!(!guard.crosses(&uv, 4, [1.5, 0.3]));
+        assert!(!guard.crosses(&uv, 5, [1.5, 5.0]));
+        guard.insert(4);
+        assert_eq!(guard.neighbours(1), (0, 1));
+        assert_eq!(guard.neighbours(2), (4, 2));
+        // Below the notch, or outside the square: nothing crossed.
+        assert!(!guard.crosses(&uv, 4, [1.5, 0.05]));
+        assert!(!guard.crosses(&uv, 4, [1.0, -0.5]));
+        // Above the notch's tip: its edge (4, 1) crosses the notch's side (2, 6).
+        assert!(guard.crosses(&uv, 4, [1.5, 0.3]));
+        // Moving a placed vertex: 6 pulled below the bottom side crosses (0, 4)/(4, 1)
+        // only once 4 is placed (as it now is), and its own neighbours are skipped.
+        let mut moved = uv.clone();
+        moved[4] = [1.0, 0.0];
+        assert!(guard.crosses(&moved, 6, [1.5, -0.2]));
+        assert!(!guard.crosses(&moved, 6, [1.5, 0.5]));
+        // With no boundary (the guard off) nothing is ever crossing.
+        let off = BoundaryGuard::new(&[], &uv);
+        assert!(!off.crosses(&uv, 6, [1.5, -0.2]));
     }
 
     #[test]

@@ -127,9 +127,9 @@ pub struct NewtonSolver<'m> {
     best: Vec<[f64; 2]>,
     /// The boundary barrier of the bijective mode ([`super::barrier`]).
     barrier: Option<BoundaryBarrier>,
-    /// A boundary loop whose crossing ends [`Self::minimize`]
-    /// ([`StopReason::BoundaryCrossed`]).
-    watched_boundary: Option<Vec<u32>>,
+    /// A boundary loop whose crossing for the given number of iterations in a row ends
+    /// [`Self::minimize`] ([`StopReason::BoundaryCrossed`]).
+    watched_boundary: Option<(Vec<u32>, usize)>,
     /// The barrier's pair terms at the last assembly ([`PairTerm`]).
     pairs: Vec<PairTerm>,
     /// The fill-reducing ordering of the unknowns, kept to re-analyse the pattern.
@@ -179,8 +179,11 @@ enum HessianKind {
 }
 
 /// Consecutive iterations whose boundary crosses itself that end a watched solve
-/// ([`NewtonSolver::stop_when_boundary_crosses`]).
-const CROSSING_PERSISTENCE: usize = 3;
+/// ([`NewtonSolver::stop_when_boundary_crosses`]) from a start far from the minimum:
+/// one is not enough (a cone cut from its apex crosses transiently and unrolls to an
+/// exact isometry; so do the coarse levels of ICT faces opened with seams, two iterates
+/// crossing then none), two fail the same test.
+pub const CROSSING_PERSISTENCE: usize = 3;
 
 /// Relative stopping threshold with a boundary barrier: `λ²/2 ≤ 10⁻⁴·E` (the energy
 /// is then within about that fraction of the minimum). Near a contact the barrier's
@@ -276,11 +279,11 @@ impl<'m> NewtonSolver<'m> {
         })
     }
 
-    /// Ends [`Self::minimize`] with [`StopReason::BoundaryCrossed`] once
-    /// [`CROSSING_PERSISTENCE`] iterations in a row have mapped `boundary` (a loop of
-    /// vertex ids) across itself.
-    pub fn stop_when_boundary_crosses(&mut self, boundary: Vec<u32>) {
-        self.watched_boundary = Some(boundary);
+    /// Ends [`Self::minimize`] with [`StopReason::BoundaryCrossed`] once `persistence`
+    /// iterations in a row (at least one) have mapped `boundary` (a loop of vertex ids)
+    /// across itself.
+    pub fn stop_when_boundary_crosses(&mut self, boundary: Vec<u32>, persistence: usize) {
+        self.watched_boundary = Some((boundary, persistence.max(1)));
     }
 
     /// Adds the boundary barrier `barrier` to the energy, and its contact bound to the
@@ -562,10 +565,10 @@ impl<'m> NewtonSolver<'m> {
                 flip_free_step: t_max,
                 time: clock.elapsed().as_secs_f64(),
             });
-            if let Some(boundary) = &self.watched_boundary {
+            if let Some((boundary, persistence)) = &self.watched_boundary {
                 if crate::measure::overlap::boundary_crossings(uv, boundary) > 0 {
                     crossing_iterations += 1;
-                    if crossing_iterations >= CROSSING_PERSISTENCE {
+                    if crossing_iterations >= *persistence {
                         return Ok((StopReason::BoundaryCrossed, it, energy));
                     }
                 } else {
