@@ -490,7 +490,7 @@ fn admissible(uv: &[[f64; 2]], star: &[[u32; 3]], p: [f64; 2]) -> bool {
 
 /// The conformal least-squares position of `v` (module docs, step 1); `None` if a star
 /// face is degenerate in 3D.
-fn conformal_position(
+pub(super) fn conformal_position(
     positions: &[[f64; 3]],
     uv: &[[f64; 2]],
     star: &[[u32; 3]],

@@ -62,6 +62,54 @@ pub fn mean_value(positions: &[[f64; 3]], disc: &Disc) -> Result<Vec<[f64; 2]>, 
     onto_circle(positions, disc, Weights::MeanValue)
 }
 
+/// Opens the ears of a fixed-boundary map onto a circle: an ear is a triangle `(b, a, c)`
+/// with two boundary edges, its tip `b` a boundary vertex with no other face. With the
+/// boundary on a circle by arc length its three corners are consecutive points of the
+/// circle, so its area is about `ℓ³/8` (`ℓ` the arc between its ends on the unit
+/// circle): where a cut's seam meets the boundary, 10⁻⁶ of a typical triangle's area,
+/// and any step that moves `a` or `c` inward turns it over at once (measured: an ICT
+/// face opened with seams, whose warm-start step was held to 2·10⁻³ of its length by
+/// one ear). The tip is moved to its conformal position `a' + z (c' − a')`, `z = (b −
+/// a)/(c − a)` taken in the 3D triangle's plane (the ear similar to its 3D shape): to
+/// the right of `a' → c'`, outside the circle, so no other face changes and the map
+/// stays flip-free. Kept only where the ear grows, and only if the boundary then
+/// crosses itself nowhere (else the map is left as it was). Returns the ears opened.
+pub fn open_ears(positions: &[[f64; 3]], disc: &Disc, uv: &mut [[f64; 2]]) -> usize {
+    let boundary = disc.boundary();
+    let mut faces_at = vec![0u32; uv.len()];
+    let mut face_of = vec![u32::MAX; uv.len()];
+    for (f, t) in disc.triangles().iter().enumerate() {
+        for &v in t {
+            faces_at[v as usize] += 1;
+            face_of[v as usize] = f as u32;
+        }
+    }
+    let before = uv.to_vec();
+    let mut opened = 0;
+    for &tip in boundary {
+        if faces_at[tip as usize] != 1 {
+            continue;
+        }
+        let mut ear = disc.triangles()[face_of[tip as usize] as usize];
+        while ear[0] != tip {
+            ear.rotate_left(1);
+        }
+        let Some(p) = super::multilevel::conformal_position(positions, uv, &[ear], tip) else {
+            continue;
+        };
+        let area = super::signed_uv_area([p, uv[ear[1] as usize], uv[ear[2] as usize]]);
+        if area > super::signed_uv_area(ear.map(|v| uv[v as usize])) && area.is_finite() {
+            uv[tip as usize] = p;
+            opened += 1;
+        }
+    }
+    if opened > 0 && crate::measure::overlap::boundary_crossings(uv, boundary) > 0 {
+        uv.copy_from_slice(&before);
+        return 0;
+    }
+    opened
+}
+
 /// Mean-value coordinates (Floater 2003, eq. 5.1) with the boundary loop fixed at
 /// `boundary_uv[k]` for `disc.boundary()[k]`:
 ///
@@ -246,6 +294,53 @@ mod tests {
 
     fn disc(mesh: &TriMesh) -> Disc<'_> {
         Disc::new(mesh).unwrap()
+    }
+
+    #[test]
+    fn ears_flat_on_the_circle_are_opened_to_their_3d_shape() {
+        // A 6 × 6 grid split along one diagonal: corners (6, 0) and (0, 6) have one
+        // face each, a right isosceles triangle, nearly flat on the circle.
+        let mesh = grid_disc(6);
+        let d = disc(&mesh);
+        let mut uv = mean_value(&mesh.positions, &d).unwrap();
+        let before = uv.clone();
+        let ears = [6u32, 42];
+        let angle_at_tip = |uv: &[[f64; 2]], tip: u32| {
+            let face = mesh.triangles.iter().find(|t| t.contains(&tip)).unwrap();
+            let others: Vec<[f64; 2]> = face
+                .iter()
+                .filter(|&&w| w != tip)
+                .map(|&w| uv[w as usize])
+                .collect();
+            let p = uv[tip as usize];
+            let (e1, e2) = (
+                [others[0][0] - p[0], others[0][1] - p[1]],
+                [others[1][0] - p[0], others[1][1] - p[1]],
+            );
+            (e1[0] * e2[1] - e1[1] * e2[0])
+                .abs()
+                .atan2(e1[0] * e2[0] + e1[1] * e2[1])
+        };
+        let right = std::f64::consts::FRAC_PI_2;
+        for &tip in &ears {
+            let angle = angle_at_tip(&uv, tip);
+            assert!(angle > 2.5, "flat before: {angle}");
+        }
+        assert_eq!(open_ears(&mesh.positions, &d, &mut uv), 2);
+        for &tip in &ears {
+            let angle = angle_at_tip(&uv, tip);
+            assert!((angle - right).abs() < 1e-9, "a right angle after: {angle}");
+        }
+        assert_eq!(count_flipped(&uv, &mesh.triangles), 0);
+        assert_eq!(
+            crate::measure::overlap::boundary_crossings(&uv, d.boundary()),
+            0
+        );
+        for v in 0..uv.len() as u32 {
+            if !ears.contains(&v) {
+                assert_eq!(uv[v as usize], before[v as usize]);
+            }
+        }
     }
 
     /// Checks injectivity (all UV triangles positive) and the boundary on the unit circle.
