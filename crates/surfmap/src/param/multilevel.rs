@@ -37,7 +37,8 @@
 //! boundary vertex that would cross is not taken. A crossing that remains (no such
 //! position exists) is found by the caller, which abandons the start as before. The
 //! prolongation needs no linear solve: cost O(faces · (polish steps + sweeps)), plus
-//! O(boundary) per placement or step of a boundary vertex when guarded.
+//! O(boundary) per placement or step of a boundary vertex when guarded (loops up to
+//! [`MAX_GUARDED_BOUNDARY`] vertices).
 
 use super::element::{self, RestTriangle};
 use super::signed_uv_area;
@@ -94,8 +95,22 @@ struct BoundaryGuard {
     present: Vec<bool>,
 }
 
+/// Longest boundary loop the re-insertion keeps from crossing itself: each check scans
+/// the loop, so the sweeps cost `sweeps · n²` edge visits (most rejected by a bounding
+/// box). Measured: the prolongation of a 61k-face polar disc with 4,096 boundary
+/// vertices 0.056 s unguarded, 0.076 s guarded. Beyond it the loop is not guarded (a
+/// start that crosses itself is abandoned, as without the guard).
+pub const MAX_GUARDED_BOUNDARY: usize = 4096;
+
 impl BoundaryGuard {
+    /// The guard of `boundary` (none when it is longer than [`MAX_GUARDED_BOUNDARY`]),
+    /// with the vertices placed in `uv` (finite) present.
     fn new(boundary: &[u32], uv: &[[f64; 2]]) -> Self {
+        let boundary = if boundary.len() > MAX_GUARDED_BOUNDARY {
+            &[]
+        } else {
+            boundary
+        };
         let n = boundary.len();
         let mut index = vec![u32::MAX; uv.len()];
         for (k, &v) in boundary.iter().enumerate() {
@@ -260,10 +275,11 @@ pub const DEFAULT_SWEEPS: usize = 8;
 
 /// Undoes every collapse of `decimation` in reverse order on `faces` (which must be
 /// the coarse state, `decimation.faces`), placing each re-inserted vertex in `uv`
-/// (module docs). `boundary`: the original mesh's boundary loop, whose vertices are kept
-/// from crossing it (empty: no such guard). `uv` holds one entry per original vertex; on entry the coarse
-/// vertices must be set (a flip-free map of the coarse mesh); on success every vertex
-/// is set and the map of the original mesh is flip-free.
+/// (module docs). `boundary`: the original mesh's boundary loop, whose vertices are
+/// kept from crossing it (empty, or longer than [`MAX_GUARDED_BOUNDARY`]: no such
+/// guard). `uv` holds one entry per original vertex; on entry the coarse vertices must
+/// be set (a flip-free map of the coarse mesh); on success every vertex is set and the
+/// map of the original mesh is flip-free.
 pub fn prolongate<D: Density + ?Sized>(
     positions: &[[f64; 3]],
     decimation: &Decimation,
