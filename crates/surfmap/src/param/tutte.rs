@@ -70,9 +70,9 @@ pub fn mean_value(positions: &[[f64; 3]], disc: &Disc) -> Result<Vec<[f64; 2]>, 
 /// and any step that moves `a` or `c` inward turns it over at once (measured: an ICT
 /// face opened with seams, whose warm-start step was held to 2·10⁻³ of its length by
 /// one ear). The tip is moved to its conformal position `a' + z (c' − a')`, `z = (b −
-/// a)/(c − a)` taken in the 3D triangle's plane (the ear similar to its 3D shape): to
-/// the right of `a' → c'`, outside the circle, so no other face changes and the map
-/// stays flip-free. Kept only where the ear grows, and only if the boundary then
+/// a)/(c − a)` taken in the 3D triangle's plane (the ear similar to its 3D shape): on
+/// the far side of the chord `a'c'` from the circle's centre, outside the circle, so no
+/// other face changes and the map stays flip-free. Kept only where the ear grows, and only if the boundary then
 /// crosses itself nowhere (else the map is left as it was). Returns the ears opened.
 pub fn open_ears(positions: &[[f64; 3]], disc: &Disc, uv: &mut [[f64; 2]]) -> usize {
     let boundary = disc.boundary();
