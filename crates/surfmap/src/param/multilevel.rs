@@ -106,7 +106,9 @@ impl BoundaryGuard {
     /// The guard of `boundary` (none when it is longer than [`MAX_GUARDED_BOUNDARY`]),
     /// with the vertices placed in `uv` (finite) present.
     fn new(boundary: &[u32], uv: &[[f64; 2]]) -> Self {
-        let boundary = if boundary.len() > MAX_GUARDED_BOUNDARY {
+        // (Unguarded also when no boundary vertex is placed yet: nothing to link to.)
+        let placed = |v: &u32| uv.get(*v as usize).is_some_and(|p| p[0].is_finite());
+        let boundary = if boundary.len() > MAX_GUARDED_BOUNDARY || !boundary.iter().any(placed) {
             &[]
         } else {
             boundary
@@ -116,10 +118,7 @@ impl BoundaryGuard {
         for (k, &v) in boundary.iter().enumerate() {
             index[v as usize] = k as u32;
         }
-        let present: Vec<bool> = boundary
-            .iter()
-            .map(|&v| uv[v as usize][0].is_finite())
-            .collect();
+        let present: Vec<bool> = boundary.iter().map(placed).collect();
         let (mut prev, mut next) = (vec![0u32; n], vec![0u32; n]);
         if let Some(last) = (0..n).rev().find(|&k| present[k]) {
             let mut before = last;
@@ -728,6 +727,10 @@ mod tests {
         // With no boundary (the guard off) nothing is ever crossing.
         let off = BoundaryGuard::new(&[], &uv);
         assert!(!off.crosses(&uv, 6, [1.5, -0.2]));
+        // Nor when none of the loop is placed yet (nothing to link an insertion to).
+        let mut unplaced = BoundaryGuard::new(&[4], &uv);
+        unplaced.insert(4);
+        assert!(!unplaced.crosses(&moved, 4, [1.5, 0.3]));
     }
 
     #[test]
