@@ -196,6 +196,19 @@ fn a_barrier_solve_starts_from_the_multilevel_start_when_it_does_not_cross() {
     assert_eq!(overlap, 0.0);
 }
 
+/// The flattening of `mesh` with `options` and the Newton iterations of all its solves (the
+/// progress callback's entries past iteration 0).
+fn flatten_counting_iterations(
+    mesh: &TriMesh,
+    options: &FlattenOptions,
+) -> (surfmap::Flattening, usize) {
+    let mut all = 0;
+    let map =
+        surfmap::flatten_with_progress(mesh, options, &mut |l| all += usize::from(l.iteration > 0))
+            .unwrap();
+    (map, all)
+}
+
 #[test]
 fn an_unconstrained_attempt_that_crosses_itself_gives_way_early() {
     let Some(dir) = surfmap::testing::shared_data() else {
@@ -207,11 +220,7 @@ fn an_unconstrained_attempt_that_crosses_itself_gives_way_early() {
     // cross; from a multilevel start (an ICT face opened with seams), which is near the
     // minimum already, after the first.
     let attempt_of = |mesh: &TriMesh, options: &FlattenOptions| {
-        let mut all = 0;
-        let map = surfmap::flatten_with_progress(mesh, options, &mut |l| {
-            all += usize::from(l.iteration > 0)
-        })
-        .unwrap();
+        let (map, all) = flatten_counting_iterations(mesh, options);
         assert!(map.barrier, "{:?}", map.stop_reason);
         (all - map.iterations, map.start)
     };
@@ -272,11 +281,7 @@ fn the_multilevel_start_is_kept_from_crossing_at_the_seams() {
         .unwrap()
         .mesh;
     let opened = FlattenOptions::default().with_fill_holes(false);
-    let mut all = 0;
-    let map = surfmap::flatten_with_progress(&mesh, &opened, &mut |l| {
-        all += usize::from(l.iteration > 0)
-    })
-    .unwrap();
+    let (map, all) = flatten_counting_iterations(&mesh, &opened);
     let report = map
         .multilevel
         .as_ref()
