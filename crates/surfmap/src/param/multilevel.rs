@@ -234,11 +234,12 @@ impl BoundaryGuard {
         let (la, lb) = (length(prev), length(next));
         let t0 = if la + lb > 0.0 { la / (la + lb) } else { 0.5 };
         let q = [a[0] + t0 * (b[0] - a[0]), a[1] + t0 * (b[1] - a[1])];
+        let usable = |c: [f64; 2]| admissible(uv, star, c) && !self.crosses(uv, v, c);
         let mut s = 1.0;
         for _ in 0..6 {
             s *= 0.5;
             let c = [q[0] + s * (p[0] - q[0]), q[1] + s * (p[1] - q[1])];
-            if admissible(uv, star, c) && !self.crosses(uv, v, c) {
+            if usable(c) {
                 return Some(c);
             }
         }
@@ -263,7 +264,7 @@ impl BoundaryGuard {
         let margin = 0.1 * (hi - lo);
         let t = t0.clamp(lo + margin, hi - margin);
         let p = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])];
-        (admissible(uv, star, p) && !self.crosses(uv, v, p)).then_some(p)
+        usable(p).then_some(p)
     }
 }
 
