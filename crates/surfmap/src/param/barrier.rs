@@ -12,7 +12,10 @@
 //! by `κ` so that `b(ε/2) = 1`; see `profile`)
 //! over boundary vertices `v` and boundary edges `e` not incident to `v` (`d`:
 //! point–segment distance in the plane). It is zero while every vertex stays `ε` away
-//! from every other boundary edge and `+∞` at contact. For an edge that shares a vertex
+//! from every other boundary edge and `+∞` at contact. A boundary edge and the third
+//! corner of its own face, when that corner is on the boundary too, are no pair
+//! ([`BoundaryBarrier::with_faces`]): the corner cannot reach the edge without turning
+//! the face over, which the flip-free step already forbids. For an edge that shares a vertex
 //! `w` with a boundary neighbour of `v`, `ε` is at most [`NEAR_FACTOR`] times the start
 //! length of the boundary edge `vw`: such a pair is only that close when the boundary
 //! folds back at `w` (a seam's tip closing, or opening past a full turn). The
@@ -58,6 +61,11 @@ pub struct BoundaryBarrier {
     weight: f64,
     /// Start length of every boundary edge.
     start_lengths: Vec<f64>,
+    /// For every boundary edge, the loop position of the third corner of its face
+    /// when that corner is a boundary vertex too (`u32::MAX` otherwise, or when the
+    /// faces were not given): that vertex cannot reach the edge without turning the
+    /// face over, which the flip-free step already forbids ([`Self::with_faces`]).
+    face_corner: Vec<u32>,
     grid: Mutex<Grid>,
 }
 
@@ -74,9 +82,46 @@ impl BoundaryBarrier {
             loop_: loop_.to_vec(),
             epsilon: EPSILON_FACTOR * h,
             weight: WEIGHT_FACTOR * h * h,
+            face_corner: vec![u32::MAX; loop_.len()],
             start_lengths,
             grid: Mutex::new(Grid::default()),
         }
+    }
+
+    /// Leaves out the pairs of a boundary edge and the third corner of its own face
+    /// (`triangles`: the disc's faces): the corner can only reach the edge by turning
+    /// that face over, which no flip-free step does, so the barrier adds nothing there
+    /// but a force on thin faces at the boundary. Such a corner sits at a fraction of
+    /// an edge from it where three consecutive boundary vertices form one face (an
+    /// ear: where a seam runs through slivers, the barrier held every step of the ICT
+    /// face id002 opened with seams below 5·10⁻³ of its length, BENCHMARKS.md "Hard
+    /// discs").
+    pub fn with_faces(mut self, triangles: &[[u32; 3]]) -> Self {
+        let n = self.loop_.len();
+        let mut position = std::collections::HashMap::with_capacity(n);
+        for (k, &v) in self.loop_.iter().enumerate() {
+            position.insert(v, k);
+        }
+        for t in triangles {
+            for j in 0..3 {
+                let (a, b, c) = (t[j], t[(j + 1) % 3], t[(j + 2) % 3]);
+                let (Some(&ka), Some(&kb), Some(&kc)) =
+                    (position.get(&a), position.get(&b), position.get(&c))
+                else {
+                    continue;
+                };
+                // The boundary edge joining a and b (either orientation of the loop).
+                let edge = if (ka + 1) % n == kb {
+                    ka
+                } else if (kb + 1) % n == ka {
+                    kb
+                } else {
+                    continue;
+                };
+                self.face_corner[edge] = kc as u32;
+            }
+        }
+        self
     }
 
     fn edge(&self, i: usize) -> (u32, u32) {
@@ -87,7 +132,7 @@ impl BoundaryBarrier {
     /// vertices `i` and `i + 1`), or `None` when the edge is incident to `k`.
     fn pair_epsilon(&self, k: usize, i: usize) -> Option<f64> {
         let n = self.loop_.len();
-        if i == k || (i + 1) % n == k {
+        if i == k || (i + 1) % n == k || self.face_corner[i] == k as u32 {
             return None;
         }
         let cap = if i == (k + 1) % n {
@@ -595,5 +640,35 @@ mod tests {
         let mut past = uv.clone();
         past[10] = [0.5, -0.01];
         assert!(barrier.crossings(&past) > 0);
+    }
+
+    #[test]
+    fn a_boundary_edge_and_its_own_face_corner_are_no_pair() {
+        // A disc whose boundary runs out along the bottom and folds back at vertex 1:
+        // face (0, 1, 2) is a thin spike, its corner 2 only 0.05 above its boundary edge
+        // 0 → 1, well inside ε (0.2).
+        let uv = vec![[0.0, 0.0], [1.0, 0.0], [0.5, 0.05], [0.5, 1.0], [0.0, 1.0]];
+        let triangles = [[0, 1, 2], [0, 2, 3], [0, 3, 4]];
+        let loop_: Vec<u32> = (0..5).collect();
+        let plain = BoundaryBarrier::new(&loop_, &uv);
+        let with_faces = BoundaryBarrier::new(&loop_, &uv).with_faces(&triangles);
+        let pairs = |b: &BoundaryBarrier| {
+            let mut found = Vec::new();
+            b.for_each_pair_term(&uv, |vertices, _, _, _, _| found.push(vertices));
+            found
+        };
+        // Without the faces the spike's corner is pushed off its own edge; with them
+        // no pair is active at all (every other vertex is ≥ 0.45 from every edge).
+        assert!(plain.energy(&uv) > 0.0);
+        assert_eq!(pairs(&plain), vec![[2, 0, 1]]);
+        assert_eq!(with_faces.energy(&uv), 0.0);
+        assert!(pairs(&with_faces).is_empty());
+        // The step bound still stops the corner at the edge (where the face turns over).
+        let mut dir = vec![[0.0; 2]; uv.len()];
+        dir[2] = [0.0, -1.0];
+        for b in [&plain, &with_faces] {
+            let t = b.max_step(&uv, &dir, 1.0);
+            assert!((t - 0.05).abs() < 1e-12, "{t}");
+        }
     }
 }

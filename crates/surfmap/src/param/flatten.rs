@@ -160,9 +160,11 @@ pub struct MultilevelReport {
     pub coarse_faces: usize,
     /// Newton iterations on the coarse mesh.
     pub coarse_iterations: usize,
-    /// Whether the coarse mesh's map needed the boundary barrier (its unconstrained
-    /// minimum overlapped itself): then so does the full mesh's, and the bijective mode
-    /// solves it with the barrier from the start.
+    /// Whether the coarse mesh was solved with the boundary barrier: because its
+    /// unconstrained minimum overlapped itself, or outright where the boundary runs
+    /// along itself in 3D (the sides of seams). The bijective mode then solves the full mesh
+    /// with the barrier from the start (measured: every ICT face opened with seams
+    /// ends in the barrier solve).
     pub coarse_barrier: bool,
     /// α values of the continuation stages solved on the coarse mesh (with a
     /// continuation start; the full mesh then goes straight to the target α).
@@ -784,7 +786,8 @@ fn solve_disc(
     // (A given start is the user's: it is solved from as given.) A multilevel start
     // whose coarse level needed the barrier leads to an overlapping minimum too
     // (measured: ICT faces opened with seams, BENCHMARKS.md "Hard discs"), so it goes
-    // to the barrier solve at once.
+    // to the barrier solve at once; so does one whose coarse level was solved with the
+    // barrier because its boundary runs along itself (seams).
     let coarse_overlapped =
         start == StartMap::Multilevel && multilevel.as_ref().is_some_and(|m| m.coarse_barrier);
     if solve == Solve::UnlessStartCrosses
@@ -912,7 +915,8 @@ fn solve_disc(
         && start != StartMap::Multilevel
         && (!barrier || start == StartMap::MeanValue)
     {
-        let contact = barrier.then(|| BoundaryBarrier::new(boundary, &uv));
+        let contact =
+            barrier.then(|| BoundaryBarrier::new(boundary, &uv).with_faces(&mesh.triangles));
         let first_energy = match objective.continuation_start() {
             Some(from) => Energy::litke(from),
             None => objective,
@@ -971,7 +975,7 @@ fn solve_disc(
         Some(&vertex_ordering),
     )?;
     if barrier {
-        solver.set_barrier(BoundaryBarrier::new(boundary, &uv));
+        solver.set_barrier(BoundaryBarrier::new(boundary, &uv).with_faces(&mesh.triangles));
     } else if solve == Solve::UnlessStartCrosses {
         // The bijective mode solves again with the barrier when the result overlaps
         // itself; an iterate whose boundary crosses already says it will (BENCHMARKS.md,
@@ -1183,8 +1187,21 @@ fn multilevel_start(
             },
             // Overlap-free on the coarse level unless overlap is allowed, so that a
             // barrier solve can start from it too (the full mesh's solve checks and
-            // prevents overlap in any case).
-            bijective: options.bijective,
+            // prevents overlap in any case). Where the boundary runs along itself in 3D
+            // (the two sides of a seam) it is solved with the barrier outright: the coarse
+            // map then keeps the sides of each slit apart by the barrier's reach (a
+            // quarter of a coarse boundary edge), room for the re-inserted vertices
+            // between them; without it the coarse mouth of the ICT face id000 opened
+            // with seams closed to a slit whose re-inserted lips crossed (the start
+            // was abandoned), and id003 / id005 took 11 / 15 fine barrier iterations
+            // against 6 / 9 (BENCHMARKS.md, "Hard discs").
+            bijective: if options.bijective == Bijective::WhenOverlapping
+                && boundary_runs_along_itself(&mesh.positions, disc.boundary())
+            {
+                Bijective::Always
+            } else {
+                options.bijective
+            },
             max_distortion: None,
             ..options.clone()
         };
@@ -1227,6 +1244,18 @@ fn multilevel_start(
             (None, report)
         }
     }
+}
+
+/// Whether the boundary runs along itself in 3D: a boundary edge whose reverse, from
+/// the same point to the same point, is a boundary edge too (the two sides of a seam
+/// edge, split into copies by [`crate::mesh::cut::open_along`] or by whoever cut the
+/// mesh). A single point where the boundary touches itself (beetle.off: two loops meet
+/// at one vertex) is not a seam.
+fn boundary_runs_along_itself(positions: &[[f64; 3]], boundary: &[u32]) -> bool {
+    let n = boundary.len();
+    let at = |k: usize| positions[boundary[k % n] as usize].map(f64::to_bits);
+    let edges: std::collections::HashSet<_> = (0..n).map(|k| (at(k), at(k + 1))).collect();
+    (0..n).any(|k| edges.contains(&(at(k + 1), at(k))))
 }
 
 fn check_given_length(given: &[[f64; 2]], mesh: &TriMesh) -> Result<(), FlattenError> {
@@ -1325,6 +1354,46 @@ mod tests {
         assert_eq!(flipped, 1);
         let map = flatten(&fixed, &FlattenOptions::default()).unwrap();
         assert_eq!(map.flipped_triangles, 0);
+    }
+
+    #[test]
+    fn a_boundary_running_along_itself_is_a_seam_and_a_touching_point_is_not() {
+        // A torus cut into a disc: every seam edge is on the boundary twice, reversed.
+        let torus = crate::mesh::generate::torus(2.0, 0.5, 12, 8);
+        let opened = crate::mesh::cut::cut_to_disc(&torus).unwrap();
+        let disc = Disc::new(&opened.mesh).unwrap();
+        assert!(boundary_runs_along_itself(
+            &opened.mesh.positions,
+            disc.boundary()
+        ));
+        // A plain disc does not.
+        let plain = grid_disc(6);
+        let disc = Disc::new(&plain).unwrap();
+        assert!(!boundary_runs_along_itself(
+            &plain.positions,
+            disc.boundary()
+        ));
+        // Nor a loop that passes one point twice (a pinch, like where two of
+        // beetle.off's loops meet at a vertex).
+        let p = |x: f64, y: f64| [x, y, 0.0];
+        let positions = [
+            p(0.0, 0.0),
+            p(1.0, 0.0),
+            p(2.0, -1.0),
+            p(2.0, 1.0),
+            p(1.0, 0.0),
+            p(0.0, 1.0),
+        ];
+        assert!(!boundary_runs_along_itself(&positions, &[0, 1, 2, 3, 4, 5]));
+        // ... but the same edge walked back is: 0 → 1 → 2 → 3 (= 1) → 4 (= 0).
+        let positions = [
+            p(0.0, 0.0),
+            p(1.0, 0.0),
+            p(2.0, 1.0),
+            p(1.0, 0.0),
+            p(0.0, 0.0),
+        ];
+        assert!(boundary_runs_along_itself(&positions, &[0, 1, 2, 3, 4]));
     }
 
     #[test]

@@ -34,8 +34,10 @@
 //! also kept from crossing the boundary (`BoundaryGuard`): a re-inserted boundary
 //! vertex whose edges would cross a current boundary edge is drawn toward the edge its
 //! insertion split (which crossed nothing), and a local step (insertion or sweep) of a
-//! boundary vertex that would cross is not taken. A crossing that remains (no such
-//! position exists) is found by the caller, which abandons the start as before. The
+//! boundary vertex that would cross is not taken. A vertex that found no crossing-free
+//! position when it was inserted gets another try once all vertices are in place
+//! (`untangle`); a crossing that still remains is found by the caller, which abandons
+//! the start as before. The
 //! prolongation needs no linear solve: cost O(faces · (polish steps + sweeps)), plus
 //! O(boundary) per placement or step of a boundary vertex when guarded (loops up to
 //! [`MAX_GUARDED_BOUNDARY`] vertices).
@@ -72,6 +74,9 @@ pub struct ProlongationStats {
     /// Placements and local steps of boundary vertices changed or refused because the
     /// boundary would have crossed itself (see the module docs).
     pub kept_off_the_boundary: usize,
+    /// Boundary vertices moved after the re-insertion because their edges still
+    /// crossed the boundary (`untangle`).
+    pub untangled: usize,
 }
 
 /// The boundary loop of the map during the re-insertion: the re-inserted boundary
@@ -349,6 +354,7 @@ pub fn prolongate<D: Density + ?Sized>(
         }
         stats.inserted += 1;
     }
+    stats.untangled = untangle(positions, &faces, &incident, uv, &guard, &mut star);
     drop(incident);
     if sweeps > 0 {
         let triangles: Vec<[u32; 3]> = faces.iter().flatten().copied().collect();
@@ -357,6 +363,46 @@ pub fn prolongate<D: Density + ?Sized>(
         stats.kept_off_the_boundary += refused;
     }
     Ok(stats)
+}
+
+/// Rounds of [`untangle`] at most.
+const UNTANGLE_ROUNDS: usize = 4;
+
+/// After the re-insertion: every boundary vertex whose edges still cross the boundary
+/// (its placement found no crossing-free position then) is moved to the one
+/// [`BoundaryGuard::uncrossed`] finds now that all its neighbours are in place, in up
+/// to [`UNTANGLE_ROUNDS`] rounds (a move can free a neighbour's). Returns the vertices
+/// moved. Measured: the ICT face id002 opened with seams, where the seam runs through
+/// slivers (two boundary vertices 0.006 apart, a seventh of an edge), kept a crossing
+/// from its insertion and lost its multilevel start; one move uncrosses it.
+fn untangle(
+    positions: &[[f64; 3]],
+    faces: &[Option<[u32; 3]>],
+    incident: &[Vec<u32>],
+    uv: &mut [[f64; 2]],
+    guard: &BoundaryGuard,
+    star: &mut Vec<[u32; 3]>,
+) -> usize {
+    let mut moved = 0;
+    for _ in 0..UNTANGLE_ROUNDS {
+        // (The whole loop is in place: one sweep-line test before the O(n²) search.)
+        if guard.fine.is_empty()
+            || crate::measure::overlap::boundary_crossings(uv, &guard.fine) == 0
+        {
+            break;
+        }
+        for &v in &guard.fine {
+            if !guard.crosses(uv, v, uv[v as usize]) {
+                continue;
+            }
+            star_of(faces, &incident[v as usize], v, star);
+            if let Some(q) = guard.uncrossed(positions, uv, star, v, uv[v as usize]) {
+                uv[v as usize] = q;
+                moved += 1;
+            }
+        }
+    }
+    moved
 }
 
 /// `sweeps` Gauss–Seidel sweeps of one local Newton step per vertex over the mesh.
@@ -732,6 +778,84 @@ mod tests {
         let mut unplaced = BoundaryGuard::new(&[4], &uv);
         unplaced.insert(4);
         assert!(!unplaced.crosses(&moved, 4, [1.5, 0.3]));
+    }
+
+    #[test]
+    fn untangling_moves_a_crossing_boundary_vertex_back_between_its_neighbours() {
+        // A U of 3×3 unit squares without the middle column's top two: its arms' inner
+        // sides at x = 1 and x = 2. Vertex (1, 2) of the left arm is pulled across the
+        // gap to (2.5, 2), into the right arm: its faces only grow (its kernel is open
+        // outward), but its boundary edges cross the right arm's inner side.
+        let at = |x: u32, y: u32| y * 4 + x;
+        let mut faces = Vec::new();
+        for j in 0..3 {
+            for i in 0..3 {
+                if i == 1 && j > 0 {
+                    continue;
+                }
+                faces.push(Some([at(i, j), at(i + 1, j), at(i + 1, j + 1)]));
+                faces.push(Some([at(i, j), at(i + 1, j + 1), at(i, j + 1)]));
+            }
+        }
+        let positions: Vec<[f64; 3]> = (0..16)
+            .map(|v| [(v % 4) as f64, (v / 4) as f64, 0.0])
+            .collect();
+        let mut uv: Vec<[f64; 2]> = positions.iter().map(|p| [p[0], p[1]]).collect();
+        let boundary = [
+            at(0, 0),
+            at(1, 0),
+            at(2, 0),
+            at(3, 0),
+            at(3, 1),
+            at(3, 2),
+            at(3, 3),
+            at(2, 3),
+            at(2, 2),
+            at(2, 1),
+            at(1, 1),
+            at(1, 2),
+            at(1, 3),
+            at(0, 3),
+            at(0, 2),
+            at(0, 1),
+        ];
+        let mut incident = vec![Vec::new(); 16];
+        for (f, t) in faces.iter().enumerate() {
+            for &v in t.iter().flatten() {
+                incident[v as usize].push(f as u32);
+            }
+        }
+        let pulled = at(1, 2) as usize;
+        uv[pulled] = [2.5, 2.0];
+        let guard = BoundaryGuard::new(&boundary, &uv);
+        let mut star = Vec::new();
+        star_of(&faces, &incident[pulled], pulled as u32, &mut star);
+        assert!(admissible(&uv, &star, uv[pulled]));
+        assert!(crate::measure::overlap::boundary_crossings(&uv, &boundary) > 0);
+        let moved = untangle(&positions, &faces, &incident, &mut uv, &guard, &mut star);
+        // Every vertex whose edges crossed is drawn toward the midpoint of its loop
+        // neighbours until it crosses nothing, in loop order: first (2, 1), the right
+        // arm's inner corner (its side was crossed: an eighth of the way back suffices),
+        // then the pulled vertex itself, halfway back from (1, 2) to (1.75, 2). Nothing
+        // crosses any more, every face stays counter-clockwise, nothing else moved.
+        assert_eq!(moved, 2);
+        assert_eq!(uv[at(2, 1) as usize], [1.5625, 1.4375]);
+        assert_eq!(uv[pulled], [1.75, 2.0]);
+        assert_eq!(
+            crate::measure::overlap::boundary_crossings(&uv, &boundary),
+            0
+        );
+        for t in faces.iter().flatten() {
+            assert!(signed_uv_area(t.map(|v| uv[v as usize])) > 0.0, "{t:?}");
+        }
+        for v in (0..16).filter(|&v| v != pulled && v != at(2, 1) as usize) {
+            assert_eq!(uv[v], [positions[v][0], positions[v][1]]);
+        }
+        // Nothing crossing: nothing to do.
+        assert_eq!(
+            untangle(&positions, &faces, &incident, &mut uv, &guard, &mut star),
+            0
+        );
     }
 
     #[test]
