@@ -91,11 +91,11 @@ impl BoundaryBarrier {
     /// Leaves out the pairs of a boundary edge and the third corner of its own face
     /// (`triangles`: the disc's faces): the corner can only reach the edge by turning
     /// that face over, which no flip-free step does, so the barrier adds nothing there
-    /// but a force on thin faces at the boundary. Such a corner sits at a fraction of
-    /// an edge from it where three consecutive boundary vertices form one face (an
-    /// ear: where a seam runs through slivers, the barrier held every step of the ICT
-    /// face id002 opened with seams below 5·10⁻³ of its length, BENCHMARKS.md "Hard
-    /// discs").
+    /// but a force on thin faces at the boundary. Such a corner sits a fraction of an
+    /// edge from it where a sliver has all three corners on the boundary (a seam run
+    /// through slivers: with these pairs, the contact bound held four of the last nine steps of
+    /// the ICT face id002 opened with seams to 4·10⁻³ of the Newton step, BENCHMARKS.md
+    /// "Hard discs").
     pub fn with_faces(mut self, triangles: &[[u32; 3]]) -> Self {
         let n = self.loop_.len();
         let mut position = std::collections::HashMap::with_capacity(n);
