@@ -296,8 +296,9 @@ fn the_multilevel_start_is_kept_from_crossing_at_the_seams() {
     // from crossing, so the barrier solve starts from the multilevel start. ict_id002:
     // its seam runs through slivers at a mouth corner, where one vertex found no
     // crossing-free position when it was inserted (mean-value start, 16 iterations);
-    // it is moved once all are in place. Their boundaries meet themselves (seams), so
-    // the coarse level is solved with the barrier and there is no unconstrained attempt.
+    // it is moved once all are in place. Their boundaries run along themselves (seams),
+    // so the coarse level is solved with the barrier and there is no unconstrained
+    // attempt.
     for (name, untangled) in [("ict_blink_l", false), ("ict_id002", true)] {
         let mesh = read_mesh(&dir.join(format!("faces/ict/{name}.obj")))
             .unwrap()
