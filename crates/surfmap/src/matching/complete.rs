@@ -718,6 +718,17 @@ mod tests {
         ]
     }
 
+    /// Whether each vertex of `mesh` lies on one of its boundary loops.
+    fn on_a_rim(mesh: &TriMesh) -> Vec<bool> {
+        let mut on = vec![false; mesh.num_vertices()];
+        for l in Topology::new(mesh).boundary_loops {
+            for v in l.vertices {
+                on[v as usize] = true;
+            }
+        }
+        on
+    }
+
     fn distance(x: [f64; 3], y: [f64; 3]) -> f64 {
         DVec3::from_array(x).distance(DVec3::from_array(y))
     }
@@ -903,16 +914,7 @@ mod tests {
         let a = bumpy_disc(16, 0.3);
         let edge = 1.0 / 16.0;
         let (b, index) = crop(&a, |p| p[0] > -0.3);
-        let on_rim = |m: &TriMesh| {
-            let mut on = vec![false; m.num_vertices()];
-            for l in Topology::new(m).boundary_loops {
-                for v in l.vertices {
-                    on[v as usize] = true;
-                }
-            }
-            on
-        };
-        let (rim_a, rim_b) = (on_rim(&a), on_rim(&b));
+        let (rim_a, rim_b) = (on_a_rim(&a), on_a_rim(&b));
         let projector = SurfaceProjector::new(&b);
         let start: Vec<Option<SurfacePoint>> = (0..a.num_vertices())
             .map(|v| {
@@ -980,15 +982,7 @@ mod tests {
             cropped.triangles.clone(),
         );
         // φ also missed the first ring inside B's rim.
-        let rim: Vec<bool> = {
-            let mut on = vec![false; b.num_vertices()];
-            for l in Topology::new(&b).boundary_loops {
-                for v in l.vertices {
-                    on[v as usize] = true;
-                }
-            }
-            on
-        };
+        let rim = on_a_rim(&b);
         let mut corr: Vec<Option<SurfacePoint>> = (0..a.num_vertices())
             .map(|v| {
                 index[v]
