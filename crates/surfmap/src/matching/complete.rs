@@ -718,15 +718,9 @@ mod tests {
         ]
     }
 
-    /// Whether each vertex of `mesh` lies on one of its boundary loops.
+    /// Whether each vertex of `mesh` lies on its boundary.
     fn on_a_rim(mesh: &TriMesh) -> Vec<bool> {
-        let mut on = vec![false; mesh.num_vertices()];
-        for l in Topology::new(mesh).boundary_loops {
-            for v in l.vertices {
-                on[v as usize] = true;
-            }
-        }
-        on
+        crate::raster::boundary::boundary_vertices(mesh.num_vertices(), &mesh.triangles)
     }
 
     fn distance(x: [f64; 3], y: [f64; 3]) -> f64 {
