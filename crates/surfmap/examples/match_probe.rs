@@ -38,6 +38,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 "maxev" => options.ncg.max_evaluations = f() as usize,
                 "rot" => options.align_rotations = f() as usize,
                 "scale" => options.allow_scale = f() != 0.0,
+                // ridge of the position term's affine map; negative: a similarity
+                "ridge" => {
+                    options.position_map = if f() < 0.0 {
+                        surfmap::matching::PositionMap::Similarity
+                    } else {
+                        surfmap::matching::PositionMap::AffineNearSimilarity { ridge: f() }
+                    }
+                }
                 "sob" => options.sobolev_cells = f(),
                 "band" => options.position_band = f(),
                 "tau" => options.position_scale = f(),

@@ -18,9 +18,11 @@
 //!   `∫ χ^ε η^ε(d_B∘φ) θ^ε(d_A) √det g_B(φ) det Dφ`, one point per triangle (B's
 //!   quantities the mean of the three nodes' samples).
 //!   `η^ε(s) = max(1 − s/ε, 0)/ε`, `θ^ε(s) = min(s²/ε, 1)`.
-//! * `E_pos^ε` (ours, not the thesis's): `∫ χ^ε |T(x_A) − x_B∘φ|² √det g_A` with a
-//!   similarity `T(x) = M x + t` of ℝ³ fitted jointly ([`super::similarity`]): the
-//!   surfaces' 3D shapes, compared after the best rigid motion and scale.
+//! * `E_pos^ε` (ours, not the thesis's): `∫ χ^ε |T(x_A) − x_B∘φ|² √det g_A` with a map
+//!   `T(x) = M x + t` of ℝ³ fitted jointly ([`super::similarity`]): the surfaces' 3D
+//!   shapes, compared after the best rigid motion and scale — by default allowing
+//!   also a regularized affine part ([`super::solve::PositionMap`]). The gradient holds
+//!   `T` fixed; it is refitted to φ between iterations.
 //!
 //! `χ^ε(ξ) = χ_A^ε(ξ)·χ_B^ε(φ(ξ))` (2.14) with `χ_S^ε = max(1 − dist(·, S)/ε, 0)`,
 //! computed from the signed boundary-distance images. Node integrals use the
@@ -264,7 +266,8 @@ impl FeatureSet {
     }
 }
 
-/// The similarity `T(x) = M x + t` of the position term.
+/// The map `T(x) = M x + t` of the position term: a similarity, or an affine map near
+/// one ([`super::solve::PositionMap`]).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Similarity3 {
     pub matrix: [[f64; 3]; 3],

@@ -295,8 +295,8 @@ pub struct MatchReport {
     pub pinned_landmarks: usize,
     pub largest_landmark_miss: f64,
     pub alignment: super::AlignmentReport,
-    /// The rigid motion (with scale) of the position term at the end, A's length units
-    /// to B's (both in the shared unit ℓ).
+    /// The position term's map of ℝ³ at the end (a similarity, or an affine map near
+    /// one: [`super::PositionMap`]), A's length units to B's (both in the shared unit ℓ).
     pub similarity: super::Similarity3,
     /// The position term's weight `β_pos` used, and the surfaces' RMS distance in space
     /// (ℓ units) it was set from ([`super::PositionWeight`]; `null` when fixed).
@@ -474,8 +474,8 @@ pub fn correspondence_rows(correspondence: &[Option<SurfacePoint>]) -> Vec<f64> 
 }
 
 /// A's triangles at their matched positions on B: every vertex of A at its point on B
-/// (unmatched vertices at their position moved by the final similarity, so the file
-/// keeps A's numbering), triangles with an unmatched vertex left out.
+/// (unmatched vertices at their position moved by the position term's final map, so
+/// the file keeps A's numbering), triangles with an unmatched vertex left out.
 pub fn a_on_b(
     mesh_a: &TriMesh,
     mesh_b: &TriMesh,

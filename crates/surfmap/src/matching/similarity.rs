@@ -239,6 +239,65 @@ pub fn fit_similarity_3d(
     })
 }
 
+/// The affine map `T(x) = M x + t` of ℝ³ minimizing
+///
+/// `Σ wᵢ |T(pᵢ) − qᵢ|² + λ̄ ‖M − M₀‖²_F`,   `λ̄ = ridge · tr C / 3`,
+///
+/// `C = Σ wᵢ p̃ᵢ p̃ᵢᵀ` the weighted covariance of the centred points `p̃ = p − p̄` and `M₀`
+/// the linear part of `near` (a similarity fitted to the same pairs,
+/// [`fit_similarity_3d`]). Closed form (the normal equations of a ridge regression):
+///
+/// `M = (Σ wᵢ q̃ᵢ p̃ᵢᵀ + λ̄ M₀)(C + λ̄ I)⁻¹`,   `t = q̄ − M p̄`.
+///
+/// Along an eigenvector of `C` with eigenvalue `e` the data weigh `e / (e + λ̄)`: where
+/// the points spread well (a face's width and height) `M` follows them, where they barely
+/// spread (the depth of a shallow crop) it stays at the similarity — an unregularized
+/// affine fit there is decided by noise. `ridge = 0` is the least-squares affine map,
+/// `ridge → ∞` the similarity. `None` when the weights vanish or `C + λ̄ I` is singular.
+pub fn fit_affine_3d_near(
+    p: &[[f64; 3]],
+    q: &[[f64; 3]],
+    w: &[f64],
+    near: &Similarity3,
+    ridge: f64,
+) -> Option<Similarity3> {
+    use glam::{DMat3, DVec3};
+    let total: f64 = w.iter().sum();
+    if total.is_nan() || total <= 0.0 {
+        return None;
+    }
+    let (mut pm, mut qm) = (DVec3::ZERO, DVec3::ZERO);
+    for k in 0..p.len() {
+        pm += w[k] * DVec3::from_array(p[k]) / total;
+        qm += w[k] * DVec3::from_array(q[k]) / total;
+    }
+    // glam is column-major: `outer(a, b)` = a bᵀ has columns a·b_j.
+    let outer = |a: DVec3, b: DVec3| DMat3::from_cols(a * b.x, a * b.y, a * b.z);
+    let (mut c, mut qp) = (DMat3::ZERO, DMat3::ZERO);
+    for k in 0..p.len() {
+        if w[k] == 0.0 {
+            continue;
+        }
+        let a = DVec3::from_array(p[k]) - pm;
+        let b = DVec3::from_array(q[k]) - qm;
+        c += outer(a, a) * w[k];
+        qp += outer(b, a) * w[k];
+    }
+    let lambda = ridge * (c.x_axis.x + c.y_axis.y + c.z_axis.z) / 3.0;
+    let m0 = DMat3::from_cols_array_2d(&near.matrix).transpose();
+    let normal = c + DMat3::from_diagonal(DVec3::splat(lambda));
+    let det = normal.determinant();
+    if !det.is_finite() || det.abs() <= 1e-300 {
+        return None;
+    }
+    let m = (qp + m0 * lambda) * normal.inverse();
+    let t = qm - m * pm;
+    m.is_finite().then(|| Similarity3 {
+        matrix: m.transpose().to_cols_array_2d(),
+        translation: t.to_array(),
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -313,18 +372,7 @@ mod tests {
     #[test]
     fn space_similarity_is_recovered_and_is_optimal() {
         // Rotation about an oblique axis by 1.3 rad, scale 1.4, a translation.
-        let axis = [0.48, -0.6, 0.64];
-        let (s, c) = 1.3f64.sin_cos();
-        let k = |i: usize, j: usize| axis[i] * axis[j] * (1.0 - c);
-        let r = [
-            [c + k(0, 0), k(0, 1) - axis[2] * s, k(0, 2) + axis[1] * s],
-            [k(1, 0) + axis[2] * s, c + k(1, 1), k(1, 2) - axis[0] * s],
-            [k(2, 0) - axis[1] * s, k(2, 1) + axis[0] * s, c + k(2, 2)],
-        ];
-        let truth = Similarity3 {
-            matrix: r.map(|row| row.map(|v| 1.4 * v)),
-            translation: [0.5, -2.0, 3.0],
-        };
+        let truth = oblique_similarity(1.3, 1.4, [0.5, -2.0, 3.0]);
         let mut rng = Rng(9);
         let p: Vec<[f64; 3]> = (0..50)
             .map(|_| [rng.uniform(), rng.uniform(), rng.uniform()])
@@ -344,16 +392,7 @@ mod tests {
             .map(|x| x.map(|v| v + rng.range(-0.05, 0.05)))
             .collect();
         let fit = fit_similarity_3d(&p, &noisy, &w, false).unwrap();
-        let cost = |t: &Similarity3| -> f64 {
-            p.iter()
-                .zip(&noisy)
-                .zip(&w)
-                .map(|((a, b), wi)| {
-                    let y = t.apply(*a);
-                    wi * (0..3).map(|c| (y[c] - b[c]).powi(2)).sum::<f64>()
-                })
-                .sum()
-        };
+        let cost = |t: &Similarity3| squared_misfit(t, &p, &noisy, &w);
         let base = cost(&fit);
         for dt in [[1e-3, 0.0, 0.0], [0.0, -1e-3, 0.0], [0.0, 0.0, 1e-3]] {
             let mut moved = fit;
@@ -368,5 +407,169 @@ mod tests {
             - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
             + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
         assert!((det - 1.0).abs() < 1e-9);
+    }
+
+    /// `Σ wᵢ |T(pᵢ) − qᵢ|²`, the data part of every fit here.
+    fn squared_misfit(t: &Similarity3, p: &[[f64; 3]], q: &[[f64; 3]], w: &[f64]) -> f64 {
+        p.iter()
+            .zip(q)
+            .zip(w)
+            .map(|((a, b), wi)| {
+                let y = t.apply(*a);
+                wi * (0..3).map(|c| (y[c] - b[c]).powi(2)).sum::<f64>()
+            })
+            .sum()
+    }
+
+    /// The rotation by `angle` about an oblique axis, scaled by `scale`, then `translation`.
+    fn oblique_similarity(angle: f64, scale: f64, translation: [f64; 3]) -> Similarity3 {
+        let r = crate::matching::rigid::axis_angle_rotation([0.48, -0.6, 0.64], angle);
+        Similarity3 {
+            matrix: r.map(|row| row.map(|v| scale * v)),
+            translation,
+        }
+    }
+
+    /// `T ∘ diag(stretch)`.
+    fn stretched(t: &Similarity3, stretch: [f64; 3]) -> Similarity3 {
+        Similarity3 {
+            matrix: t
+                .matrix
+                .map(|row| std::array::from_fn(|j| row[j] * stretch[j])),
+            translation: t.translation,
+        }
+    }
+
+    #[test]
+    fn affine_fit_recovers_an_exact_affine_map_and_keeps_an_exact_similarity() {
+        let sim = oblique_similarity(0.7, 0.9, [0.3, -1.0, 2.0]);
+        let truth = stretched(&sim, [1.2, 0.9, 1.05]);
+        let mut rng = Rng(3);
+        let p: Vec<[f64; 3]> = (0..60)
+            .map(|_| [rng.uniform(), rng.uniform(), rng.uniform()])
+            .collect();
+        let w: Vec<f64> = (0..60).map(|_| rng.range(0.5, 2.0)).collect();
+        // Without the ridge, exact affine pairs give the affine map back.
+        let q: Vec<[f64; 3]> = p.iter().map(|&x| truth.apply(x)).collect();
+        let near = fit_similarity_3d(&p, &q, &w, true).unwrap();
+        let fit = fit_affine_3d_near(&p, &q, &w, &near, 0.0).unwrap();
+        assert!(squared_misfit(&fit, &p, &q, &w) < 1e-20);
+        for r in 0..3 {
+            for c in 0..3 {
+                assert!((fit.matrix[r][c] - truth.matrix[r][c]).abs() < 1e-9);
+            }
+        }
+        // Pairs a similarity explains exactly: any ridge leaves that similarity.
+        let q: Vec<[f64; 3]> = p.iter().map(|&x| sim.apply(x)).collect();
+        let near = fit_similarity_3d(&p, &q, &w, true).unwrap();
+        for ridge in [0.0, 0.3, 1.0, 10.0] {
+            let fit = fit_affine_3d_near(&p, &q, &w, &near, ridge).unwrap();
+            for r in 0..3 {
+                for c in 0..3 {
+                    assert!((fit.matrix[r][c] - sim.matrix[r][c]).abs() < 1e-9);
+                }
+                assert!((fit.translation[r] - sim.translation[r]).abs() < 1e-9);
+            }
+        }
+        assert!(fit_affine_3d_near(&p, &q, &[0.0; 60], &near, 1.0).is_none());
+    }
+
+    /// The closed form is the minimizer of its objective (data + ridge): with noisy
+    /// pairs, moving any entry of `M` or `t` either way raises it.
+    #[test]
+    fn affine_fit_minimizes_the_ridge_objective() {
+        let truth = stretched(
+            &oblique_similarity(0.7, 0.9, [0.3, -1.0, 2.0]),
+            [1.15, 1.0, 0.95],
+        );
+        let mut rng = Rng(11);
+        let p: Vec<[f64; 3]> = (0..40)
+            .map(|_| [rng.uniform(), rng.uniform(), 0.3 * rng.uniform()])
+            .collect();
+        let w: Vec<f64> = (0..40).map(|_| rng.range(0.5, 2.0)).collect();
+        let q: Vec<[f64; 3]> = p
+            .iter()
+            .map(|&x| truth.apply(x).map(|v| v + rng.range(-0.05, 0.05)))
+            .collect();
+        let near = fit_similarity_3d(&p, &q, &w, true).unwrap();
+        let ridge = 0.7;
+        // λ̄ = ridge · tr C / 3, C the weighted covariance of p.
+        let total: f64 = w.iter().sum();
+        let mean: [f64; 3] =
+            std::array::from_fn(|c| p.iter().zip(&w).map(|(x, wi)| wi * x[c]).sum::<f64>() / total);
+        let trace: f64 = p
+            .iter()
+            .zip(&w)
+            .map(|(x, wi)| wi * (0..3).map(|c| (x[c] - mean[c]).powi(2)).sum::<f64>())
+            .sum();
+        let lambda = ridge * trace / 3.0;
+        let objective = |t: &Similarity3| {
+            let penalty: f64 = (0..3)
+                .flat_map(|r| (0..3).map(move |c| (r, c)))
+                .map(|(r, c)| (t.matrix[r][c] - near.matrix[r][c]).powi(2))
+                .sum();
+            squared_misfit(t, &p, &q, &w) + lambda * penalty
+        };
+        let fit = fit_affine_3d_near(&p, &q, &w, &near, ridge).unwrap();
+        let base = objective(&fit);
+        for k in 0..12 {
+            for d in [-1e-4, 1e-4] {
+                let mut moved = fit;
+                if k < 9 {
+                    moved.matrix[k / 3][k % 3] += d;
+                } else {
+                    moved.translation[k - 9] += d;
+                }
+                assert!(objective(&moved) > base, "entry {k} by {d}");
+            }
+        }
+    }
+
+    /// Points that barely spread in one direction (a shallow crop of a surface): the
+    /// plain affine fit's map along it is decided by the noise, the ridge fit's stays
+    /// near the similarity, and the ridge fit still follows most of a stretch along the
+    /// directions the points do spread in.
+    #[test]
+    fn ridge_keeps_a_poorly_spread_direction_at_the_similarity() {
+        let sim = oblique_similarity(0.7, 0.9, [0.3, -1.0, 2.0]);
+        let truth = stretched(&sim, [1.2, 1.0, 1.0]);
+        let mut rng = Rng(7);
+        let p: Vec<[f64; 3]> = (0..400)
+            .map(|_| [rng.uniform(), rng.uniform(), 0.002 * rng.uniform()])
+            .collect();
+        let w = vec![1.0; p.len()];
+        let q: Vec<[f64; 3]> = p
+            .iter()
+            .map(|&x| truth.apply(x).map(|v| v + rng.range(-0.01, 0.01)))
+            .collect();
+        let near = fit_similarity_3d(&p, &q, &w, true).unwrap();
+        // How much T stretches an axis direction, relative to the similarity's scale.
+        let gain = |t: &Similarity3, axis: usize| {
+            (0..3)
+                .map(|r| t.matrix[r][axis].powi(2))
+                .sum::<f64>()
+                .sqrt()
+                / near.scale()
+        };
+        // How far T's image of the shallow axis is from the similarity's.
+        let off = |t: &Similarity3| {
+            (0..3)
+                .map(|r| (t.matrix[r][2] - near.matrix[r][2]).powi(2))
+                .sum::<f64>()
+                .sqrt()
+                / near.scale()
+        };
+        let plain = fit_affine_3d_near(&p, &q, &w, &near, 0.0).unwrap();
+        let ridge = fit_affine_3d_near(&p, &q, &w, &near, 1.0).unwrap();
+        assert!(off(&plain) > 0.2, "plain fit: {}", off(&plain));
+        assert!(off(&ridge) < 0.02, "ridge fit: {}", off(&ridge));
+        // The similarity stretches x and y alike; the ridge fit moves the x/y ratio most
+        // of the way to the truth's 1.2 (data weight e/(e + λ̄) ≈ 0.6 along x and y).
+        let ratio = gain(&ridge, 0) / gain(&ridge, 1);
+        assert!(ratio > 1.1 && ratio < 1.2, "x/y gain ratio {ratio}");
+        assert!(
+            squared_misfit(&ridge, &p, &q, &w) < squared_misfit(&near, &p, &q, &w),
+            "the ridge fit explains the pairs better than the similarity"
+        );
     }
 }

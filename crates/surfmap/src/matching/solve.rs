@@ -28,7 +28,7 @@ use super::ncg::{LevelLog, NcgSettings, minimize};
 use super::precondition::SobolevPreconditioner;
 use super::rigid::{ClosestPoints, align_rigidly, refine_rigidly, vertex_normals};
 use super::similarity::{
-    Similarity2, fit_similarity_2d, fit_similarity_2d_robust, fit_similarity_3d,
+    Similarity2, fit_affine_3d_near, fit_similarity_2d, fit_similarity_2d_robust, fit_similarity_3d,
 };
 use super::similarity_search::{
     SearchWhen, SimilaritySearch, SimilaritySearchLog, matched_area, search_similarity,
@@ -108,6 +108,9 @@ pub struct MatchOptions {
     pub split_hole_rims: f64,
     /// Let the position term's similarity scale (else a rigid motion).
     pub allow_scale: bool,
+    /// The map of ℝ³ the position term compares the surfaces after: that similarity,
+    /// or an affine map held near it ([`PositionMap`]).
+    pub position_map: PositionMap,
     /// Cut-off width (ω units) of the position term around ω_B: B's harmonically
     /// extended positions keep pulling A's rim into place up to this far outside.
     pub position_band: f64,
@@ -183,6 +186,33 @@ pub enum PositionWeight {
 /// `κ` of [`PositionWeight::FromShapeResidual`].
 pub const POSITION_KAPPA: f64 = 0.1;
 
+/// The map `T` of ℝ³ in the position term `β_pos ∫ χ |T(x_A) − x_B∘φ|² dA`, refitted
+/// to the current φ every few iterations (weighted least squares over the matched
+/// nodes, [`NcgSettings::refit_every`]).
+///
+/// Two faces of different people differ by more than a rotation and a scale — one is
+/// wider, or longer, or deeper than the other — and what a similarity leaves unexplained
+/// the position term reads as a reason to slide the correspondence (towards B's closest
+/// points). An affine map takes up such global proportions; left free, though, it is
+/// decided by noise along a direction in which the matched points barely spread (the
+/// depth of a crop that keeps one side of a face) and then distorts the comparison
+/// everywhere. So by default `T` is the affine map held near the similarity by a ridge
+/// ([`super::similarity::fit_affine_3d_near`], ridge [`POSITION_AFFINE_RIDGE`]: along a
+/// direction whose spread equals the mean spread of the three, data and similarity weigh
+/// alike). Measured in BENCHMARKS.md ("Matching": "The position term's map: affine near
+/// the similarity").
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PositionMap {
+    /// A similarity (a rigid motion when `allow_scale` is off).
+    Similarity,
+    /// The affine map nearest the data with `ridge · tr C / 3 · ‖M − M_sim‖²` added.
+    AffineNearSimilarity { ridge: f64 },
+}
+
+/// Ridge of [`PositionMap::AffineNearSimilarity`].
+pub const POSITION_AFFINE_RIDGE: f64 = 1.0;
+
 /// `σ_min` (ℓ units) of [`PositionWeight::FromShapeResidual`].
 pub const POSITION_RESIDUAL_FLOOR: f64 = 0.001;
 
@@ -229,6 +259,9 @@ impl Default for MatchOptions {
             hole_features: HoleFeatures::Auto,
             split_hole_rims: super::holes::SPLIT_HOLE_RIMS,
             allow_scale: true,
+            position_map: PositionMap::AffineNearSimilarity {
+                ridge: POSITION_AFFINE_RIDGE,
+            },
             sobolev_cells: 4.0,
             position_band: 0.0,
             curvature_sigma: 0.0,
@@ -292,7 +325,8 @@ pub struct SurfaceMatch {
     pub deformation: Deformation,
     pub levels: Vec<LevelLog>,
     pub alignment: AlignmentReport,
-    /// The position term's similarity at the end (A's ℓ units → B's ℓ units).
+    /// The position term's map at the end (A's ℓ units → B's ℓ units): a similarity, or
+    /// an affine map near one ([`PositionMap`]).
     pub similarity: Similarity3,
     /// The position term's weight `β_pos` used ([`PositionWeight`]).
     pub position_weight: f64,
@@ -782,10 +816,10 @@ impl Solver<'_> {
         }
     }
 
-    /// Refits the position term's similarity of `e` to `phi` (when the term is on).
+    /// Refits the position term's map of `e` to `phi` (when the term is on).
     fn refit(&self, e: &mut LevelEnergy, phi: &Deformation) {
         if self.betas.position != 0.0
-            && let Some(s) = fit_position_similarity(e, phi, self.options.allow_scale)
+            && let Some(s) = fit_position_map(e, phi, self.options)
         {
             e.similarity = s;
         }
@@ -870,12 +904,12 @@ impl Solver<'_> {
     }
 }
 
-/// The similarity of ℝ³ that best maps A's positions onto B's matched positions,
-/// weighted by the node weights and `χ^ε`.
-fn fit_position_similarity(
+/// The map of ℝ³ ([`PositionMap`]) that best carries A's positions onto B's matched
+/// positions, weighted by the node weights and `χ^ε`.
+fn fit_position_map(
     e: &LevelEnergy,
     phi: &Deformation,
-    allow_scale: bool,
+    options: &MatchOptions,
 ) -> Option<Similarity3> {
     let n = e.size();
     let mut p = Vec::with_capacity(n * n);
@@ -899,7 +933,13 @@ fn fit_position_similarity(
         q.push(x);
         w.push(wa * c * robust(r2, e.position_scale).1);
     }
-    fit_similarity_3d(&p, &q, &w, allow_scale)
+    let similarity = fit_similarity_3d(&p, &q, &w, options.allow_scale)?;
+    match options.position_map {
+        PositionMap::Similarity => Some(similarity),
+        PositionMap::AffineNearSimilarity { ridge } => {
+            fit_affine_3d_near(&p, &q, &w, &similarity, ridge).or(Some(similarity))
+        }
+    }
 }
 
 impl SurfaceMatch {
