@@ -53,9 +53,9 @@ pub struct Betas {
     pub reg: f64,
     pub features: f64,
     /// Weight of the position term (ours, beyond the thesis): A's 3D positions,
-    /// moved by a jointly fitted similarity, against B's at φ (BENCHMARKS.md,
-    /// "Matching"). In [`super::MatchOptions`] it is used as given only with
-    /// [`super::PositionWeight::Fixed`] (default 1000); by default the solve sets it
+    /// moved by a jointly fitted map ([`super::PositionMap`]), against B's at φ
+    /// (BENCHMARKS.md, "Matching"). In [`super::MatchOptions`] it is used as given only
+    /// with [`super::PositionWeight::Fixed`] (default 1000); by default the solve sets it
     /// from the surfaces' disagreement in space. 0 turns the term off either way.
     pub position: f64,
     /// Cost per unit area of A left without a counterpart (ours): makes the data

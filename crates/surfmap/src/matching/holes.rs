@@ -126,7 +126,8 @@ pub(crate) fn add_hole_features(
     Ok((pairs, split_pairs))
 }
 
-/// Default elongation from which paired hole rims are split ([`MatchOptions::split_hole_rims`]).
+/// Default elongation from which paired hole rims are split
+/// ([`super::MatchOptions::split_hole_rims`]).
 pub const SPLIT_HOLE_RIMS: f64 = 2.0;
 
 /// Splits a pair of hole rims, given as closed polygons in one frame (A's after the

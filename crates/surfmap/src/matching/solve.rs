@@ -670,7 +670,7 @@ pub fn solve(
 /// with its closest vertex of B, and the least-squares similarity of their domain
 /// positions is refitted once without the pairs it explains worst (beyond three times
 /// the median residual). Also returns the rigid motion, in ℓ units, as the start of the
-/// position term's similarity.
+/// position term's map.
 fn shape_alignment(
     sa: &MatchSurface,
     sb: &MatchSurface,
