@@ -178,6 +178,9 @@ pub struct MultilevelReport {
     pub time_prolongate: f64,
     /// Set when the multilevel start failed and the single-level start was used instead.
     pub abandoned: Option<String>,
+    /// The local solve that opened the start's crushed boundary contacts before the
+    /// barrier solve, when it had any ([`super::relief`]).
+    pub relief: Option<super::relief::ContactRelief>,
 }
 
 /// When the flattening keeps the boundary from overlapping itself with the boundary
@@ -400,7 +403,8 @@ pub struct Flattening {
 
 impl Flattening {
     /// The start map for people: `lscm`, `mean-value (LSCM flipped N)`, `given` or
-    /// `multilevel (N coarse vertices)`.
+    /// `multilevel (N coarse vertices)` (`…, K crushed boundary contacts relieved` when
+    /// [`MultilevelReport::relief`] opened some).
     pub fn start_description(&self) -> String {
         match self.start {
             StartMap::Lscm => "lscm".to_string(),
@@ -410,7 +414,13 @@ impl Flattening {
             StartMap::MeanValue => "mean-value".to_string(),
             StartMap::Given => "given".to_string(),
             StartMap::Multilevel => match &self.multilevel {
-                Some(m) => format!("multilevel ({} coarse vertices)", m.coarse_vertices),
+                Some(m) => match m.relief {
+                    Some(r) => format!(
+                        "multilevel ({} coarse vertices, {} crushed boundary contacts relieved)",
+                        m.coarse_vertices, r.crushed_pairs
+                    ),
+                    None => format!("multilevel ({} coarse vertices)", m.coarse_vertices),
+                },
                 None => "multilevel".to_string(),
             },
         }
@@ -678,7 +688,7 @@ enum SharedStart {
     /// No coarse level for this mesh size or options.
     None,
     /// The start (`None` when abandoned) and its report.
-    Tried(Option<Vec<[f64; 2]>>, MultilevelReport),
+    Tried(Option<Vec<[f64; 2]>>, Box<MultilevelReport>),
 }
 
 /// What [`solve_disc`] returned.
@@ -757,7 +767,7 @@ fn solve_disc(
                 *shared = match choice.coarse_level(mesh.triangles.len()) {
                     Some(coarse) => {
                         let (uv, report) = multilevel_start(mesh, disc, options, coarse);
-                        SharedStart::Tried(uv, report)
+                        SharedStart::Tried(uv, Box::new(report))
                     }
                     None => SharedStart::None,
                 };
@@ -766,11 +776,11 @@ fn solve_disc(
                 SharedStart::Tried(Some(uv), report)
                     if !barrier || boundary_crossings(uv, boundary) == 0 =>
                 {
-                    multilevel = Some(report.clone());
+                    multilevel = Some(MultilevelReport::clone(report));
                     (uv.clone(), StartMap::Multilevel)
                 }
                 SharedStart::Tried(uv, report) => {
-                    let mut report = report.clone();
+                    let mut report = MultilevelReport::clone(report);
                     if uv.is_some() {
                         report.abandoned =
                             Some("its boundary crosses itself (a barrier solve)".into());
@@ -964,6 +974,23 @@ fn solve_disc(
             }
         }
         align_pins(&mut uv, p0, p1);
+    }
+    // A multilevel start's crushed boundary contacts (a coarse slit's tip, its
+    // re-inserted sides a sliver apart) are opened by a local barrier solve first
+    // (measured: the ICT face id000 opened with seams 17 → 5 barrier iterations,
+    // BENCHMARKS.md "Hard discs").
+    if barrier && start == StartMap::Multilevel {
+        let relief = super::relief::relieve_crushed_contacts(
+            &mut uv,
+            &mesh.triangles,
+            &rest,
+            boundary,
+            &objective,
+            &options.newton,
+        )?;
+        if let Some(report) = multilevel.as_mut() {
+            report.relief = relief;
+        }
     }
     let time_start = clock.elapsed().as_secs_f64();
 

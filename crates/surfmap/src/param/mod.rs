@@ -15,6 +15,7 @@ pub mod multilevel;
 pub mod newton;
 pub mod optcuts;
 pub mod plan;
+pub mod relief;
 pub mod scaffold;
 pub mod tutte;
 

@@ -190,7 +190,7 @@ pub const CROSSING_PERSISTENCE: usize = 3;
 /// Hessian is approximated and convergence is linear: from 10⁻⁶ to 10⁻⁴ the ICT faces
 /// opened with seams take 3–29 iterations instead of 6–32, at energies 0.004–0.024 %
 /// higher (BENCHMARKS.md, "Hard discs").
-const BARRIER_RELATIVE_TOLERANCE: f64 = 1e-4;
+pub(super) const BARRIER_RELATIVE_TOLERANCE: f64 = 1e-4;
 
 /// Largest step tried with a boundary barrier (the contact search's reach).
 const BARRIER_STEP_CAP: f64 = 16.0;
