@@ -224,8 +224,8 @@ mod tests {
         );
         assert_eq!(count_flipped(&uv, &mesh.triangles), 0);
         assert_eq!(boundary_crossings(&uv, boundary), 0);
-        // No pair is crushed any more, measured with the start's ε as the full solve
-        // would (a barrier built on the relieved map).
+        // No pair is crushed any more, measured as the full solve will measure it: with
+        // a barrier built on the relieved map.
         let after = BoundaryBarrier::new(boundary, &uv).with_faces(&mesh.triangles);
         let mut still = 0;
         after.for_each_pair_within(&uv, CRUSHED_FRACTION, |_| still += 1);
