@@ -106,13 +106,14 @@ pub fn relieve_crushed_contacts<D: Density + ?Sized>(
         .flat_map(|v| [(v, 0), (v, 1)])
         .collect();
     // The full solve's threshold, from the whole map's energy.
-    let whole = NewtonSolver::energy_of(rest, triangles)(uv, density) + barrier.energy(uv);
+    let barrier_start = barrier.energy(uv);
+    let whole = NewtonSolver::energy_of(rest, triangles)(uv, density) + barrier_start;
     let local = NewtonSettings {
         tolerance: settings.tolerance.max(BARRIER_RELATIVE_TOLERANCE * whole),
         ..*settings
     };
     let mut solver = NewtonSolver::new(n, &patch, patch_rest, &pins, None)?;
-    let energy_before = solver.energy(uv, density) + barrier.energy(uv);
+    let energy_before = solver.energy(uv, density) + barrier_start;
     solver.set_barrier(barrier);
     let (_, iterations, energy_after) =
         solver.minimize(uv, density, &local, 0, clock, &mut |_| {})?;
