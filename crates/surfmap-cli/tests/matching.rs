@@ -109,6 +109,63 @@ fn matching_two_registered_faces_finds_the_registration() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+#[test]
+fn a_face_in_metres_onto_one_in_centimetres_is_scaled_and_matched() {
+    // The same registered pair with B written in metres: 100 times smaller in size, read
+    // as different units, B is taken ×100 for the match, which finds the registration as
+    // in centimetres, and the outputs stay in B's metres.
+    let (Some(a), Some(b)) = (
+        shared_file("faces/ict/ict_neutral.obj"),
+        shared_file("faces/ict/ict_id004.obj"),
+    ) else {
+        return;
+    };
+    let dir = temp_dir("match-units");
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut mesh_b = surfmap::read_mesh(&b).unwrap().mesh;
+    for p in &mut mesh_b.positions {
+        *p = p.map(|c| c / 100.0);
+    }
+    let b_metres = dir.join("id004_metres.obj");
+    surfmap::mesh::io::write_mesh(&b_metres, &mesh_b).unwrap();
+    let out = dir.join("out");
+    let run = run_ok(
+        surfmap()
+            .arg("match")
+            .arg(&a)
+            .arg(&b_metres)
+            .arg("-o")
+            .arg(&out),
+    );
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        stdout.contains("B ×100 for the match") && stdout.contains("different units"),
+        "{stdout}"
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("match.json")).unwrap()).unwrap();
+    assert_eq!(report["scale_b"], 100.0);
+    let within = registration_errors(&out, &mesh_b)
+        .into_iter()
+        .flatten()
+        .filter(|&d| d < 0.05)
+        .count();
+    assert!(within as f64 > 0.9 * 9409.0, "within 0.05: {within}");
+    // A placed on B, in B's units: inside B's bounding box (metres), not A's.
+    let placed = surfmap::read_mesh(&out.join("A_on_B.obj")).unwrap().mesh;
+    let extent = |m: &surfmap::TriMesh| {
+        m.positions
+            .iter()
+            .flat_map(|p| p.iter().copied())
+            .fold(0.0f64, |x, c| x.max(c.abs()))
+    };
+    assert!(
+        extent(&placed) <= extent(&mesh_b) * 1.0001,
+        "A_on_B not in B's units"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// Runs `surfmap match` expecting failure; returns stderr and checks that the output
 /// folder was not created.
 fn fails(args: &[&str], dir: &Path) -> String {
@@ -169,6 +226,12 @@ fn bad_guidance_is_refused_by_name_and_nothing_is_written() {
     // Two weights where β takes three.
     let err = fails(&[s, s, "--beta", "1,2"], &out);
     assert!(err.contains("--beta takes three weights"), "{err}");
+    // A scale factor for B that is not a positive number.
+    let err = fails(&[s, s, "--scale-b", "0"], &out);
+    assert!(
+        err.contains("--scale-b takes `auto` or a positive factor"),
+        "{err}"
+    );
     let _ = std::fs::remove_dir_all(&base);
 }
 

@@ -8,7 +8,7 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use surfmap::matching::{
-    Align, Guidance, Landmarks, MatchError, MatchOptions, match_surfaces, output,
+    Align, Guidance, Landmarks, MatchError, MatchOptions, ScaleB, match_surfaces, output,
 };
 
 use crate::arrays;
@@ -56,6 +56,9 @@ fn landmarks(d: &Bound<'_, PyDict>) -> PyResult<Landmarks> {
 /// where φ just misses B, after smoothing the matched border (0: leave them unmatched and
 /// φ's matches as they are). ``pin_landmarks``: match each landmark exactly to its vertex
 /// of B in the output, the vertices around it following (``False``: where φ puts it).
+/// ``scale_b``: ``None`` takes B as given unless the two sizes (√area) differ by more
+/// than 5 times, then as in other units (B multiplied by the nearest power of ten for the
+/// match; the report's ``scale_b``); a number multiplies B by it (1.0: as given).
 ///
 /// Returns ``(correspondence, report)``: an (n_A, 4) float64 array of rows ``[triangle
 /// of B, b0, b1, b2]`` (triangle −1 where A's vertex has no counterpart) — the command
@@ -73,7 +76,7 @@ fn landmarks(d: &Bound<'_, PyDict>) -> PyResult<Landmarks> {
 /// >>> C.shape, report["min_det"] > 0, report["matched_fraction_a"] > 0.9
 /// ((289, 4), True, True)
 #[pyfunction]
-#[pyo3(name = "match", signature = (VA, FA, VB, FB, *, landmarks=None, size=257, align="auto", keep_folds=false, rim_fit_rings=8, complete_rings=4, pin_landmarks=true))]
+#[pyo3(name = "match", signature = (VA, FA, VB, FB, *, landmarks=None, size=257, align="auto", keep_folds=false, rim_fit_rings=8, complete_rings=4, pin_landmarks=true, scale_b=None))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub fn match_meshes<'py>(
     py: Python<'py>,
@@ -88,12 +91,23 @@ pub fn match_meshes<'py>(
     rim_fit_rings: usize,
     complete_rings: usize,
     pin_landmarks: bool,
+    scale_b: Option<f64>,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>)> {
     surfmap::grid::grid_level(size).map_err(|e| PyValueError::new_err(format!("size: {e}")))?;
     let a = arrays::mesh(VA, FA)?;
     let b = arrays::mesh(VB, FB)?;
+    let scale_b = match scale_b {
+        None => ScaleB::Auto,
+        Some(f) if f.is_finite() && f > 0.0 => ScaleB::Factor(f),
+        Some(f) => {
+            return Err(PyValueError::new_err(format!(
+                "scale_b must be None (automatic) or a positive factor, got {f}"
+            )));
+        }
+    };
     let options = MatchOptions {
         size,
+        scale_b,
         drop_folds: !keep_folds,
         rim_fit_rings,
         complete_rings,

@@ -59,6 +59,14 @@ def test_match_of_a_moved_copy_recovers_the_motion():
     cell = 2.4 / 128
     assert report["min_det"] > 0 and ok.mean() > 0.95 and report["flipped_triangles"] == 0
     assert np.median(err) < 2 * cell and np.percentile(err, 95) < 4 * cell
+    # B in units 1000 times smaller (m → mm): read as other units, scaled back for the
+    # match, the same correspondence to within rounding.
+    C_mm, report_mm = surfmap.match(V, F, VB * 1000.0, F, size=129)
+    assert report_mm["scale_b"] == 0.001 and report["scale_b"] == 1.0
+    ok_mm = C_mm[:, 0] >= 0
+    points_mm = np.einsum("ij,ijk->ik", C_mm[ok_mm, 1:], VB[F[C_mm[ok_mm, 0].astype(int)]])
+    err_mm = np.linalg.norm(points_mm - VB[ok_mm], axis=1)
+    assert ok_mm.mean() > 0.95 and np.median(err_mm) < 2 * cell
 
 
 def test_match_errors():
@@ -73,5 +81,7 @@ def test_match_errors():
         surfmap.match(V, F, V, F, size=65, landmarks={"names": ["a"], "A": [0]})
     with pytest.raises(ValueError, match="does not exist"):
         surfmap.match(V, F, V, F, size=65, landmarks={"names": ["a"], "A": [0], "B": [10_000]})
+    with pytest.raises(ValueError, match="scale_b must be None"):
+        surfmap.match(V, F, V, F, size=65, scale_b=-1.0)
     with pytest.raises(ValueError, match="size: grid size 100"):
         surfmap.match(V, F, V, F, size=100)

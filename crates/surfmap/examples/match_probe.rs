@@ -36,6 +36,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 "refit" => options.ncg.refit_every = f() as usize,
                 "ftol" => options.ncg.finest_tolerance = f(),
                 "maxev" => options.ncg.max_evaluations = f() as usize,
+                "totev" => options.ncg.total_evaluations = f() as usize,
                 "rot" => options.align_rotations = f() as usize,
                 "scale" => options.allow_scale = f() != 0.0,
                 // ridge of the position term's affine map; negative: a similarity

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, bail};
 use surfmap::matching::{
-    Align, Guidance, HoleFeatures, Landmarks, MatchOptions, PositionWeight, SearchWhen,
+    Align, Guidance, HoleFeatures, Landmarks, MatchOptions, PositionWeight, ScaleB, SearchWhen,
     match_surfaces, output, pictures, write_match_folder,
 };
 use surfmap::raster::FeatureFile;
@@ -120,6 +120,12 @@ pub struct Args {
     /// exactly to its vertex of B in the output, and the vertices around it follow.
     #[arg(long)]
     pub free_landmarks: bool,
+    /// B's size for the match: `auto` keeps it unless the two surfaces' sizes (√area)
+    /// differ by more than 5 times — then they are taken to be in different units (mm,
+    /// cm, m) and B is multiplied by the nearest power of ten; a number multiplies B by
+    /// it (1: as given). The outputs stay in B's own units.
+    #[arg(long, value_name = "auto|FACTOR", default_value = "auto")]
+    pub scale_b: String,
     /// Also draw pictures: checkerboard carried across, deformed grid, energy staircase.
     #[arg(long)]
     pub pictures: bool,
@@ -206,6 +212,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         options.similarity_search.candidate_angle = c[0].to_radians();
         options.similarity_search.candidate_log_scale = (1.0 + c[1]).ln();
     }
+    options.scale_b = match args.scale_b.as_str() {
+        "auto" => ScaleB::Auto,
+        text => match text.parse::<f64>() {
+            Ok(f) if f.is_finite() && f > 0.0 => ScaleB::Factor(f),
+            _ => bail!("--scale-b takes `auto` or a positive factor (1: B as given), got {text:?}"),
+        },
+    };
     surfmap::grid::grid_level(args.size).context("--size")?;
     let landmarks = match &args.landmarks {
         Some(p) => {
@@ -322,8 +335,23 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 names.join(", ")
             ),
         };
+        let scaled = if report.scale_b == 1.0 {
+            String::new()
+        } else {
+            let sizes = (mesh_a.area() / mesh_b.area()).sqrt();
+            format!(
+                "B ×{} for the match ({}; outputs in B's units), ",
+                report.scale_b,
+                match options.scale_b {
+                    ScaleB::Auto => format!(
+                        "A is {sizes:.3}× B's size (√area): taken for different units; --scale-b 1 to match as given"
+                    ),
+                    ScaleB::Factor(_) => "--scale-b".into(),
+                }
+            )
+        };
         outln!(
-            "match: {} levels up to {n}², {} iterations, energy {:.4e}, min det Dφ {:.3}, matched {:.1}% of A ({} of {}, {} completed at rims){rims}, {:.1}% of B covered{filled}, {} vertices unmatched for folds ({} flipped, {} collapsed){pinned}, alignment {}{left_out}{searched}{position}, {:.2} s",
+            "match: {scaled}{} levels up to {n}², {} iterations, energy {:.4e}, min det Dφ {:.3}, matched {:.1}% of A ({} of {}, {} completed at rims){rims}, {:.1}% of B covered{filled}, {} vertices unmatched for folds ({} flipped, {} collapsed){pinned}, alignment {}{left_out}{searched}{position}, {:.2} s",
             report.levels.len(),
             report.iterations,
             report.energy,

@@ -122,4 +122,5 @@ def match(
     rim_fit_rings: int = 8,
     complete_rings: int = 4,
     pin_landmarks: bool = True,
+    scale_b: Optional[float] = None,
 ) -> Tuple[FloatArray, Report]: ...

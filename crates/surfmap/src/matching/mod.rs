@@ -35,7 +35,7 @@ pub use similarity_search::{SearchWhen, SimilaritySearch, SimilaritySearchLog};
 pub use solve::{
     Align, AlignmentReport, Guidance, HoleFeatures, Landmarks, MatchOptions, POSITION_AFFINE_RIDGE,
     POSITION_KAPPA, POSITION_RESIDUAL_CAP, POSITION_RESIDUAL_FLOOR, PositionMap, PositionWeight,
-    SurfaceMatch, match_surfaces,
+    ScaleB, SurfaceMatch, UNIT_MISMATCH, match_surfaces,
 };
 pub use surface::MatchSurface;
 

@@ -302,6 +302,10 @@ pub struct MatchReport {
     /// (ℓ units) it was set from ([`super::PositionWeight`]; `null` when fixed).
     pub position_weight: f64,
     pub shape_residual: Option<f64>,
+    /// The factor B's positions were multiplied by for the match (1: as given; another
+    /// power of ten when the sizes said the units differ, [`super::ScaleB`]). The
+    /// outputs are in B's own units.
+    pub scale_b: f64,
     pub length_unit: f64,
     pub grid_size: usize,
     pub levels: Vec<LevelSummary>,
@@ -439,6 +443,7 @@ impl SurfaceMatch {
             similarity: self.similarity,
             position_weight: self.position_weight,
             shape_residual: self.shape_residual,
+            scale_b: self.scale_b,
             length_unit: self.a.length_unit,
             grid_size: self.deformation.size,
             iterations: levels.iter().map(|l| l.iterations).sum(),
@@ -475,7 +480,8 @@ pub fn correspondence_rows(correspondence: &[Option<SurfacePoint>]) -> Vec<f64> 
 
 /// A's triangles at their matched positions on B: every vertex of A at its point on B
 /// (unmatched vertices at their position moved by the position term's final map, so
-/// the file keeps A's numbering), triangles with an unmatched vertex left out.
+/// the file keeps A's numbering), triangles with an unmatched vertex left out. In B's
+/// own units (`mesh_b` as given, before [`super::ScaleB`]).
 pub fn a_on_b(
     mesh_a: &TriMesh,
     mesh_b: &TriMesh,
@@ -483,7 +489,8 @@ pub fn a_on_b(
     correspondence: &[Option<SurfacePoint>],
 ) -> TriMesh {
     let unit_a = matched.a.length_unit;
-    let unit_b = matched.b.length_unit;
+    // B's ℓ in the units of the surface that was matched (B × `scale_b`), back to B's own.
+    let unit_b = matched.b.length_unit / matched.scale_b;
     let positions = correspondence
         .iter()
         .zip(&mesh_a.positions)

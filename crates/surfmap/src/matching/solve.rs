@@ -26,7 +26,7 @@ use super::energy::{B_SD, B_X, Betas, LevelEnergy, Similarity3, chi, robust};
 use super::holes::add_hole_features;
 use super::ncg::{LevelLog, NcgSettings, minimize};
 use super::precondition::SobolevPreconditioner;
-use super::rigid::{ClosestPoints, align_rigidly, refine_rigidly, vertex_normals};
+use super::rigid::{ClosestPoints, align_surfaces};
 use super::similarity::{
     Similarity2, fit_affine_3d_near, fit_similarity_2d, fit_similarity_2d_robust, fit_similarity_3d,
 };
@@ -147,6 +147,55 @@ pub struct MatchOptions {
     /// How the position term's weight is set: from the surfaces' disagreement in space
     /// (default) or `betas.position` as given.
     pub position_weight: PositionWeight,
+    /// B's size for the match: as given, or multiplied by a power of ten when the two
+    /// surfaces are evidently in different units ([`ScaleB`]).
+    pub scale_b: ScaleB,
+}
+
+/// How B's size is reconciled with A's before matching.
+///
+/// The matcher keeps the surfaces' relative size (one length unit for both: a crop of a
+/// face is matched as the part of the whole it is), and aligns them in space by rigid
+/// motions. Two scans in different units — a face in centimetres and another in metres —
+/// are then 100 times apart in size: no rigid motion lays one onto the other, and the
+/// result is a fold-free but meaningless map (measured: landmark errors of 30–75 mm on
+/// ICT crops against FLAME crops, 5–7 mm once both are in one unit; BENCHMARKS.md,
+/// "Faces from two sources").
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ScaleB {
+    /// B as given unless the sizes `√area` differ by more than [`UNIT_MISMATCH`] times;
+    /// then B is multiplied by the power of ten nearest to `√(area A / area B)` (the
+    /// usual unit mismatches, mm / cm / m, are powers of ten; the faces' own difference
+    /// in size stays for the similarity to take up).
+    Auto,
+    /// B's positions multiplied by this factor (1: as given).
+    Factor(f64),
+}
+
+/// Ratio of the surfaces' sizes `√area` beyond which [`ScaleB::Auto`] reads a unit
+/// mismatch: 25 times the area — more than separates a face crop from a whole head in
+/// one unit, less than the factor 10 in length between mm and cm.
+pub const UNIT_MISMATCH: f64 = 5.0;
+
+impl ScaleB {
+    /// The factor B's positions are multiplied by, for surfaces of areas `area_a` and
+    /// `area_b` (in their own units).
+    pub fn factor(self, area_a: f64, area_b: f64) -> f64 {
+        match self {
+            ScaleB::Factor(f) => f,
+            ScaleB::Auto => {
+                let ratio = (area_a / area_b).sqrt();
+                if !(ratio.is_finite() && ratio > 0.0)
+                    || (1.0 / UNIT_MISMATCH..=UNIT_MISMATCH).contains(&ratio)
+                {
+                    1.0
+                } else {
+                    10f64.powf(ratio.log10().round())
+                }
+            }
+        }
+    }
 }
 
 /// How the weight `β_pos` of the position term is set.
@@ -278,6 +327,7 @@ impl Default for MatchOptions {
                 floor: POSITION_RESIDUAL_FLOOR,
                 cap: POSITION_RESIDUAL_CAP,
             },
+            scale_b: ScaleB::Auto,
         }
     }
 }
@@ -349,6 +399,10 @@ pub struct SurfaceMatch {
     /// ([`super::pin`]); empty without landmarks or with
     /// [`MatchOptions::pin_landmarks`] off.
     pub pinned_landmarks: Vec<(u32, u32)>,
+    /// The factor B's positions were multiplied by for the match ([`ScaleB`]; 1 when
+    /// as given). `b` holds the scaled surface; the correspondence (triangles and
+    /// barycentric coordinates of B) does not depend on it.
+    pub scale_b: f64,
 }
 
 /// Points mapped within this many finest-grid cells of B's surface are snapped onto it
@@ -461,6 +515,23 @@ pub fn match_surfaces(
     guidance: &Guidance,
     options: &MatchOptions,
 ) -> Result<SurfaceMatch, MatchError> {
+    let scale_b = options.scale_b.factor(mesh_a.area(), mesh_b.area());
+    if !(scale_b.is_finite() && scale_b > 0.0) {
+        return Err(MatchError::Option(format!(
+            "B's scale factor must be finite and positive, got {scale_b}"
+        )));
+    }
+    let scaled_b;
+    let mesh_b = if scale_b == 1.0 {
+        mesh_b
+    } else {
+        let mut m = mesh_b.clone();
+        for p in &mut m.positions {
+            *p = p.map(|c| c * scale_b);
+        }
+        scaled_b = m;
+        &scaled_b
+    };
     let (fa, fb) = paired_features(mesh_a, mesh_b, guidance)?;
     // One length unit for both: the geometric mean of √area, so the energy's balance
     // does not depend on the units, and the surfaces' relative size is kept.
@@ -493,7 +564,9 @@ pub fn match_surfaces(
         },
     );
     let (sa, sb) = (sa?, sb?);
-    solve(sa, sb, fa.as_ref(), fb.as_ref(), options)
+    let mut matched = solve(sa, sb, fa.as_ref(), fb.as_ref(), options)?;
+    matched.scale_b = scale_b;
+    Ok(matched)
 }
 
 /// The landmark pairs among the paired features (point features named `landmark:NAME`,
@@ -662,6 +735,7 @@ pub fn solve(
         } else {
             vec![]
         },
+        scale_b: 1.0,
     })
 }
 
@@ -699,11 +773,15 @@ fn shape_alignment(
             translation: c.motion.translation.map(|t| t * unit),
         })
         .collect();
-    let normals = vertex_normals(&sb.positions, &sb.triangles);
-    let rigid =
-        align_rigidly(&sa.positions, &sb.positions, &normals, &starts).ok_or_else(|| {
-            MatchError::Guidance("cannot align the surfaces in space: too few vertices".into())
-        })?;
+    let rigid = align_surfaces(
+        (&sa.positions, &sa.triangles),
+        (&sb.positions, &sb.triangles),
+        &starts,
+        None,
+    )
+    .ok_or_else(|| {
+        MatchError::Guidance("cannot align the surfaces in space: too few vertices".into())
+    })?;
     let closest = ClosestPoints::new(&sb.positions);
     let limit = (2.5 * rigid.rms).powi(2);
     let step = (sa.positions.len() / 4000).max(1);
@@ -764,7 +842,7 @@ fn shape_alignment(
 
 /// The RMS distance (ℓ units) between the surfaces after their best rigid alignment in
 /// space: trimmed ICP from the rigid motion of the paired features' 3D centroids when
-/// there are three or more, else from the usual starts ([`align_rigidly`]); `None` when
+/// there are three or more, else from the usual starts ([`align_surfaces`], either way round); `None` when
 /// they cannot be aligned.
 fn shape_residual(
     sa: &MatchSurface,
@@ -780,11 +858,12 @@ fn shape_residual(
         }
         _ => None,
     };
-    let normals = vertex_normals(&sb.positions, &sb.triangles);
-    match start {
-        Some(start) => refine_rigidly(&sa.positions, &sb.positions, &normals, start),
-        None => align_rigidly(&sa.positions, &sb.positions, &normals, &[]),
-    }
+    align_surfaces(
+        (&sa.positions, &sa.triangles),
+        (&sb.positions, &sb.triangles),
+        &[],
+        start,
+    )
     .map(|rigid| rigid.rms / sa.length_unit)
 }
 

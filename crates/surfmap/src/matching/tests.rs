@@ -115,6 +115,64 @@ fn a_retriangulated_moved_copy_matches_by_the_identity() {
 }
 
 #[test]
+fn a_copy_in_other_units_matches_by_the_identity() {
+    // B is the moved, re-triangulated copy in units 100 times smaller (metres → cm):
+    // its size (√area) is 100 times A's, read as a unit mismatch and undone; the
+    // match is the identity to the same accuracy as at one size, and the outputs stay
+    // in B's units. Matched as given, the same pair is far off (or refused).
+    let a = surface(18, |p| p);
+    let motion = moved_copy_motion();
+    let b = surface(23, |p| motion(p).map(|c| 100.0 * c));
+    let (m, corr) = run(&a, &b, &Guidance::default(), &options());
+    assert_eq!(m.scale_b, 0.01);
+    let truth = |v: usize| Some(motion(a.positions[v]).map(|c| 100.0 * c));
+    let (e, matched) = errors(&a, &b, &corr, truth);
+    assert!(matched > 0.97, "matched {matched}");
+    let (median, p95) = (quantile(&e, 0.5) / 100.0, quantile(&e, 0.95) / 100.0);
+    assert!(
+        median < 0.6 * CELL && p95 < 2.0 * CELL,
+        "median {median} p95 {p95} (A's units)"
+    );
+    let as_given = MatchOptions {
+        scale_b: ScaleB::Factor(1.0),
+        ..options()
+    };
+    if let Ok(m) = match_surfaces(&a, &b, &Guidance::default(), &as_given) {
+        assert_eq!(m.scale_b, 1.0);
+        let corr = m.checked_correspondence(&a, &b, true).unwrap().points;
+        let (e, matched) = errors(&a, &b, &corr, truth);
+        assert!(
+            matched < 0.5 || quantile(&e, 0.5) / 100.0 > 5.0 * CELL,
+            "as given: matched {matched}, median {} (A's units)",
+            quantile(&e, 0.5) / 100.0
+        );
+    }
+}
+
+#[test]
+fn sizes_apart_by_more_than_the_unit_mismatch_are_read_as_units() {
+    // Within 5× in √area: as given (a crop against a whole head); beyond: the power
+    // of ten nearest to the ratio (cm against m, mm against cm), either way round.
+    for (ratio, factor) in [
+        (1.0, 1.0),
+        (4.9, 1.0),
+        (0.21, 1.0),
+        (10.0, 10.0),
+        (177.0, 100.0),
+    ] {
+        let area_b = 3.0;
+        let area_a = area_b * ratio * ratio;
+        assert_eq!(ScaleB::Auto.factor(area_a, area_b), factor, "ratio {ratio}");
+        assert_eq!(
+            ScaleB::Auto.factor(area_b, area_a),
+            1.0 / factor,
+            "ratio 1/{ratio}"
+        );
+    }
+    assert_eq!(ScaleB::Factor(2.5).factor(1.0, 1e6), 2.5);
+}
+
+#[test]
 fn a_known_smooth_deformation_is_recovered() {
     // A smooth, mildly non-isometric deformation of space (5–10 % of stretch, shear
     // and bend), as between two expressions of one face.
