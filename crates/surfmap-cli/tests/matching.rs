@@ -5,14 +5,19 @@
 mod common;
 
 use common::{read_npy_f64 as read_npy, run_demo, run_ok, shared_file, surfmap, temp_dir};
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+/// The registered pair ICT neutral → id004 (vertex i ↔ vertex i), when ../shared is here.
+fn registered_pair() -> Option<(PathBuf, PathBuf)> {
+    Some((
+        shared_file("faces/ict/ict_neutral.obj")?,
+        shared_file("faces/ict/ict_id004.obj")?,
+    ))
+}
 
 #[test]
 fn matching_two_registered_faces_finds_the_registration() {
-    let (Some(a), Some(b)) = (
-        shared_file("faces/ict/ict_neutral.obj"),
-        shared_file("faces/ict/ict_id004.obj"),
-    ) else {
+    let Some((a, b)) = registered_pair() else {
         return;
     };
     let dir = temp_dir("match-ict");
@@ -114,10 +119,7 @@ fn a_face_in_metres_onto_one_in_centimetres_is_scaled_and_matched() {
     // The same registered pair with B written in metres: 100 times smaller in size, read
     // as different units, B is taken ×100 for the match, which finds the registration as
     // in centimetres, and the outputs stay in B's metres.
-    let (Some(a), Some(b)) = (
-        shared_file("faces/ict/ict_neutral.obj"),
-        shared_file("faces/ict/ict_id004.obj"),
-    ) else {
+    let Some((a, b)) = registered_pair() else {
         return;
     };
     let dir = temp_dir("match-units");

@@ -17,7 +17,7 @@ use rayon::prelude::*;
 
 use super::energy::Similarity3;
 use crate::linsolve::dense::symmetric_eigen;
-use crate::vec3::{cross3 as cross, dot3 as dot, sub3 as sub};
+use crate::vec3::{cross3 as cross, dot3 as dot, norm3 as norm, sub3 as sub};
 
 /// Fraction of the pairs (closest first) that each ICP step fits.
 pub const KEEP: f64 = 0.7;
@@ -373,7 +373,7 @@ fn area(points: &[[f64; 3]], triangles: &[[u32; 3]]) -> f64 {
         .iter()
         .map(|t| {
             let [p, q, r] = t.map(|i| points[i as usize]);
-            0.5 * dot(cross(sub(q, p), sub(r, p)), cross(sub(q, p), sub(r, p))).sqrt()
+            0.5 * norm(cross(sub(q, p), sub(r, p)))
         })
         .sum()
 }
