@@ -30,8 +30,12 @@ fn python_remedy(kind: DefectKind) -> Option<&'static str> {
             "Keep one with surfmap.repair(V, F, keep_largest=True), or component=N to choose one."
         }
         DefectKind::NonManifoldEdges => {
-            "No automatic fix: remove the extra faces (fins, internal walls) in a mesh editor, \
-             or try surfmap.repair(V, F, keep_largest=True) if they belong to a stray piece."
+            "Use surfmap.repair(V, F, fix_non_manifold=True, keep_largest=True, \
+             drop_unreferenced=True) to keep, on each such edge, the two faces that continue \
+             the surface most smoothly and drop the others (fins, internal walls)."
+        }
+        DefectKind::NonManifoldVertices => {
+            "Split each into one copy per fan with surfmap.repair(V, F, fix_non_manifold=True)."
         }
         DefectKind::InconsistentOrientation => {
             "Flip them with surfmap.repair(V, F, reorient=True)."
@@ -45,7 +49,7 @@ fn python_remedy(kind: DefectKind) -> Option<&'static str> {
             "pass cut=\"auto\" to cut it open into a disc along seams (per-corner UVs: UV, FUV, \
              report), or seams=EDGES to cut along your own edges."
         }
-        DefectKind::NoFaces | DefectKind::NonManifoldVertices | DefectKind::NonOrientable => {
+        DefectKind::NoFaces | DefectKind::NonOrientable => {
             return None;
         }
     })

@@ -167,13 +167,18 @@ pub fn write_obj(
 /// applied in the order of the command line's repair flags: ``weld`` (merge vertices
 /// closer than this tolerance; 0.0: exactly coincident ones), ``drop_degenerate`` (faces
 /// with a repeated vertex or zero area), ``reorient`` (flip faces for a consistent
-/// orientation), ``keep_largest`` or ``component=N`` (keep one connected component, as
-/// numbered by the defect message), ``drop_unreferenced`` (vertices no face uses).
+/// orientation), ``fix_non_manifold`` (on an edge shared by more than two faces keep the
+/// two that continue the surface most smoothly; split a vertex that joins separate fans
+/// of faces into one copy per fan, appended after the others), ``keep_largest`` or
+/// ``component=N`` (keep one connected component, as numbered by the defect message),
+/// ``drop_unreferenced`` (vertices no face uses). For a raw scan:
+/// ``drop_degenerate=True, fix_non_manifold=True, keep_largest=True,
+/// drop_unreferenced=True`` (the command line's ``--repair``).
 ///
 /// Returns ``(V, F, done)``: the repaired arrays (vertex indices change when vertices
 /// are merged or dropped) and a dictionary counting what each requested repair changed
-/// (``welded``, ``dropped_degenerate``, ``flipped``, ``dropped_faces``,
-/// ``dropped_unreferenced``).
+/// (``welded``, ``dropped_degenerate``, ``flipped``, ``dropped_non_manifold_faces`` and
+/// ``split_vertices``, ``dropped_faces``, ``dropped_unreferenced``).
 ///
 /// >>> import numpy as np, surfmap
 /// >>> V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 0, 0], [1, 1, 0]], dtype=float)
@@ -183,7 +188,7 @@ pub fn write_obj(
 /// (4, [[0, 1, 2], [1, 3, 2]], {'welded': 1})
 #[pyfunction]
 #[pyo3(signature = (V, F, *, weld=None, drop_degenerate=false, reorient=false, keep_largest=false,
-    component=None, drop_unreferenced=false))]
+    component=None, drop_unreferenced=false, fix_non_manifold=false))]
 #[allow(non_snake_case, clippy::too_many_arguments, clippy::type_complexity)]
 pub fn repair<'py>(
     py: Python<'py>,
@@ -195,6 +200,7 @@ pub fn repair<'py>(
     keep_largest: bool,
     component: Option<usize>,
     drop_unreferenced: bool,
+    fix_non_manifold: bool,
 ) -> PyResult<(
     Bound<'py, PyArray2<f64>>,
     Bound<'py, PyArray2<i64>>,
@@ -222,6 +228,12 @@ pub fn repair<'py>(
     if drop_degenerate {
         let (m, n) = repair::drop_degenerate(&mesh);
         done.set_item("dropped_degenerate", n)?;
+        mesh = m;
+    }
+    if fix_non_manifold {
+        let (m, fix) = py.detach(|| repair::fix_non_manifold(&mesh));
+        done.set_item("dropped_non_manifold_faces", fix.dropped_faces)?;
+        done.set_item("split_vertices", fix.split_vertices)?;
         mesh = m;
     }
     if reorient {

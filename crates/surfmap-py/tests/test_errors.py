@@ -129,6 +129,43 @@ def test_remedies_fix_what_they_name(data):
     assert report["holes_filled"] == 2 and report["flipped_triangles"] == 0
 
 
+def test_fix_non_manifold_makes_the_raw_head_scan_flattenable(data):
+    """The FLAME head scan: 11 edges with more than two faces, pinched vertices, hair
+    fragments. The messages name fix_non_manifold; the named repairs make it a manifold
+    surface that flattens without a flipped triangle."""
+    V, F = surfmap.read_mesh(data / "faces" / "flame" / "flame_scan.obj")
+    messages = {d["kind"]: d["message"] for d in surfmap.inspect(V, F)["defects"]}
+    assert "fix_non_manifold=True" in messages["non_manifold_edges"]
+    assert "fix_non_manifold=True" in messages["non_manifold_vertices"]
+    W, G, done = surfmap.repair(
+        V, F, fix_non_manifold=True, keep_largest=True, drop_unreferenced=True
+    )
+    assert done["dropped_non_manifold_faces"] > 0 and done["split_vertices"] > 0
+    kinds = [d["kind"] for d in surfmap.inspect(W, G)["defects"]]
+    assert "non_manifold_edges" not in kinds and "non_manifold_vertices" not in kinds
+    # Split vertices are copies: every face keeps its corners' positions.
+    assert len(G) > 0.99 * len(F)
+    UV, report = surfmap.flatten(W, G, fill_holes=True)
+    assert report["flipped_triangles"] == 0
+
+
+def test_a_bow_tie_is_split_into_two_discs(grid):
+    V, F = grid
+    # A second copy whose corner 0 is glued onto the first copy's last vertex.
+    n = len(V)
+    V2 = np.r_[V, V[1:] + (V[-1] - V[0])]
+    F_second = np.where(F == 0, n - 1, F + n - 1)
+    F2 = np.r_[F, F_second]
+    kinds = [d["kind"] for d in surfmap.inspect(V2, F2)["defects"]]
+    assert "non_manifold_vertices" in kinds
+    W, G, done = surfmap.repair(V2, F2, fix_non_manifold=True)
+    assert done == {"dropped_non_manifold_faces": 0, "split_vertices": 1}
+    assert len(W) == len(V2) + 1 and np.array_equal(W[-1], V[-1])
+    assert np.array_equal(W[G], V2[F2])  # the same triangles in space
+    W, G, _ = surfmap.repair(W, G, keep_largest=True, drop_unreferenced=True)
+    assert surfmap.inspect(W, G)["disc"]
+
+
 def test_non_finite_positions_are_mesh_errors(grid):
     V, F = grid
     V = V.copy()

@@ -21,8 +21,12 @@ fn flag_remedy(kind: DefectKind) -> Option<&'static str> {
         DefectKind::DuplicateVertices => "Use --weld to merge coincident vertices.",
         DefectKind::SeveralComponents => "Use --keep-largest, or --component N to choose one.",
         DefectKind::NonManifoldEdges => {
-            "No automatic fix: remove the extra faces (fins, internal walls) in a mesh editor, \
-             or try --keep-largest if they belong to a stray piece."
+            "Use --fix-non-manifold to keep, on each such edge, the two faces that continue the \
+             surface most smoothly and drop the others (fins, internal walls), or --repair for \
+             every repair a raw scan needs (it also keeps the largest piece)."
+        }
+        DefectKind::NonManifoldVertices => {
+            "Use --fix-non-manifold to split each into one copy per fan (or --repair)."
         }
         DefectKind::InconsistentOrientation => "Use --reorient.",
         DefectKind::SeveralBoundaryLoops => {
@@ -32,7 +36,7 @@ fn flag_remedy(kind: DefectKind) -> Option<&'static str> {
         DefectKind::ClosedSurface | DefectKind::PositiveGenus => {
             "surfmap flatten cuts it open along seams (or along yours: --cut-along)."
         }
-        DefectKind::NoFaces | DefectKind::NonManifoldVertices | DefectKind::NonOrientable => {
+        DefectKind::NoFaces | DefectKind::NonOrientable => {
             return None;
         }
     })

@@ -43,6 +43,17 @@ pub struct RepairArgs {
     /// Remove vertices no face uses.
     #[arg(long)]
     pub drop_unreferenced: bool,
+    /// Make the surface manifold: on an edge shared by more than two faces keep the two
+    /// that continue the surface most smoothly (drop fins and internal walls); split a
+    /// vertex that joins separate fans of faces into one copy per fan.
+    #[arg(long)]
+    pub fix_non_manifold: bool,
+    /// Every repair that needs no parameter, for a raw scan: --drop-degenerate,
+    /// --fix-non-manifold, --reorient, --keep-largest (unless --component is given),
+    /// --drop-unreferenced. Each one that changes something is reported. Vertex numbers
+    /// change when vertices are dropped or split; every output follows the repaired mesh.
+    #[arg(long)]
+    pub repair: bool,
 }
 
 impl RepairArgs {
@@ -65,38 +76,81 @@ impl RepairArgs {
             say(format!("welded {n} vertices (tolerance {tol})"));
             mesh = m;
         }
-        if self.drop_degenerate {
+        // With --repair only the repairs that change something are reported.
+        let all = self.repair;
+        let say_if = |asked: bool, n: usize, s: String| {
+            if asked || n > 0 {
+                say(s)
+            }
+        };
+        if self.drop_degenerate || all {
             let (m, n) = repair::drop_degenerate(&mesh);
-            say(format!("dropped {n} degenerate faces"));
+            say_if(
+                self.drop_degenerate,
+                n,
+                format!("dropped {n} degenerate faces"),
+            );
             mesh = m;
         }
-        if self.reorient {
-            let (m, n) = repair::reorient(&mesh).ok_or_else(|| {
-                anyhow::anyhow!("--reorient: the surface is not orientable (a Möbius-like piece); it cannot be made consistent")
-            })?;
-            say(format!("flipped {n} faces for a consistent orientation"));
+        if self.fix_non_manifold || all {
+            let (m, done) = repair::fix_non_manifold(&mesh);
+            say_if(
+                self.fix_non_manifold,
+                done.dropped_faces + done.split_vertices,
+                format!(
+                    "non-manifold: dropped {} faces from edges with more than two faces, split {} vertices",
+                    done.dropped_faces, done.split_vertices
+                ),
+            );
             mesh = m;
         }
-        if self.keep_largest || self.component.is_some() {
+        if self.reorient || all {
+            match repair::reorient(&mesh) {
+                Some((m, n)) => {
+                    say_if(
+                        self.reorient,
+                        n,
+                        format!("flipped {n} faces for a consistent orientation"),
+                    );
+                    mesh = m;
+                }
+                // Under --repair a non-orientable surface is left for the defect report.
+                None if !self.reorient => {}
+                None => anyhow::bail!(
+                    "--reorient: the surface is not orientable (a Möbius-like piece); it cannot be made consistent"
+                ),
+            }
+        }
+        if self.keep_largest || self.component.is_some() || all {
             let choice = match self.component {
                 Some(i) => repair::ComponentChoice::Index(i),
                 None => repair::ComponentChoice::Largest,
             };
-            let (m, n) = repair::keep_component(&mesh, choice).ok_or_else(|| {
-                anyhow::anyhow!(
+            let Some((m, n)) = repair::keep_component(&mesh, choice) else {
+                if self.component.is_none() {
+                    // No face at all: the defect report says so.
+                    return Ok(mesh);
+                }
+                anyhow::bail!(
                     "--component {}: no such component ({} found)",
                     self.component.unwrap_or(0),
                     surfmap::Topology::new(&mesh).num_components
                 )
-            })?;
-            say(format!(
-                "kept one component, dropped {n} faces of the others"
-            ));
+            };
+            say_if(
+                self.keep_largest || self.component.is_some(),
+                n,
+                format!("kept one component, dropped {n} faces of the others"),
+            );
             mesh = m;
         }
-        if self.drop_unreferenced {
+        if self.drop_unreferenced || all {
             let (m, n) = repair::drop_unreferenced(&mesh);
-            say(format!("dropped {n} unreferenced vertices"));
+            say_if(
+                self.drop_unreferenced,
+                n,
+                format!("dropped {n} unreferenced vertices"),
+            );
             mesh = m;
         }
         Ok(mesh)

@@ -91,6 +91,7 @@ def repair(
     keep_largest: bool = False,
     component: Optional[int] = None,
     drop_unreferenced: bool = False,
+    fix_non_manifold: bool = False,
 ) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.int64], Dict[str, int]]: ...
 
 # flatten_file and flatten_many take the keywords of flatten() (preset, alpha, energy,

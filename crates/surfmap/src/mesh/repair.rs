@@ -207,6 +207,194 @@ pub fn keep_component(mesh: &TriMesh, choice: ComponentChoice) -> Option<(TriMes
     Some((kept, removed))
 }
 
+/// What [`fix_non_manifold`] changed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct NonManifoldFix {
+    /// Faces dropped from edges shared by more than two faces.
+    pub dropped_faces: usize,
+    /// Vertex copies added where one vertex joined separate fans of faces.
+    pub split_vertices: usize,
+}
+
+/// Makes a triangle soup manifold, the two defects scans and boolean exports carry:
+///
+/// 1. **Edges shared by more than two faces** (fins, internal walls, a sheet glued on):
+///    of the faces on such an edge, the two that continue the surface most smoothly are
+///    kept and the others dropped. "Most smoothly" ranks the pairs by, in order: a
+///    consistent orientation (one face runs the edge a→b, the other b→a), the largest
+///    cosine between their oriented unit normals `n_s · n_t` (a flat continuation is 1,
+///    a fin folded back on its neighbour −1), the larger total area. Edges are taken in
+///    order, faces already dropped no longer count.
+/// 2. **Vertices that join otherwise separate fans** (bow-ties, two sheets touching at a
+///    point): each fan after the first gets its own copy of the vertex (same position
+///    and per-vertex UV), appended after the existing vertices, so every original vertex
+///    keeps its index.
+///
+/// Faces are never moved or re-triangulated; dropping faces may open small holes, which
+/// the flattening fills, and may leave stray pieces ([`keep_component`] removes them).
+/// Cost `O(F log F)` (two topology passes).
+pub fn fix_non_manifold(mesh: &TriMesh) -> (TriMesh, NonManifoldFix) {
+    let (mesh, dropped_faces) = drop_non_manifold_faces(mesh);
+    let (mesh, split_vertices) = split_non_manifold_vertices(&mesh);
+    (
+        mesh,
+        NonManifoldFix {
+            dropped_faces,
+            split_vertices,
+        },
+    )
+}
+
+/// Step 1 of [`fix_non_manifold`]: on every edge with more than two faces keep the
+/// smoothest consistently oriented pair. Returns the mesh and the faces dropped.
+fn drop_non_manifold_faces(mesh: &TriMesh) -> (TriMesh, usize) {
+    use crate::vec3::{cross3, dot3, norm3, sub3};
+    let topo = Topology::new(mesh);
+    if topo.non_manifold_edges.is_empty() {
+        return (mesh.clone(), 0);
+    }
+    let p = &mesh.positions;
+    let area_normal = |t: u32| -> ([f64; 3], f64) {
+        let [a, b, c] = mesh.triangles[t as usize].map(|v| p[v as usize]);
+        let n = cross3(sub3(b, a), sub3(c, a));
+        let len = norm3(n);
+        if len > 0.0 && len.is_finite() {
+            (n.map(|x| x / len), len / 2.0)
+        } else {
+            ([0.0; 3], 0.0)
+        }
+    };
+    let mut dropped = vec![false; mesh.triangles.len()];
+    for &e in &topo.non_manifold_edges {
+        let [a, b] = topo.edges[e as usize];
+        let faces: Vec<u32> = topo
+            .faces_of_edge(e as usize)
+            .iter()
+            .copied()
+            .filter(|&t| !dropped[t as usize])
+            .collect();
+        if faces.len() <= 2 {
+            continue;
+        }
+        // Whether face t runs the edge from a to b.
+        let forward = |t: u32| {
+            let tri = mesh.triangles[t as usize];
+            (0..3).any(|k| tri[k] == a && tri[(k + 1) % 3] == b)
+        };
+        let mut best = (0, 1);
+        let mut best_key = (false, f64::NEG_INFINITY, f64::NEG_INFINITY);
+        for i in 0..faces.len() {
+            for j in i + 1..faces.len() {
+                let (s, t) = (faces[i], faces[j]);
+                let consistent = forward(s) != forward(t);
+                let ((ns, area_s), (nt, area_t)) = (area_normal(s), area_normal(t));
+                // With a consistent orientation the normals of a flat continuation agree;
+                // with an inconsistent one they are opposite.
+                let cosine = if consistent {
+                    dot3(ns, nt)
+                } else {
+                    -dot3(ns, nt)
+                };
+                let key = (consistent, cosine, area_s + area_t);
+                if key.partial_cmp(&best_key) == Some(std::cmp::Ordering::Greater) {
+                    best_key = key;
+                    best = (i, j);
+                }
+            }
+        }
+        for (k, &t) in faces.iter().enumerate() {
+            if k != best.0 && k != best.1 {
+                dropped[t as usize] = true;
+            }
+        }
+    }
+    let removed = dropped.iter().filter(|&&d| d).count();
+    (retain_faces(mesh, |t| !dropped[t]), removed)
+}
+
+/// Step 2 of [`fix_non_manifold`]: one copy of a vertex per fan of faces around it after
+/// the first. Fans are the classes of the vertex's faces joined through its manifold
+/// edges. Vertices on an edge with more than two faces are left alone (step 1 first).
+/// Returns the mesh and the copies added.
+fn split_non_manifold_vertices(mesh: &TriMesh) -> (TriMesh, usize) {
+    let topo = Topology::new(mesh);
+    if topo.non_manifold_vertices.is_empty() {
+        return (mesh.clone(), 0);
+    }
+    let mut is_split = vec![false; mesh.positions.len()];
+    for &v in &topo.non_manifold_vertices {
+        is_split[v as usize] = true;
+    }
+    // Incident (face, corner) pairs of the vertices to split.
+    let mut around: HashMap<u32, Vec<u32>> = HashMap::new();
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        for &v in tri {
+            if is_split[v as usize] {
+                around.entry(v).or_default().push(t as u32);
+            }
+        }
+    }
+    let mut out = mesh.clone();
+    let mut added = 0;
+    for &v in &topo.non_manifold_vertices {
+        let faces = &around[&v];
+        // Fan label per incident face: flood through the edges at v that are manifold.
+        let mut fan = vec![usize::MAX; faces.len()];
+        let mut fans = 0;
+        for seed in 0..faces.len() {
+            if fan[seed] != usize::MAX {
+                continue;
+            }
+            fan[seed] = fans;
+            let mut stack = vec![seed];
+            while let Some(i) = stack.pop() {
+                let t = faces[i] as usize;
+                let tri = mesh.triangles[t];
+                for k in 0..3 {
+                    if tri[k] != v && tri[(k + 1) % 3] != v {
+                        continue; // the edge opposite v
+                    }
+                    let e = topo.face_edges[t][k] as usize;
+                    let across = topo.faces_of_edge(e);
+                    if across.len() != 2 {
+                        continue;
+                    }
+                    for &u in across {
+                        if let Some(j) = faces.iter().position(|&x| x == u)
+                            && fan[j] == usize::MAX
+                        {
+                            fan[j] = fans;
+                            stack.push(j);
+                        }
+                    }
+                }
+            }
+            fans += 1;
+        }
+        // Fan 0 keeps v; fan f > 0 gets a new vertex.
+        let first_new = out.positions.len() as u32;
+        for _ in 1..fans {
+            out.positions.push(mesh.positions[v as usize]);
+            if let Some(Uvs::PerVertex(uv)) = &mut out.uvs {
+                let copy = uv[v as usize];
+                uv.push(copy);
+            }
+        }
+        for (i, &t) in faces.iter().enumerate() {
+            if fan[i] > 0 {
+                let new_v = first_new + fan[i] as u32 - 1;
+                for corner in out.triangles[t as usize].iter_mut() {
+                    if *corner == v {
+                        *corner = new_v;
+                    }
+                }
+            }
+        }
+        added += fans - 1;
+    }
+    (out, added)
+}
+
 /// Fills every boundary loop but the longest with a fan around a new vertex at the
 /// loop's centroid, so a face scan with open eyes and mouth becomes a disc. Returns the
 /// mesh (original vertices and faces first, in their order; the fill after them) and
@@ -358,5 +546,85 @@ mod tests {
         let (d, n) = drop_degenerate(&m);
         assert_eq!(n, 1);
         assert_eq!(d.triangles.len(), 2);
+    }
+
+    /// A fin (a triangle standing on an interior edge) and a sheet glued back onto the
+    /// surface along another edge: each of the two edges has three faces; the fix keeps
+    /// the surface's own faces, so the mesh is the original disc again.
+    #[test]
+    fn fix_non_manifold_drops_fins_and_keeps_the_surface() {
+        use crate::mesh::generate::grid_disc;
+        let disc = grid_disc(6);
+        let mut m = disc.clone();
+        let n = m.positions.len() as u32;
+        // Interior edges of the 7×7 grid: (8, 9) and the diagonal (16, 24).
+        m.positions.push([1.5 / 6.0, 1.0 / 6.0, 0.2]); // fin standing up
+        m.triangles.push([8, 9, n]);
+        // Folded back almost onto the surface, the wrong way round.
+        m.positions.push([2.0 / 6.0, 3.5 / 6.0, 0.01]);
+        m.triangles.push([24, 16, n + 1]);
+        let topo = Topology::new(&m);
+        assert_eq!(topo.non_manifold_edges.len(), 2);
+        let (fixed, done) = fix_non_manifold(&m);
+        assert_eq!(
+            done,
+            NonManifoldFix {
+                dropped_faces: 2,
+                split_vertices: 0
+            }
+        );
+        assert_eq!(fixed.triangles, disc.triangles);
+        let (fixed, unused) = drop_unreferenced(&fixed);
+        assert_eq!(unused, 2);
+        assert!(Topology::new(&fixed).is_disc());
+    }
+
+    /// Two discs touching at one vertex (a bow-tie): the vertex is split, each disc gets
+    /// its own copy at the same place, and nothing else changes.
+    #[test]
+    fn fix_non_manifold_splits_a_bow_tie() {
+        use crate::mesh::generate::grid_disc;
+        let a = grid_disc(3);
+        let na = a.positions.len() as u32;
+        let mut m = a.clone();
+        // The second disc, shifted so its corner 0 lands on the first's corner 15 = (1, 1).
+        let b = grid_disc(3);
+        m.positions
+            .extend(b.positions.iter().map(|p| [p[0] + 1.0, p[1] + 1.0, p[2]]));
+        let join = 15u32;
+        m.triangles.extend(
+            b.triangles
+                .iter()
+                .map(|t| t.map(|v| if v == 0 { join } else { v + na })),
+        );
+        let (m, _) = drop_unreferenced(&m); // b's own corner 0
+        let topo = Topology::new(&m);
+        assert_eq!(topo.non_manifold_vertices, vec![join]);
+        let (fixed, done) = fix_non_manifold(&m);
+        assert_eq!(done.split_vertices, 1);
+        assert_eq!(done.dropped_faces, 0);
+        assert_eq!(fixed.positions.len(), m.positions.len() + 1);
+        assert_eq!(fixed.positions.last(), Some(&m.positions[join as usize]));
+        let topo = Topology::new(&fixed);
+        assert!(topo.is_manifold());
+        assert_eq!(topo.num_components, 2);
+        // Every face keeps its corners' positions.
+        for (t, u) in fixed.triangles.iter().zip(&m.triangles) {
+            for k in 0..3 {
+                assert_eq!(fixed.positions[t[k] as usize], m.positions[u[k] as usize]);
+            }
+        }
+        let (one, _) = keep_component(&fixed, ComponentChoice::Largest).unwrap();
+        assert!(Topology::new(&one).is_disc());
+    }
+
+    /// A manifold mesh is returned unchanged.
+    #[test]
+    fn fix_non_manifold_leaves_a_manifold_mesh_alone() {
+        let m = crate::mesh::generate::holed_plate(2, 4);
+        let (fixed, done) = fix_non_manifold(&m);
+        assert_eq!(done, NonManifoldFix::default());
+        assert_eq!(fixed.triangles, m.triangles);
+        assert_eq!(fixed.positions, m.positions);
     }
 }

@@ -296,8 +296,9 @@ pub fn validate(mesh: &TriMesh, topo: &Topology) -> Vec<Defect> {
             topo.non_manifold_edges.len(),
             fmt_examples(&ex)
         ),
-        "No automatic fix: remove the extra faces (fins, internal walls) in a mesh editor, \
-         or try `repair::keep_component` if they belong to a stray piece.",
+        "`repair::fix_non_manifold` keeps, on each such edge, the two faces that continue the \
+         surface most smoothly and drops the others (fins, internal walls); then \
+         `repair::keep_component` removes any stray piece.",
         true,
     );
     let ex = one(&topo.non_manifold_vertices);
@@ -311,7 +312,7 @@ pub fn validate(mesh: &TriMesh, topo: &Topology) -> Vec<Defect> {
             topo.non_manifold_vertices.len(),
             fmt_examples(&ex)
         ),
-        "No automatic fix: split those vertices in a mesh editor.",
+        "`repair::fix_non_manifold` splits each into one copy per fan.",
         true,
     );
     if !topo.orientable {
