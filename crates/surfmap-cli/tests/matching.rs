@@ -105,12 +105,109 @@ fn matching_two_registered_faces_finds_the_registration() {
     assert_eq!(csv.lines().count(), 9410);
     let placed = surfmap::read_mesh(&dir.join("A_on_B.obj")).unwrap().mesh;
     assert_eq!(placed.num_vertices(), 9409);
+    // Two faces of like size matched where they correspond: A's matched part keeps its
+    // area on B (the report's ratio, recomputed from A_on_B.obj), and nothing is doubted.
+    let ratio = placed_area_ratio(&surfmap::read_mesh(&a).unwrap().mesh, &placed);
+    assert!(
+        (report["area_ratio"].as_f64().unwrap() / ratio - 1.0).abs() < 1e-9,
+        "report {} against {ratio}",
+        report["area_ratio"]
+    );
+    assert!((0.8..1.25).contains(&ratio), "area ratio {ratio}");
+    assert_eq!(report["warnings"], serde_json::json!([]));
     for name in ["checker_carried.png", "deformed_grid.png", "energy.png"] {
         let png = std::fs::read(dir.join(name)).unwrap();
         assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n", "{name}");
         let width = u32::from_be_bytes(png[16..20].try_into().unwrap());
         assert!(width >= 500, "{name}: {width} px");
     }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Area of A_on_B.obj's triangles (A's fully matched ones, at their places on B) over the
+/// same triangles' area on A itself.
+fn placed_area_ratio(mesh_a: &surfmap::TriMesh, placed: &surfmap::TriMesh) -> f64 {
+    let area = |p: &[[f64; 3]], t: &[u32; 3]| {
+        let [a, b, c] = t.map(|v| p[v as usize]);
+        let (u, w) = (
+            [b[0] - a[0], b[1] - a[1], b[2] - a[2]],
+            [c[0] - a[0], c[1] - a[1], c[2] - a[2]],
+        );
+        let n = [
+            u[1] * w[2] - u[2] * w[1],
+            u[2] * w[0] - u[0] * w[2],
+            u[0] * w[1] - u[1] * w[0],
+        ];
+        0.5 * (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt()
+    };
+    let on_b: f64 = placed
+        .triangles
+        .iter()
+        .map(|t| area(&placed.positions, t))
+        .sum();
+    let on_a: f64 = placed
+        .triangles
+        .iter()
+        .map(|t| area(&mesh_a.positions, t))
+        .sum();
+    on_b / on_a
+}
+
+/// A raw head scan (non-manifold, hair fragments, shoulders) matched onto the FLAME
+/// template (a head without shoulders, plus two eyeballs): `--repair` makes both
+/// matchable, but the surfaces differ in extent and the match squeezes the scan into a
+/// small part of the template. The result is still fold-free and written, and the
+/// doubt is said — on stderr and in match.json — with the area ratio recomputed here.
+#[test]
+fn a_head_scan_squeezed_onto_a_template_is_flagged() {
+    let (Some(scan), Some(template)) = (
+        shared_file("faces/flame/flame_scan.obj"),
+        shared_file("faces/flame/flame_template.ply"),
+    ) else {
+        return;
+    };
+    let dir = temp_dir("match-scan");
+    let refused = fails(
+        &[scan.to_str().unwrap(), template.to_str().unwrap()],
+        &dir.join("refused"),
+    );
+    assert!(refused.contains("--fix-non-manifold"), "{refused}");
+    let out = run_ok(
+        surfmap()
+            .arg("match")
+            .arg(&scan)
+            .arg(&template)
+            .arg("--repair")
+            .arg("-o")
+            .arg(&dir),
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("repair: non-manifold: dropped"), "{stderr}");
+    assert!(
+        stderr.contains("warning: A's matched part lands on B at"),
+        "{stderr}"
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("match.json")).unwrap()).unwrap();
+    assert!(report["min_det"].as_f64().unwrap() > 0.0);
+    assert_eq!(report["warnings"].as_array().unwrap().len(), 1);
+    // A as the match saw it: the same repairs, in --repair's order.
+    use surfmap::mesh::repair;
+    let a = surfmap::read_mesh(&scan).unwrap().mesh;
+    let (a, _) = repair::drop_degenerate(&a);
+    let (a, _) = repair::fix_non_manifold(&a);
+    let a = repair::reorient(&a).map_or(a, |(m, _)| m);
+    let (a, _) = repair::keep_component(&a, repair::ComponentChoice::Largest).unwrap();
+    let (a, _) = repair::drop_unreferenced(&a);
+    let placed = surfmap::read_mesh(&dir.join("A_on_B.obj")).unwrap().mesh;
+    assert_eq!(placed.num_vertices(), a.num_vertices());
+    let ratio = placed_area_ratio(&a, &placed);
+    assert!(
+        (report["area_ratio"].as_f64().unwrap() / ratio - 1.0).abs() < 1e-9,
+        "report {} against {ratio}",
+        report["area_ratio"]
+    );
+    assert!(ratio < 1.0 / 3.0, "area ratio {ratio}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

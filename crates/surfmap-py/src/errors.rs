@@ -68,7 +68,12 @@ pub fn mesh_error(message: impl Into<String>, defects: &[Defect]) -> PyErr {
 /// A flattening error as its Python exception: the library's message, remedies worded
 /// as Python calls.
 pub fn flatten_error(e: FlattenError) -> PyErr {
-    let message = advice::flatten_error_message(&e);
+    flatten_error_about(e, "")
+}
+
+/// [`flatten_error`] with its message after `about` (e.g. `"surface A: "`).
+pub fn flatten_error_about(e: FlattenError, about: &str) -> PyErr {
+    let message = format!("{about}{}", advice::flatten_error_message(&e));
     match e {
         FlattenError::NotADisc(defects) => mesh_error(message, &defects),
         FlattenError::Index(_)

@@ -13,11 +13,14 @@ use surfmap::matching::{
 
 use crate::arrays;
 use crate::convert::to_dict;
-use crate::errors::{SolverError, flatten_error};
+use crate::errors::{SolverError, flatten_error_about};
 
 fn match_error(e: MatchError) -> PyErr {
     match e {
-        MatchError::Flatten(f) => flatten_error(f),
+        MatchError::Flatten { surface, source } => flatten_error_about(
+            source,
+            &surface.map_or(String::new(), |s| format!("surface {s}: ")),
+        ),
         MatchError::Guidance(_) | MatchError::Option(_) | MatchError::Grid(_) => {
             PyValueError::new_err(e.to_string())
         }
@@ -62,7 +65,9 @@ fn landmarks(d: &Bound<'_, PyDict>) -> PyResult<Landmarks> {
 ///
 /// Returns ``(correspondence, report)``: an (n_A, 4) float64 array of rows ``[triangle
 /// of B, b0, b1, b2]`` (triangle −1 where A's vertex has no counterpart) — the command
-/// line's ``correspondence.npy`` — and the dictionary of its ``match.json``.
+/// line's ``correspondence.npy`` — and the dictionary of its ``match.json``. Doubts about
+/// the result (``report["warnings"]``, e.g. A squeezed into a small part of B) are also
+/// raised as ``RuntimeWarning``.
 ///
 /// >>> import numpy as np, surfmap
 /// >>> n = 17
@@ -137,6 +142,12 @@ pub fn match_meshes<'py>(
             Ok((checked.points, report))
         })
         .map_err(match_error)?;
+    // The report's doubts (`report["warnings"]`) also as Python warnings.
+    for w in &report.warnings {
+        let message = std::ffi::CString::new(w.as_str()).unwrap_or_default();
+        let category = py.get_type::<pyo3::exceptions::PyRuntimeWarning>();
+        PyErr::warn(py, category.as_any(), &message, 1)?;
+    }
     let rows = Array2::from_shape_vec((corr.len(), 4), output::correspondence_rows(&corr))
         .expect("four values per vertex")
         .into_pyarray(py)

@@ -5,10 +5,11 @@
 
 use std::path::PathBuf;
 
+use super::advice::flatten_error_message;
 use anyhow::{Context, bail};
 use surfmap::matching::{
-    Align, Guidance, HoleFeatures, Landmarks, MatchOptions, PositionWeight, ScaleB, SearchWhen,
-    match_surfaces, output, pictures, write_match_folder,
+    Align, Guidance, HoleFeatures, Landmarks, MatchError, MatchOptions, PositionWeight, ScaleB,
+    SearchWhen, match_surfaces, output, pictures, write_match_folder,
 };
 use surfmap::raster::FeatureFile;
 use surfmap::render::save_png;
@@ -239,13 +240,25 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         features_a: read_features(&args.features_a, mesh_a.num_vertices())?,
         features_b: read_features(&args.features_b, mesh_b.num_vertices())?,
     };
-    let matched = match_surfaces(&mesh_a, &mesh_b, &guidance, &options).with_context(|| {
-        format!(
-            "cannot match {} onto {}",
-            args.a.display(),
-            args.b.display()
-        )
-    })?;
+    let matched = match_surfaces(&mesh_a, &mesh_b, &guidance, &options)
+        .map_err(|e| match &e {
+            // The flattening's remedies as this command's flags.
+            MatchError::Flatten { surface, source } => match flatten_error_message(source) {
+                Some(message) => anyhow::anyhow!(
+                    "cannot flatten {}: {message}",
+                    surface.map_or("the surface".to_string(), |s| format!("surface {s}"))
+                ),
+                None => e.into(),
+            },
+            _ => e.into(),
+        })
+        .with_context(|| {
+            format!(
+                "cannot match {} onto {}",
+                args.a.display(),
+                args.b.display()
+            )
+        })?;
     let checked = matched.checked_correspondence(&mesh_a, &mesh_b, options.drop_folds)?;
     let report = matched.report(&checked, &options);
     let corr = checked.points;
@@ -376,6 +389,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                     .map_or(p.display().to_string(), |n| n.to_string_lossy().into())
             );
         }
+    }
+    // Doubts are printed even with --quiet (and kept in match.json's `warnings`).
+    for w in &report.warnings {
+        eprintln!("warning: {w}");
     }
     Ok(())
 }

@@ -42,8 +42,12 @@ pub use surface::MatchSurface;
 /// What went wrong while matching, and what to do about it.
 #[derive(Debug, thiserror::Error)]
 pub enum MatchError {
-    #[error("cannot flatten the surface: {0}")]
-    Flatten(#[from] crate::param::flatten::FlattenError),
+    /// `surface`: `'A'` or `'B'` when known.
+    #[error("cannot flatten {}: {source}", .surface.map_or("the surface".to_string(), |s| format!("surface {s}")))]
+    Flatten {
+        surface: Option<char>,
+        source: crate::param::flatten::FlattenError,
+    },
     #[error("geometry images: {0}")]
     Images(#[from] crate::raster::RasterError),
     #[error("grid: {0}")]
@@ -54,6 +58,28 @@ pub enum MatchError {
     Option(String),
     #[error("{0}")]
     Output(String),
+}
+
+impl From<crate::param::flatten::FlattenError> for MatchError {
+    fn from(source: crate::param::flatten::FlattenError) -> Self {
+        MatchError::Flatten {
+            surface: None,
+            source,
+        }
+    }
+}
+
+impl MatchError {
+    /// Names the surface (`'A'` or `'B'`) a flattening error came from.
+    pub(crate) fn of_surface(self, which: char) -> Self {
+        match self {
+            MatchError::Flatten { source, .. } => MatchError::Flatten {
+                surface: Some(which),
+                source,
+            },
+            other => other,
+        }
+    }
 }
 
 #[cfg(test)]

@@ -272,6 +272,16 @@ pub struct MatchReport {
     /// Area of B covered by the images of A's fully matched triangles, as a fraction of
     /// B's area (capped at 1; φ is injective, so the images barely overlap).
     pub covered_fraction_b: f64,
+    /// Area of the images on B of A's fully matched triangles over those triangles' own
+    /// area (both in the shared unit, B × `scale_b`): near 1 when surfaces of like size
+    /// are matched where they correspond (0.82–1.16 on the 86 good matches of the
+    /// benchmarked face pairs); far from it, A was squeezed into (or stretched over) part
+    /// of B.
+    /// `null` when nothing matched.
+    pub area_ratio: Option<f64>,
+    /// Doubts about the result, worded for the user (empty when none): see
+    /// [`match_warnings`].
+    pub warnings: Vec<String>,
     pub holes_filled_a: usize,
     pub holes_filled_b: usize,
     /// Minimum det Dφ over the grid's triangles (> 0: φ has no fold).
@@ -409,6 +419,7 @@ impl SurfaceMatch {
         let folds = &checked.folds;
         let matched = correspondence.iter().filter(|p| p.is_some()).count();
         let mut covered = 0.0;
+        let mut matched_area_a = 0.0;
         let mut area_b = 0.0;
         for t in &self.b.triangles {
             let [p, q, r] = t.map(|i| self.b.positions[i as usize]);
@@ -419,8 +430,11 @@ impl SurfaceMatch {
             if let [Some(p), Some(q), Some(r)] = pts {
                 let [p, q, r] = [p, q, r].map(|s| s.position(&self.b.positions, &self.b.triangles));
                 covered += 0.5 * norm(cross(sub(q, p), sub(r, p)));
+                let [p, q, r] = t.map(|v| self.a.positions[v as usize]);
+                matched_area_a += 0.5 * norm(cross(sub(q, p), sub(r, p)));
             }
         }
+        let area_ratio = (matched_area_a > 0.0).then(|| covered / matched_area_a);
         let levels: Vec<LevelSummary> = self.levels.iter().map(LevelSummary::from).collect();
         MatchReport {
             vertices_a: correspondence.len(),
@@ -428,6 +442,8 @@ impl SurfaceMatch {
             matched_vertices_a: matched,
             matched_fraction_a: matched as f64 / correspondence.len().max(1) as f64,
             covered_fraction_b: (covered / area_b.max(f64::MIN_POSITIVE)).min(1.0),
+            area_ratio,
+            warnings: match_warnings(area_ratio),
             holes_filled_a: self.a.filled_holes,
             holes_filled_b: self.b.filled_holes,
             min_det: self.min_det,
@@ -455,6 +471,35 @@ impl SurfaceMatch {
             options: options.clone(),
         }
     }
+}
+
+/// Largest factor by which a plausible match changes the matched part's area (either
+/// way) before [`match_warnings`] doubts it. Faces of different people, expressions,
+/// crops and sources stay within 0.82–1.16 (BENCHMARKS, "Doubtful matches"); a factor of
+/// 3 is a different kind of result (a head scan squeezed into a template: 0.27), not a
+/// worse one of the same kind. It does not catch a moderately wrong match (0.56 on the
+/// worst ICT → FLAME pair, 45 mm off), and it leaves room for faces of different sizes
+/// (a child's onto an adult's).
+pub const AREA_RATIO_DOUBT: f64 = 3.0;
+
+/// What a match report should warn about. Today one check: the matched part of A lands
+/// on B at less than 1/[`AREA_RATIO_DOUBT`] or more than [`AREA_RATIO_DOUBT`] times its
+/// own area — the surfaces were matched in a way no pair of like surfaces is (a whole
+/// head squeezed into the face of another, a face spread over a head).
+pub fn match_warnings(area_ratio: Option<f64>) -> Vec<String> {
+    let mut warnings = Vec::new();
+    if let Some(r) = area_ratio
+        && !(1.0 / AREA_RATIO_DOUBT..=AREA_RATIO_DOUBT).contains(&r)
+    {
+        warnings.push(format!(
+            "A's matched part lands on B at {r:.2}× its own area ({}): the surfaces probably \
+             do not correspond the way they were matched. Check the pictures (--pictures); \
+             crop both to the region they share (a face against a whole head or a scan \
+             with shoulders does not match), or give landmarks.",
+            if r < 1.0 { "squeezed" } else { "stretched" }
+        ));
+    }
+    warnings
 }
 
 /// File names inside a match folder (read back by [`crate::apps::match_folder`]).

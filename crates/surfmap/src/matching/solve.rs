@@ -563,7 +563,10 @@ pub fn match_surfaces(
             )
         },
     );
-    let (sa, sb) = (sa?, sb?);
+    let (sa, sb) = (
+        sa.map_err(|e| e.of_surface('A'))?,
+        sb.map_err(|e| e.of_surface('B'))?,
+    );
     let mut matched = solve(sa, sb, fa.as_ref(), fb.as_ref(), options)?;
     matched.scale_b = scale_b;
     Ok(matched)
