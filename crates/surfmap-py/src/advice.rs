@@ -31,8 +31,9 @@ fn python_remedy(kind: DefectKind) -> Option<&'static str> {
         }
         DefectKind::NonManifoldEdges => {
             "Use surfmap.repair(V, F, fix_non_manifold=True, keep_largest=True, \
-             drop_unreferenced=True) to keep, on each such edge, the two faces that continue \
-             the surface most smoothly and drop the others (fins, internal walls)."
+             drop_unreferenced=True) to cut them apart into sheets (the faces that continue \
+             each other most smoothly stay joined; fins and glued-on sheets come loose) and \
+             keep the largest piece."
         }
         DefectKind::NonManifoldVertices => {
             "Split each into one copy per fan with surfmap.repair(V, F, fix_non_manifold=True)."

@@ -167,9 +167,11 @@ pub fn write_obj(
 /// applied in the order of the command line's repair flags: ``weld`` (merge vertices
 /// closer than this tolerance; 0.0: exactly coincident ones), ``drop_degenerate`` (faces
 /// with a repeated vertex or zero area), ``reorient`` (flip faces for a consistent
-/// orientation), ``fix_non_manifold`` (on an edge shared by more than two faces keep the
-/// two that continue the surface most smoothly; split a vertex that joins separate fans
-/// of faces into one copy per fan, appended after the others), ``keep_largest`` or
+/// orientation), ``fix_non_manifold`` (cut every edge shared by more than two faces
+/// apart into sheets, faces paired by how smoothly they continue each other, a fin cut
+/// loose; split a vertex that joins separate fans of faces into one copy per fan,
+/// appended after the others; faces are removed only where the sheets cannot be cut
+/// apart), ``keep_largest`` or
 /// ``component=N`` (keep one connected component, as numbered by the defect message),
 /// ``drop_unreferenced`` (vertices no face uses). For a raw scan:
 /// ``drop_degenerate=True, fix_non_manifold=True, keep_largest=True,
@@ -177,8 +179,9 @@ pub fn write_obj(
 ///
 /// Returns ``(V, F, done)``: the repaired arrays (vertex indices change when vertices
 /// are merged or dropped) and a dictionary counting what each requested repair changed
-/// (``welded``, ``dropped_degenerate``, ``flipped``, ``dropped_non_manifold_faces`` and
-/// ``split_vertices``, ``dropped_faces``, ``dropped_unreferenced``).
+/// (``welded``, ``dropped_degenerate``, ``flipped``, ``cut_edges``, ``unpaired_faces``,
+/// ``dropped_non_manifold_faces`` and ``split_vertices``, ``dropped_faces``,
+/// ``dropped_unreferenced``).
 ///
 /// >>> import numpy as np, surfmap
 /// >>> V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 0, 0], [1, 1, 0]], dtype=float)
@@ -232,6 +235,8 @@ pub fn repair<'py>(
     }
     if fix_non_manifold {
         let (m, fix) = py.detach(|| repair::fix_non_manifold(&mesh));
+        done.set_item("cut_edges", fix.cut_edges)?;
+        done.set_item("unpaired_faces", fix.unpaired_faces)?;
         done.set_item("dropped_non_manifold_faces", fix.dropped_faces)?;
         done.set_item("split_vertices", fix.split_vertices)?;
         mesh = m;

@@ -21,9 +21,10 @@ fn flag_remedy(kind: DefectKind) -> Option<&'static str> {
         DefectKind::DuplicateVertices => "Use --weld to merge coincident vertices.",
         DefectKind::SeveralComponents => "Use --keep-largest, or --component N to choose one.",
         DefectKind::NonManifoldEdges => {
-            "Use --fix-non-manifold to keep, on each such edge, the two faces that continue the \
-             surface most smoothly and drop the others (fins, internal walls), or --repair for \
-             every repair a raw scan needs (it also keeps the largest piece)."
+            "Use --fix-non-manifold to cut them apart into sheets (the faces that continue each \
+             other most smoothly stay joined; fins and glued-on sheets come loose), with \
+             --keep-largest to drop the loose pieces; or --repair for every repair a raw scan \
+             needs."
         }
         DefectKind::NonManifoldVertices => {
             "Use --fix-non-manifold to split each into one copy per fan (or --repair)."

@@ -43,9 +43,10 @@ pub struct RepairArgs {
     /// Remove vertices no face uses.
     #[arg(long)]
     pub drop_unreferenced: bool,
-    /// Make the surface manifold: on an edge shared by more than two faces keep the two
-    /// that continue the surface most smoothly (drop fins and internal walls); split a
-    /// vertex that joins separate fans of faces into one copy per fan.
+    /// Make the surface manifold without removing a face: cut every edge shared by more
+    /// than two faces apart into sheets (faces paired by how smoothly they continue each
+    /// other; a fin is cut loose), and split a vertex that joins separate fans of faces
+    /// into one copy per fan. With --keep-largest (or --repair) the loose pieces go.
     #[arg(long)]
     pub fix_non_manifold: bool,
     /// Every repair that needs no parameter, for a raw scan: --drop-degenerate,
@@ -96,10 +97,16 @@ impl RepairArgs {
             let (m, done) = repair::fix_non_manifold(&mesh);
             say_if(
                 self.fix_non_manifold,
-                done.dropped_faces + done.split_vertices,
+                done.cut_edges + done.split_vertices,
                 format!(
-                    "non-manifold: dropped {} faces from edges with more than two faces, split {} vertices",
-                    done.dropped_faces, done.split_vertices
+                    "non-manifold: cut {} edges with more than two faces apart into sheets ({} faces left unpaired{}), split {} vertices",
+                    done.cut_edges,
+                    done.unpaired_faces,
+                    match done.dropped_faces {
+                        0 => String::new(),
+                        n => format!(", {n} removed where the sheets could not be separated"),
+                    },
+                    done.split_vertices
                 ),
             );
             mesh = m;

@@ -210,51 +210,59 @@ pub fn keep_component(mesh: &TriMesh, choice: ComponentChoice) -> Option<(TriMes
 /// What [`fix_non_manifold`] changed.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct NonManifoldFix {
-    /// Faces dropped from edges shared by more than two faces.
+    /// Edges shared by more than two faces, cut apart into sheets.
+    pub cut_edges: usize,
+    /// Faces on such an edge left without a partner there (a fin's face: it is cut loose
+    /// along that edge).
+    pub unpaired_faces: usize,
+    /// Faces removed where cutting could not separate the sheets (they stay joined around
+    /// both ends of the edge, e.g. a face repeated on the same three vertices).
     pub dropped_faces: usize,
-    /// Vertex copies added where one vertex joined separate fans of faces.
+    /// Vertex copies added, one per fan of faces after the first around a vertex.
     pub split_vertices: usize,
 }
 
-/// Makes a triangle soup manifold, the two defects scans and boolean exports carry:
+/// Makes a triangle soup manifold, for the two defects scans and boolean exports carry:
 ///
-/// 1. **Edges shared by more than two faces** (fins, internal walls, a sheet glued on):
-///    of the faces on such an edge, the two that continue the surface most smoothly are
-///    kept and the others dropped. "Most smoothly" ranks the pairs by, in order: a
-///    consistent orientation (one face runs the edge a→b, the other b→a), the largest
-///    cosine between their oriented unit normals `n_s · n_t` (a flat continuation is 1,
-///    a fin folded back on its neighbour −1), the larger total area. Edges are taken in
-///    order, faces already dropped no longer count.
-/// 2. **Vertices that join otherwise separate fans** (bow-ties, two sheets touching at a
-///    point): each fan after the first gets its own copy of the vertex (same position
-///    and per-vertex UV), appended after the existing vertices, so every original vertex
-///    keeps its index.
+/// 1. **Edges shared by more than two faces** (fins, internal walls, two sheets touching
+///    along an edge) are cut apart into sheets: the faces on such an edge are paired
+///    greedily, best pair first ([`ranked_pairs`]), and only paired faces stay joined
+///    across it; an odd face out (a fin) is joined to nothing there.
+/// 2. **Vertices whose faces form separate fans** — bow-ties, two sheets touching at a
+///    point, and the ends of the cuts of step 1 — get one copy per fan after the first
+///    (same position and per-vertex UV), appended after the existing vertices; fans are
+///    the classes of a vertex's faces joined through edges with two faces or a pair of
+///    step 1.
+/// 3. Where that leaves an edge with more than two faces (the sheets are joined around
+///    both of its ends, so no vertex split separates them), the best pair on it is kept
+///    and the other faces are removed, and step 2 runs again.
 ///
-/// Faces are never moved or re-triangulated; dropping faces may open small holes, which
-/// the flattening fills, and may leave stray pieces ([`keep_component`] removes them).
-/// Cost `O(F log F)` (two topology passes).
+/// Otherwise no face is removed, moved or re-triangulated: a fin or a sheet glued onto
+/// the surface becomes a piece of its own ([`keep_component`] removes such pieces), two
+/// sheets touching along an edge become two sheets with a seam. Every original vertex
+/// keeps its index. Cost `O(F log F)` (a few topology passes).
 pub fn fix_non_manifold(mesh: &TriMesh) -> (TriMesh, NonManifoldFix) {
-    let (mesh, dropped_faces) = drop_non_manifold_faces(mesh);
-    let (mesh, split_vertices) = split_non_manifold_vertices(&mesh);
-    (
-        mesh,
-        NonManifoldFix {
-            dropped_faces,
-            split_vertices,
-        },
-    )
+    let (cut, mut fix) = cut_non_manifold(mesh);
+    if Topology::new(&cut).non_manifold_edges.is_empty() {
+        return (cut, fix);
+    }
+    let (dropped, n) = drop_non_manifold_faces(&cut);
+    let (out, again) = cut_non_manifold(&dropped);
+    fix.dropped_faces = n;
+    fix.split_vertices += again.split_vertices;
+    (out, fix)
 }
 
-/// Step 1 of [`fix_non_manifold`]: on every edge with more than two faces keep the
-/// smoothest consistently oriented pair. Returns the mesh and the faces dropped.
-fn drop_non_manifold_faces(mesh: &TriMesh) -> (TriMesh, usize) {
+/// The pairs of faces on non-manifold edge `e`, best first: a consistent orientation
+/// (one face runs the edge a→b, the other b→a), then the largest cosine between their
+/// oriented unit normals `n_s · n_t` (a flat continuation is 1, a fin folded back onto its
+/// neighbour −1), then the larger total area.
+fn ranked_pairs(mesh: &TriMesh, topo: &Topology, e: u32) -> Vec<[u32; 2]> {
     use crate::vec3::{cross3, dot3, norm3, sub3};
-    let topo = Topology::new(mesh);
-    if topo.non_manifold_edges.is_empty() {
-        return (mesh.clone(), 0);
-    }
+    let [a, b] = topo.edges[e as usize];
+    let faces = topo.faces_of_edge(e as usize);
     let p = &mesh.positions;
-    let area_normal = |t: u32| -> ([f64; 3], f64) {
+    let unit_normal = |t: u32| -> ([f64; 3], f64) {
         let [a, b, c] = mesh.triangles[t as usize].map(|v| p[v as usize]);
         let n = cross3(sub3(b, a), sub3(c, a));
         let len = norm3(n);
@@ -264,81 +272,84 @@ fn drop_non_manifold_faces(mesh: &TriMesh) -> (TriMesh, usize) {
             ([0.0; 3], 0.0)
         }
     };
-    let mut dropped = vec![false; mesh.triangles.len()];
-    for &e in &topo.non_manifold_edges {
-        let [a, b] = topo.edges[e as usize];
-        let faces: Vec<u32> = topo
-            .faces_of_edge(e as usize)
-            .iter()
-            .copied()
-            .filter(|&t| !dropped[t as usize])
-            .collect();
-        if faces.len() <= 2 {
-            continue;
-        }
-        // Whether face t runs the edge from a to b.
-        let forward = |t: u32| {
-            let tri = mesh.triangles[t as usize];
-            (0..3).any(|k| tri[k] == a && tri[(k + 1) % 3] == b)
-        };
-        let mut best = (0, 1);
-        let mut best_key = (false, f64::NEG_INFINITY, f64::NEG_INFINITY);
-        for i in 0..faces.len() {
-            for j in i + 1..faces.len() {
-                let (s, t) = (faces[i], faces[j]);
-                let consistent = forward(s) != forward(t);
-                let ((ns, area_s), (nt, area_t)) = (area_normal(s), area_normal(t));
-                // With a consistent orientation the normals of a flat continuation agree;
-                // with an inconsistent one they are opposite.
-                let cosine = if consistent {
-                    dot3(ns, nt)
-                } else {
-                    -dot3(ns, nt)
-                };
-                let key = (consistent, cosine, area_s + area_t);
-                if key.partial_cmp(&best_key) == Some(std::cmp::Ordering::Greater) {
-                    best_key = key;
-                    best = (i, j);
-                }
-            }
-        }
-        for (k, &t) in faces.iter().enumerate() {
-            if k != best.0 && k != best.1 {
-                dropped[t as usize] = true;
-            }
+    // Whether face t runs the edge from a to b.
+    let forward = |t: u32| {
+        let tri = mesh.triangles[t as usize];
+        (0..3).any(|k| tri[k] == a && tri[(k + 1) % 3] == b)
+    };
+    let mut ranked = Vec::new();
+    for i in 0..faces.len() {
+        for j in i + 1..faces.len() {
+            let (s, t) = (faces[i], faces[j]);
+            let consistent = forward(s) != forward(t);
+            let ((ns, area_s), (nt, area_t)) = (unit_normal(s), unit_normal(t));
+            // With a consistent orientation the normals of a flat continuation agree; with
+            // an inconsistent one they are opposite.
+            let cosine = if consistent {
+                dot3(ns, nt)
+            } else {
+                -dot3(ns, nt)
+            };
+            ranked.push(((consistent, cosine, area_s + area_t), [s, t]));
         }
     }
-    let removed = dropped.iter().filter(|&&d| d).count();
-    (retain_faces(mesh, |t| !dropped[t]), removed)
+    ranked.sort_by(|x, y| y.0.partial_cmp(&x.0).unwrap_or(std::cmp::Ordering::Equal));
+    ranked.into_iter().map(|(_, pair)| pair).collect()
 }
 
-/// Step 2 of [`fix_non_manifold`]: one copy of a vertex per fan of faces around it after
-/// the first. Fans are the classes of the vertex's faces joined through its manifold
-/// edges. Vertices on an edge with more than two faces are left alone (step 1 first).
-/// Returns the mesh and the copies added.
-fn split_non_manifold_vertices(mesh: &TriMesh) -> (TriMesh, usize) {
+/// Steps 1 and 2 of [`fix_non_manifold`].
+fn cut_non_manifold(mesh: &TriMesh) -> (TriMesh, NonManifoldFix) {
     let topo = Topology::new(mesh);
-    if topo.non_manifold_vertices.is_empty() {
-        return (mesh.clone(), 0);
+    if topo.is_manifold() {
+        return (mesh.clone(), NonManifoldFix::default());
     }
-    let mut is_split = vec![false; mesh.positions.len()];
+    // Step 1: the pairs of faces that stay joined across each non-manifold edge.
+    let mut pairs: HashMap<u32, Vec<[u32; 2]>> = HashMap::new();
+    let mut unpaired_faces = 0;
+    for &e in &topo.non_manifold_edges {
+        let mut taken: Vec<u32> = Vec::new();
+        let chosen = pairs.entry(e).or_default();
+        for [s, t] in ranked_pairs(mesh, &topo, e) {
+            if !taken.contains(&s) && !taken.contains(&t) {
+                taken.extend([s, t]);
+                chosen.push([s, t]);
+            }
+        }
+        unpaired_faces += topo.faces_of_edge(e as usize).len() - taken.len();
+    }
+    // Whether faces s and t are joined across edge e.
+    let joined = |e: u32, s: u32, t: u32| match pairs.get(&e) {
+        None => topo.faces_of_edge(e as usize).len() == 2,
+        Some(list) => list
+            .iter()
+            .any(|&[x, y]| (x, y) == (s, t) || (x, y) == (t, s)),
+    };
+    // Step 2: split every vertex whose faces form several fans. Only vertices on a cut
+    // edge or pinched already can have several.
+    let mut candidate = vec![false; mesh.positions.len()];
     for &v in &topo.non_manifold_vertices {
-        is_split[v as usize] = true;
+        candidate[v as usize] = true;
     }
-    // Incident (face, corner) pairs of the vertices to split.
+    for &e in &topo.non_manifold_edges {
+        for v in topo.edges[e as usize] {
+            candidate[v as usize] = true;
+        }
+    }
     let mut around: HashMap<u32, Vec<u32>> = HashMap::new();
     for (t, tri) in mesh.triangles.iter().enumerate() {
         for &v in tri {
-            if is_split[v as usize] {
+            if candidate[v as usize] {
                 around.entry(v).or_default().push(t as u32);
             }
         }
     }
+    let mut order: Vec<u32> = around.keys().copied().collect();
+    order.sort_unstable();
     let mut out = mesh.clone();
-    let mut added = 0;
-    for &v in &topo.non_manifold_vertices {
+    let mut split_vertices = 0;
+    for v in order {
         let faces = &around[&v];
-        // Fan label per incident face: flood through the edges at v that are manifold.
+        // Fan label per incident face: flood through the joined edges at v.
         let mut fan = vec![usize::MAX; faces.len()];
         let mut fans = 0;
         for seed in 0..faces.len() {
@@ -348,18 +359,17 @@ fn split_non_manifold_vertices(mesh: &TriMesh) -> (TriMesh, usize) {
             fan[seed] = fans;
             let mut stack = vec![seed];
             while let Some(i) = stack.pop() {
-                let t = faces[i] as usize;
-                let tri = mesh.triangles[t];
+                let t = faces[i];
+                let tri = mesh.triangles[t as usize];
                 for k in 0..3 {
                     if tri[k] != v && tri[(k + 1) % 3] != v {
                         continue; // the edge opposite v
                     }
-                    let e = topo.face_edges[t][k] as usize;
-                    let across = topo.faces_of_edge(e);
-                    if across.len() != 2 {
-                        continue;
-                    }
-                    for &u in across {
+                    let e = topo.face_edges[t as usize][k];
+                    for &u in topo.faces_of_edge(e as usize) {
+                        if u == t || !joined(e, t, u) {
+                            continue;
+                        }
                         if let Some(j) = faces.iter().position(|&x| x == u)
                             && fan[j] == usize::MAX
                         {
@@ -390,9 +400,37 @@ fn split_non_manifold_vertices(mesh: &TriMesh) -> (TriMesh, usize) {
                 }
             }
         }
-        added += fans - 1;
+        split_vertices += fans - 1;
     }
-    (out, added)
+    (
+        out,
+        NonManifoldFix {
+            cut_edges: topo.non_manifold_edges.len(),
+            unpaired_faces,
+            dropped_faces: 0,
+            split_vertices,
+        },
+    )
+}
+
+/// Step 3 of [`fix_non_manifold`]: on every edge with more than two faces keep the best
+/// pair of [`ranked_pairs`] and remove the other faces. Returns the mesh and the faces
+/// removed.
+fn drop_non_manifold_faces(mesh: &TriMesh) -> (TriMesh, usize) {
+    let topo = Topology::new(mesh);
+    let mut dropped = vec![false; mesh.triangles.len()];
+    for &e in &topo.non_manifold_edges {
+        let best = ranked_pairs(mesh, &topo, e)
+            .into_iter()
+            .find(|&[s, t]| !dropped[s as usize] && !dropped[t as usize]);
+        for &t in topo.faces_of_edge(e as usize) {
+            if best.is_some_and(|pair| !pair.contains(&t)) {
+                dropped[t as usize] = true;
+            }
+        }
+    }
+    let removed = dropped.iter().filter(|&&d| d).count();
+    (retain_faces(mesh, |t| !dropped[t]), removed)
 }
 
 /// Fills every boundary loop but the longest with a fan around a new vertex at the
@@ -549,10 +587,11 @@ mod tests {
     }
 
     /// A fin (a triangle standing on an interior edge) and a sheet glued back onto the
-    /// surface along another edge: each of the two edges has three faces; the fix keeps
-    /// the surface's own faces, so the mesh is the original disc again.
+    /// surface along another edge: each of the two edges has three faces; the fix cuts
+    /// each fin loose (no face removed), so keeping the largest piece gives exactly the
+    /// original disc back.
     #[test]
-    fn fix_non_manifold_drops_fins_and_keeps_the_surface() {
+    fn fix_non_manifold_cuts_fins_loose_and_keeps_the_surface() {
         use crate::mesh::generate::grid_disc;
         let disc = grid_disc(6);
         let mut m = disc.clone();
@@ -566,17 +605,57 @@ mod tests {
         let topo = Topology::new(&m);
         assert_eq!(topo.non_manifold_edges.len(), 2);
         let (fixed, done) = fix_non_manifold(&m);
+        // Each fin keeps its face and gets its own copies of its edge's two vertices.
         assert_eq!(
             done,
             NonManifoldFix {
-                dropped_faces: 2,
-                split_vertices: 0
+                cut_edges: 2,
+                unpaired_faces: 2,
+                dropped_faces: 0,
+                split_vertices: 4
             }
         );
-        assert_eq!(fixed.triangles, disc.triangles);
-        let (fixed, unused) = drop_unreferenced(&fixed);
-        assert_eq!(unused, 2);
-        assert!(Topology::new(&fixed).is_disc());
+        assert_eq!(fixed.triangles.len(), m.triangles.len());
+        let topo = Topology::new(&fixed);
+        assert!(topo.is_manifold());
+        assert_eq!(topo.num_components, 3);
+        let (kept, dropped) = keep_component(&fixed, ComponentChoice::Largest).unwrap();
+        assert_eq!(dropped, 2);
+        assert_eq!(kept.triangles, disc.triangles);
+        assert_eq!(kept.positions, disc.positions);
+        assert!(Topology::new(&kept).is_disc());
+    }
+
+    /// Two sheets crossing along an edge (four faces on it): the natural pairs (each
+    /// sheet's own two faces, flat across the edge) are kept, so the fix separates the two
+    /// sheets, each whole.
+    #[test]
+    fn fix_non_manifold_separates_two_sheets_sharing_an_edge() {
+        use crate::mesh::generate::grid_disc;
+        let mut m = grid_disc(2); // 3×3 vertices in the plane z = 0; edge (4, 7) inside
+        let n = m.positions.len() as u32;
+        m.positions.push([0.5, 0.75, 0.3]);
+        m.positions.push([0.5, 0.75, -0.3]);
+        m.triangles.push([4, 7, n]);
+        m.triangles.push([7, 4, n + 1]);
+        let (fixed, done) = fix_non_manifold(&m);
+        assert_eq!(
+            done,
+            NonManifoldFix {
+                cut_edges: 1,
+                unpaired_faces: 0,
+                dropped_faces: 0,
+                split_vertices: 2
+            }
+        );
+        let topo = Topology::new(&fixed);
+        assert!(topo.is_manifold() && topo.orientable);
+        assert_eq!(topo.num_components, 2);
+        // The vertical sheet's two faces are still joined to each other.
+        let [s, t] = [8, 9].map(|f| fixed.triangles[f]);
+        let shared = s.iter().filter(|v| t.contains(v)).count();
+        assert_eq!(shared, 2, "{s:?} {t:?}");
+        assert!(s.iter().all(|&v| v != 4 && v != 7));
     }
 
     /// Two discs touching at one vertex (a bow-tie): the vertex is split, each disc gets
@@ -602,7 +681,7 @@ mod tests {
         assert_eq!(topo.non_manifold_vertices, vec![join]);
         let (fixed, done) = fix_non_manifold(&m);
         assert_eq!(done.split_vertices, 1);
-        assert_eq!(done.dropped_faces, 0);
+        assert_eq!((done.cut_edges, done.unpaired_faces), (0, 0));
         assert_eq!(fixed.positions.len(), m.positions.len() + 1);
         assert_eq!(fixed.positions.last(), Some(&m.positions[join as usize]));
         let topo = Topology::new(&fixed);

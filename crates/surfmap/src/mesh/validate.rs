@@ -296,9 +296,9 @@ pub fn validate(mesh: &TriMesh, topo: &Topology) -> Vec<Defect> {
             topo.non_manifold_edges.len(),
             fmt_examples(&ex)
         ),
-        "`repair::fix_non_manifold` keeps, on each such edge, the two faces that continue the \
-         surface most smoothly and drops the others (fins, internal walls); then \
-         `repair::keep_component` removes any stray piece.",
+        "`repair::fix_non_manifold` cuts them apart into sheets (the faces that continue each \
+         other most smoothly stay joined; fins and glued-on sheets come loose); then \
+         `repair::keep_component` removes the loose pieces.",
         true,
     );
     let ex = one(&topo.non_manifold_vertices);
