@@ -171,11 +171,11 @@ pub fn write_obj(
 /// apart into sheets, faces paired by how smoothly they continue each other, a fin cut
 /// loose; split a vertex that joins separate fans of faces into one copy per fan,
 /// appended after the others; faces are removed only where the sheets cannot be cut
-/// apart), ``keep_largest`` or
-/// ``component=N`` (keep one connected component, as numbered by the defect message),
-/// ``drop_unreferenced`` (vertices no face uses). For a raw scan:
-/// ``drop_degenerate=True, fix_non_manifold=True, keep_largest=True,
-/// drop_unreferenced=True`` (the command line's ``--repair``).
+/// apart), ``keep_largest`` or ``component=N`` (keep one connected component, as numbered
+/// by the defect message), ``drop_unreferenced`` (vertices no face uses). For a raw scan,
+/// what the command line's ``--repair`` does: ``drop_degenerate=True,
+/// fix_non_manifold=True, reorient=True, keep_largest=True, drop_unreferenced=True``
+/// (``reorient`` raises on a non-orientable surface, which ``--repair`` leaves as it is).
 ///
 /// Returns ``(V, F, done)``: the repaired arrays (vertex indices change when vertices
 /// are merged or dropped) and a dictionary counting what each requested repair changed

@@ -276,8 +276,7 @@ pub struct MatchReport {
     /// area (both in the shared unit, B × `scale_b`): near 1 when surfaces of like size
     /// are matched where they correspond (0.82–1.16 on the 86 good matches of the
     /// benchmarked face pairs); far from it, A was squeezed into (or stretched over) part
-    /// of B.
-    /// `null` when nothing matched.
+    /// of B. `null` when nothing matched.
     pub area_ratio: Option<f64>,
     /// Doubts about the result, worded for the user (empty when none): see
     /// [`match_warnings`].
