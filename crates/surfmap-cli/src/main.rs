@@ -41,6 +41,8 @@ enum Command {
     Images(cmd::images::Args),
     /// Match surface A onto surface B: a fold-free correspondence through their geometry images.
     Match(cmd::matching::Args),
+    /// Cut a surface to a ball around a point (the face of a head scan), to match surfaces of different extent.
+    Crop(cmd::crop::Args),
     /// Texture baking: flatten, render the old texture into the new domain (OBJ + MTL + PNG).
     Bake(cmd::bake::Args),
     /// Carry values, labels, landmarks, texture coordinates or a texture from B to A through a match.
@@ -61,6 +63,7 @@ fn main() {
         Command::Measure(a) => cmd::measure::run(a),
         Command::Images(a) => cmd::images::run(a),
         Command::Match(a) => cmd::matching::run(a),
+        Command::Crop(a) => cmd::crop::run(a),
         Command::Bake(a) => cmd::bake::run(a),
         Command::Transfer(a) => cmd::transfer::run(a),
         Command::Morph(a) => cmd::morph::run(a),

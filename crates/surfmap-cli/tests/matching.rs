@@ -211,6 +211,160 @@ fn a_head_scan_squeezed_onto_a_template_is_flagged() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// The vertex farthest forward (largest z) among those a face uses: the nose tip of a
+/// head facing +z, as the FLAME meshes and the scan do.
+fn nose_tip(mesh: &surfmap::TriMesh) -> [f64; 3] {
+    mesh.triangles
+        .iter()
+        .flatten()
+        .map(|&v| mesh.positions[v as usize])
+        .max_by(|p, q| p[2].total_cmp(&q[2]))
+        .unwrap()
+}
+
+/// The workflow for a raw scan: repair it, crop it and the template to the face (a ball
+/// of 10 cm around the nose tip), match. The template's face lands on the scan's face:
+/// fold-free, nothing doubted, and its nose tip (the point farthest forward, which both
+/// surfaces define alike) within a few millimetres of the scan's.
+#[test]
+fn a_raw_head_scan_cropped_to_the_face_matches_the_template_face() {
+    let (Some(scan), Some(template)) = (
+        shared_file("faces/flame/flame_scan.obj"),
+        shared_file("faces/flame/flame_template.ply"),
+    ) else {
+        return;
+    };
+    let dir = temp_dir("match-scan-face");
+    let mut faces = vec![];
+    for (name, input) in [("scan", &scan), ("template", &template)] {
+        let raw = surfmap::read_mesh(input).unwrap().mesh;
+        let tip = nose_tip(&raw);
+        let out = dir.join(format!("{name}_face.obj"));
+        let ids = dir.join(format!("{name}.ids"));
+        let run = run_ok(
+            surfmap()
+                .arg("crop")
+                .arg(input)
+                .arg("--repair")
+                .arg(format!("--center={},{},{}", tip[0], tip[1], tip[2]))
+                .args(["--radius", "0.1", "-o"])
+                .arg(&out)
+                .arg("--ids")
+                .arg(&ids),
+        );
+        let said = String::from_utf8_lossy(&run.stdout);
+        assert!(
+            said.contains("kept") && said.contains("within 0.1 in space"),
+            "{said}"
+        );
+        // The crop is one piece around the tip; its vertices are input vertices, in the
+        // input's order (ids into the repaired mesh, rising), at the input's positions.
+        let face = surfmap::read_mesh(&out).unwrap().mesh;
+        let topo = surfmap::Topology::new(&face);
+        assert!(topo.is_manifold() && topo.num_components == 1, "{name}");
+        let ids: Vec<usize> = std::fs::read_to_string(&ids)
+            .unwrap()
+            .lines()
+            .map(|l| l.parse().unwrap())
+            .collect();
+        assert_eq!(ids.len(), face.positions.len());
+        assert!(ids.windows(2).all(|w| w[0] < w[1]));
+        let given: std::collections::HashSet<[u64; 3]> =
+            raw.positions.iter().map(|p| p.map(f64::to_bits)).collect();
+        assert!(
+            face.positions
+                .iter()
+                .all(|p| given.contains(&p.map(f64::to_bits)))
+        );
+        assert!(face.positions.contains(&tip));
+        let far = face
+            .positions
+            .iter()
+            .map(|p| (0..3).map(|k| (p[k] - tip[k]).powi(2)).sum::<f64>().sqrt())
+            .fold(0.0, f64::max);
+        assert!(far <= 0.1, "{name}: a vertex {far} from the tip");
+        faces.push((out, tip));
+    }
+    let [(scan_face, scan_tip), (template_face, template_tip)] =
+        [faces[0].clone(), faces[1].clone()];
+    let out = dir.join("match");
+    run_ok(
+        surfmap()
+            .arg("match")
+            .arg(&template_face)
+            .arg(&scan_face)
+            .arg("-o")
+            .arg(&out),
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("match.json")).unwrap()).unwrap();
+    assert!(report["min_det"].as_f64().unwrap() > 0.0);
+    assert_eq!(report["warnings"], serde_json::json!([]));
+    let ratio = report["area_ratio"].as_f64().unwrap();
+    assert!((0.7..1.4).contains(&ratio), "area ratio {ratio}");
+    // Where the template's nose tip went on the scan.
+    let a = surfmap::read_mesh(&template_face).unwrap().mesh;
+    let b = surfmap::read_mesh(&scan_face).unwrap().mesh;
+    let tip_a = a.positions.iter().position(|p| *p == template_tip).unwrap();
+    let (_, rows) = read_npy(&out.join("correspondence.npy"));
+    let row = &rows[4 * tip_a..4 * tip_a + 4];
+    assert!(row[0] >= 0.0, "the template's nose tip is unmatched");
+    let t = b.triangles[row[0] as usize];
+    let landed: Vec<f64> = (0..3)
+        .map(|k| {
+            (0..3)
+                .map(|c| row[1 + c] * b.positions[t[c] as usize][k])
+                .sum()
+        })
+        .collect();
+    let miss = (0..3)
+        .map(|k| (landed[k] - scan_tip[k]).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    assert!(miss < 0.005, "nose tip {:.1} mm off", 1000.0 * miss);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `crop` refuses a centre that is not three numbers, a vertex out of range and a ball
+/// with no face in it, each by name, and writes nothing.
+#[test]
+fn crop_refuses_bad_requests_and_writes_nothing() {
+    let Some((a, _)) = registered_pair() else {
+        return;
+    };
+    let dir = temp_dir("crop-bad");
+    let out = dir.join("x.obj");
+    for (args, says) in [
+        (vec!["--center", "1,2", "--radius", "1"], "three numbers"),
+        (
+            vec!["--center-vertex", "9409", "--radius", "1"],
+            "9409 vertices",
+        ),
+        (
+            vec!["--center-vertex", "0", "--radius", "1e-9"],
+            "give a larger radius",
+        ),
+        (
+            vec!["--center-vertex", "0", "--radius", "-1"],
+            "finite and positive",
+        ),
+    ] {
+        let run = surfmap()
+            .arg("crop")
+            .arg(&a)
+            .args(&args)
+            .arg("-o")
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert_eq!(run.status.code(), Some(1), "{args:?}");
+        let err = String::from_utf8_lossy(&run.stderr);
+        assert!(err.contains(says), "{args:?}: {err}");
+        assert!(!out.exists());
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn a_face_in_metres_onto_one_in_centimetres_is_scaled_and_matched() {
     // The same registered pair with B written in metres: 100 times smaller in size, read

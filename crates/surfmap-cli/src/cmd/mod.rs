@@ -1,6 +1,7 @@
 pub mod advice;
 pub mod bake;
 pub mod batch;
+pub mod crop;
 pub mod demo;
 pub mod flatten;
 pub mod images;

@@ -3,9 +3,11 @@
 //! decimation; points on a mesh ([`SurfacePoint`]) and their location in a flattening
 //! ([`PointLocator`]).
 
+pub mod crop;
 pub mod cut;
 pub mod decimate;
 pub mod disc;
+pub(crate) mod edge_graph;
 pub mod generate;
 pub mod io;
 pub mod locate;
