@@ -40,6 +40,7 @@ fn _surfmap(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(mesh::read_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(mesh::write_obj, m)?)?;
     m.add_function(wrap_pyfunction!(mesh::repair, m)?)?;
+    m.add_function(wrap_pyfunction!(mesh::crop, m)?)?;
     m.add_function(wrap_pyfunction!(flatten::flatten, m)?)?;
     m.add_function(wrap_pyfunction!(images::geometry_images, m)?)?;
     m.add_function(wrap_pyfunction!(batch::flatten_file, m)?)?;

@@ -249,3 +249,25 @@ def test_a_closed_surface_is_refused_unless_cut(data):
     assert 'pass cut="auto"' in str(e.value) and "--" not in str(e.value)
     UV, FUV, report = surfmap.flatten(V, F, cut="auto")
     assert report["plan"] == "cut open along seams (closed, genus 0)" and FUV.shape == F.shape
+
+
+def test_crop_cuts_the_scan_to_its_face_and_refuses_bad_requests(data):
+    """The repaired FLAME scan cut to 10 cm around its nose tip (the vertex farthest
+    forward): a disc of input vertices, all within the radius, the tip among them;
+    the geodesic ball of the same radius is a part of it. Bad radius or an empty ball:
+    ValueError naming the problem."""
+    V, F = surfmap.read_mesh(data / "faces" / "flame" / "flame_scan.obj")
+    V, F, _ = surfmap.repair(
+        V, F, fix_non_manifold=True, keep_largest=True, drop_unreferenced=True
+    )
+    tip = V[np.argmax(V[:, 2])]
+    W, G, ids = surfmap.crop(V, F, center=tip, radius=0.1)
+    assert np.array_equal(W, V[ids]) and np.all(np.diff(ids) > 0)
+    assert np.all(np.linalg.norm(W - tip, axis=1) <= 0.1)
+    assert surfmap.inspect(W, G)["disc"]
+    Wg, Gg, ids_g = surfmap.crop(V, F, center=tip, radius=0.1, geodesic=True)
+    assert set(ids_g) <= set(ids) and len(Gg) < len(G)
+    with pytest.raises(ValueError, match="finite and positive"):
+        surfmap.crop(V, F, center=tip, radius=0.0)
+    with pytest.raises(ValueError, match="give a larger radius"):
+        surfmap.crop(V, F, center=tip + [1.0, 0, 0], radius=0.01)

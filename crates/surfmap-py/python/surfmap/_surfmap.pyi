@@ -93,6 +93,14 @@ def repair(
     drop_unreferenced: bool = False,
     fix_non_manifold: bool = False,
 ) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.int64], Dict[str, int]]: ...
+def crop(
+    V: FloatArray,
+    F: IndexArray,
+    *,
+    center: Sequence[float],
+    radius: float,
+    geodesic: bool = False,
+) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.int64], npt.NDArray[np.int64]]: ...
 
 # flatten_file and flatten_many take the keywords of flatten() (preset, alpha, energy,
 # from_alpha, start, multilevel, coarse_vertices, fill_holes, cut, seams, max_distortion,
