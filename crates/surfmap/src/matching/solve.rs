@@ -879,8 +879,10 @@ struct Solver<'s> {
     /// [`PositionWeight`]).
     betas: Betas,
     /// Energy evaluations spent so far, in finest-level evaluations (one on a grid `2^j`
-    /// times coarser counts `4^-j`), for [`NcgSettings::total_evaluations`].
-    spent: std::cell::Cell<f64>,
+    /// times coarser counts `4^-j`), for [`NcgSettings::total_evaluations`]: the bits of
+    /// an `f64`, atomic so that two levels can be minimized at once
+    /// ([`Solver::level_with_search`]).
+    spent: std::sync::atomic::AtomicU64,
 }
 
 impl Solver<'_> {
@@ -928,14 +930,22 @@ impl Solver<'_> {
         let found = search_similarity(&mut energy, &mut start, settings, &mut |e, phi| {
             self.refit(e, phi)
         });
-        let from_alignment = self.level(k0, phi, similarity);
         let Some(mut found) = found else {
-            return (from_alignment, None);
+            return (self.level(k0, phi, similarity), None);
         };
         searched_similarity = energy.similarity;
         let moved = found.similarity.after(&s);
         let mut other = Deformation::from_map(phi.size, |p| moved.apply(p));
-        let from_search = self.level(k0, &mut other, &mut searched_similarity);
+        // The two starts are minimized at once, each on its own φ and similarity, with
+        // the budget left before both (they are charged together afterwards).
+        let spent = self.spent();
+        let mut alignment_similarity = *similarity;
+        let ((from_alignment, cost_alignment), (from_search, cost_search)) = rayon::join(
+            || self.level_charged(k0, phi, &mut alignment_similarity, spent),
+            || self.level_charged(k0, &mut other, &mut searched_similarity, spent),
+        );
+        *similarity = alignment_similarity;
+        self.charge(cost_alignment + cost_search);
         // Kept only when it dominates: a lower energy without matching less.
         let matched = |phi: &Deformation, t: Similarity3| matched_area(&self.energy(k0, t), phi);
         found.kept = from_search.end.total < from_alignment.end.total
@@ -951,6 +961,32 @@ impl Solver<'_> {
 
     /// Minimizes level `k` from `phi` (already on level k's grid).
     fn level(&self, k: usize, phi: &mut Deformation, similarity: &mut Similarity3) -> LevelLog {
+        let (log, cost) = self.level_charged(k, phi, similarity, self.spent());
+        self.charge(cost);
+        log
+    }
+
+    /// Evaluations spent so far ([`Solver::spent`]).
+    fn spent(&self) -> f64 {
+        f64::from_bits(self.spent.load(std::sync::atomic::Ordering::Relaxed))
+    }
+
+    /// Adds `cost` finest-level evaluations to [`Solver::spent`].
+    fn charge(&self, cost: f64) {
+        let total = self.spent() + cost;
+        self.spent
+            .store(total.to_bits(), std::sync::atomic::Ordering::Relaxed);
+    }
+
+    /// Minimizes level `k` from `phi` with the budget left after `spent` evaluations;
+    /// returns its log and its cost in finest-level evaluations, not yet charged.
+    fn level_charged(
+        &self,
+        k: usize,
+        phi: &mut Deformation,
+        similarity: &mut Similarity3,
+        spent: f64,
+    ) -> (LevelLog, f64) {
         let mut energy = self.energy(k, *similarity);
         let mut refit = |e: &mut LevelEnergy, phi: &Deformation| self.refit(e, phi);
         let n = phi.size;
@@ -967,7 +1003,7 @@ impl Solver<'_> {
         let cost = ((n - 1) as f64 / (finest - 1) as f64).powi(2);
         let mut budget = settings.level_evaluations(n, finest);
         if settings.total_evaluations > 0 {
-            let left = (settings.total_evaluations as f64 - self.spent.get()).max(0.0);
+            let left = (settings.total_evaluations as f64 - spent).max(0.0);
             budget = budget.min((left / cost) as usize);
         }
         let log = minimize(
@@ -980,9 +1016,8 @@ impl Solver<'_> {
             &mut refit,
         );
         *similarity = energy.similarity;
-        self.spent
-            .set(self.spent.get() + log.evaluations as f64 * cost);
-        log
+        let charged = log.evaluations as f64 * cost;
+        (log, charged)
     }
 }
 
