@@ -94,6 +94,13 @@ impl RepairArgs {
             );
             mesh = m;
         }
+        if all {
+            // First, so that the input's unused vertices are counted on their own line
+            // (taking one component would drop them silently with the others).
+            let (m, n) = repair::drop_unreferenced(&mesh);
+            say_if(false, n, format!("dropped {n} unreferenced vertices"));
+            mesh = m;
+        }
         if self.fix_non_manifold || all {
             let (m, done) = repair::fix_non_manifold(&mesh);
             say_if(
