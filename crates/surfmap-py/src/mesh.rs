@@ -233,6 +233,15 @@ pub fn repair<'py>(
         done.set_item("dropped_degenerate", n)?;
         mesh = m;
     }
+    // Vertices no face uses are dropped first, so that they are counted even when
+    // keeping one component would remove them with the others; and once more at the
+    // end, for those whose faces a repair removed.
+    let mut unreferenced = 0;
+    if drop_unreferenced {
+        let (m, n) = repair::drop_unreferenced(&mesh);
+        unreferenced += n;
+        mesh = m;
+    }
     if fix_non_manifold {
         let (m, fix) = py.detach(|| repair::fix_non_manifold(&mesh));
         done.set_item("cut_edges", fix.cut_edges)?;
@@ -270,7 +279,7 @@ pub fn repair<'py>(
     }
     if drop_unreferenced {
         let (m, n) = repair::drop_unreferenced(&mesh);
-        done.set_item("dropped_unreferenced", n)?;
+        done.set_item("dropped_unreferenced", unreferenced + n)?;
         mesh = m;
     }
     let (v, f) = arrays::mesh_arrays(py, mesh.positions, &mesh.triangles);

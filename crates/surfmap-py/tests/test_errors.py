@@ -142,6 +142,9 @@ def test_fix_non_manifold_makes_the_raw_head_scan_flattenable(data):
     )
     assert done["cut_edges"] == 11 and done["split_vertices"] > 0
     assert done["dropped_faces"] > 0  # the pieces cut loose
+    # The input's vertices used by no face are counted, not hidden in the dropped pieces.
+    unused = len(V) - len(np.unique(F))
+    assert unused > 0 and done["dropped_unreferenced"] >= unused
     kinds = [d["kind"] for d in surfmap.inspect(W, G)["defects"]]
     assert "non_manifold_edges" not in kinds and "non_manifold_vertices" not in kinds
     # No face is removed but the loose pieces (fins, hair fragments).
