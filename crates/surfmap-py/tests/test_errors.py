@@ -104,8 +104,9 @@ def test_not_a_disc_lists_each_defect_with_a_python_remedy(grid):
     assert "repair::" not in message and "--" not in message
     # The remedies work: keep one component, drop the stray vertex, flatten.
     W, G, done = surfmap.repair(V2, F2, keep_largest=True, drop_unreferenced=True)
-    # Keeping a component drops the vertices only the others used (the stray one too).
-    assert done == {"dropped_faces": len(F), "dropped_unreferenced": 0}
+    # The stray vertex (no face uses it) is counted as unreferenced; keeping a component
+    # drops the vertices only the other one used, with its faces.
+    assert done == {"dropped_faces": len(F), "dropped_unreferenced": 1}
     assert np.array_equal(W, V) and np.array_equal(G, F)
     assert surfmap.inspect(W, G)["disc"]
     assert surfmap.flatten(W, G)[1]["flipped_triangles"] == 0
