@@ -6,7 +6,7 @@
 //! `ε = 2σ_k`; on the finest level, where `σ = 0`, two grid cells). Each level is
 //! minimized by [`super::ncg`] and prolongated (exactly, as a P1 map) to the next; the
 //! finest level stops at the looser [`NcgSettings::finest_tolerance`], and every level
-//! within the same cost ([`NcgSettings::max_evaluations`]: 120 evaluations at 257², 480
+//! within the same cost ([`NcgSettings::max_evaluations`]: 40 evaluations at 257², 160
 //! at 129², …).
 //!
 //! Alignment: both flattenings preserve orientation, so ω_A and ω_B differ by a
