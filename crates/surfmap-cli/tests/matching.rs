@@ -515,6 +515,78 @@ fn beta_given_as_documented_is_the_default_energy() {
 }
 
 #[test]
+fn the_budget_caps_every_level_and_zero_lifts_it() {
+    // A surface against a smoothly bent copy of itself, on two levels (65², 129²).
+    let base = temp_dir("match-budget");
+    run_demo(&base, 10);
+    let a = base.join("surface.obj");
+    let mut mesh = surfmap::read_mesh(&a).unwrap().mesh;
+    let (lo, hi) = mesh
+        .positions
+        .iter()
+        .fold((f64::MAX, f64::MIN), |(lo, hi), p| {
+            (lo.min(p[0]), hi.max(p[0]))
+        });
+    let width = hi - lo;
+    for p in &mut mesh.positions {
+        p[2] += 0.05 * width * (std::f64::consts::TAU * (p[0] - lo) / width).sin();
+    }
+    let b = base.join("bent.obj");
+    surfmap::mesh::io::write_mesh(&b, &mesh).unwrap();
+    let run = |extra: &[&str], name: &str| {
+        let dir = base.join(name);
+        run_ok(
+            surfmap()
+                .arg("match")
+                .arg(&a)
+                .arg(&b)
+                .args(["--size", "129", "-q", "-o"])
+                .arg(&dir)
+                .args(extra),
+        );
+        let report: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("match.json")).unwrap())
+                .unwrap();
+        let levels: Vec<(usize, usize, String)> = report["levels"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|l| {
+                (
+                    l["size"].as_u64().unwrap() as usize,
+                    l["iterations"].as_u64().unwrap() as usize,
+                    l["stop"].as_str().unwrap().to_string(),
+                )
+            })
+            .collect();
+        (
+            std::fs::read(dir.join("correspondence.npy")).unwrap(),
+            levels,
+        )
+    };
+    // The documented default is the default.
+    let (default, _) = run(&[], "default");
+    assert_eq!(run(&["--budget", "40"], "forty").0, default);
+    // A budget of 2 finest-level evaluations: 8 at 65², 2 at 129². No iteration starts
+    // once a level's budget is spent and each takes at least one evaluation, so no level
+    // iterates more than its budget; here it binds.
+    let (_, levels) = run(&["--budget", "2"], "two");
+    assert_eq!(levels.len(), 2);
+    for (size, iterations, _) in &levels {
+        let cap = 2 * (128 / (size - 1)).pow(2);
+        assert!(
+            *iterations <= cap,
+            "{size}²: {iterations} iterations, budget {cap}"
+        );
+    }
+    assert!(levels.iter().any(|l| l.2 == "budget"), "{levels:?}");
+    // 0: every level runs to its own stopping rule.
+    let (_, levels) = run(&["--budget", "0"], "none");
+    assert!(levels.iter().all(|l| l.2 != "budget"), "{levels:?}");
+    let _ = std::fs::remove_dir_all(&base);
+}
+
+#[test]
 fn hole_features_on_with_different_hole_counts_is_an_error() {
     let Some(a) = shared_file("faces/ict/ict_neutral.obj") else {
         return;

@@ -102,6 +102,14 @@ pub struct Args {
     /// coarsest level, 6).
     #[arg(long, value_name = "K", default_value_t = 4)]
     pub search_level: usize,
+    /// Most energy evaluations per level, counted at the finest level (a level 2^j
+    /// times coarser may use 4^j times as many): a level stops there if its energy
+    /// has not stopped decreasing first (relative decrease 10⁻⁶, 10⁻⁵ on the finest
+    /// level, or 300 iterations), and the whole solve after 220. 0 lifts both caps:
+    /// every level runs to its stopping rule (the thesis's). Default 40: more changed no
+    /// accuracy measure on 28 face pairs and costs time (BENCHMARKS.md).
+    #[arg(long, value_name = "N", default_value_t = surfmap::matching::NcgSettings::default().max_evaluations)]
+    pub budget: usize,
     /// Keep the vertices of image triangles that turn over or collapse in space
     /// (by default they are reported unmatched).
     #[arg(long)]
@@ -204,6 +212,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         SearchArg::Always => SearchWhen::Always,
     };
     options.similarity_search.level = args.search_level;
+    options.ncg.max_evaluations = args.budget;
+    if args.budget == 0 {
+        options.ncg.total_evaluations = 0;
+    }
     if let Some(c) = &args.search_candidates {
         if c.len() != 2 || c.iter().any(|x| !x.is_finite() || *x < 0.0) || c[1] >= 1.0 {
             bail!(
