@@ -62,6 +62,9 @@ fn landmarks(d: &Bound<'_, PyDict>) -> PyResult<Landmarks> {
 /// ``scale_b``: ``None`` takes B as given unless the two sizes (√area) differ by more
 /// than 5 times, then as in other units (B multiplied by the nearest power of ten for the
 /// match; the report's ``scale_b``); a number multiplies B by it (1.0: as given).
+/// ``budget``: most energy evaluations per level, counted at the finest level (a level
+/// 2^j times coarser may use 4^j times as many), as ``surfmap match --budget``; 0 lets
+/// every level run to its stopping rule (the thesis's).
 ///
 /// Returns ``(correspondence, report)``: an (n_A, 4) float64 array of rows ``[triangle
 /// of B, b0, b1, b2]`` (triangle −1 where A's vertex has no counterpart) — the command
@@ -81,7 +84,7 @@ fn landmarks(d: &Bound<'_, PyDict>) -> PyResult<Landmarks> {
 /// >>> C.shape, report["min_det"] > 0, report["matched_fraction_a"] > 0.9
 /// ((289, 4), True, True)
 #[pyfunction]
-#[pyo3(name = "match", signature = (VA, FA, VB, FB, *, landmarks=None, size=257, align="auto", keep_folds=false, rim_fit_rings=8, complete_rings=4, pin_landmarks=true, scale_b=None))]
+#[pyo3(name = "match", signature = (VA, FA, VB, FB, *, landmarks=None, size=257, align="auto", keep_folds=false, rim_fit_rings=8, complete_rings=4, pin_landmarks=true, scale_b=None, budget=40))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub fn match_meshes<'py>(
     py: Python<'py>,
@@ -97,6 +100,7 @@ pub fn match_meshes<'py>(
     complete_rings: usize,
     pin_landmarks: bool,
     scale_b: Option<f64>,
+    budget: usize,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>)> {
     surfmap::grid::grid_level(size).map_err(|e| PyValueError::new_err(format!("size: {e}")))?;
     let a = arrays::mesh(VA, FA)?;
@@ -110,7 +114,7 @@ pub fn match_meshes<'py>(
             )));
         }
     };
-    let options = MatchOptions {
+    let mut options = MatchOptions {
         size,
         scale_b,
         drop_folds: !keep_folds,
@@ -130,6 +134,10 @@ pub fn match_meshes<'py>(
         },
         ..Default::default()
     };
+    options.ncg.max_evaluations = budget;
+    if budget == 0 {
+        options.ncg.total_evaluations = 0;
+    }
     let guidance = Guidance {
         landmarks: landmarks.map(self::landmarks).transpose()?,
         ..Default::default()

@@ -69,6 +69,35 @@ def test_match_of_a_moved_copy_recovers_the_motion():
     assert ok_mm.mean() > 0.95 and np.median(err_mm) < 2 * cell
 
 
+def test_the_budget_caps_the_levels_as_on_the_command_line(cli, tmp_path):
+    # A bump against a bent copy of it, on two levels (65², 129²).
+    n = 33
+    x, y = np.meshgrid(np.linspace(-1, 1, n), np.linspace(-1, 1, n))
+    V = np.c_[x.ravel(), y.ravel(), (0.3 * np.exp(-2 * ((x - 0.3) ** 2 + y**2))).ravel()]
+    i = np.arange(n * (n - 1)).reshape(n - 1, n)[:, :-1].ravel()
+    F = np.r_[np.c_[i, i + 1, i + n + 1], np.c_[i, i + n + 1, i + n]]
+    VB = V + np.c_[np.zeros(len(V)), np.zeros(len(V)), 0.1 * np.sin(np.pi * V[:, 0])]
+    levels = lambda report: [(l["size"], l["iterations"], l["stop"]) for l in report["levels"]]
+    # The default is the command line's default.
+    C, report = surfmap.match(V, F, VB, F, size=129)
+    C40, _ = surfmap.match(V, F, VB, F, size=129, budget=40)
+    assert np.array_equal(C, C40)
+    # 2 finest-level evaluations: 8 at 65², 2 at 129²; no level iterates past its budget,
+    # and here it binds; the command line's --budget 2 gives the same table.
+    C2, report2 = surfmap.match(V, F, VB, F, size=129, budget=2)
+    for size, iterations, _ in levels(report2):
+        assert iterations <= 2 * (128 // (size - 1)) ** 2
+    assert any(stop == "budget" for *_, stop in levels(report2))
+    a, b = tmp_path / "a.obj", tmp_path / "b.obj"
+    surfmap.write_obj(str(a), V, F)
+    surfmap.write_obj(str(b), VB, F)
+    run_cli(cli, "match", a, b, "-o", tmp_path / "out", "--size", "129", "--budget", "2", "--quiet")
+    assert np.array_equal(C2, np.load(tmp_path / "out" / "correspondence.npy"))
+    # 0: every level runs to its stopping rule.
+    _, report0 = surfmap.match(V, F, VB, F, size=129, budget=0)
+    assert all(stop != "budget" for *_, stop in levels(report0))
+
+
 def test_match_errors():
     n = 9
     x, y = np.meshgrid(np.linspace(0, 1, n), np.linspace(0, 1, n))

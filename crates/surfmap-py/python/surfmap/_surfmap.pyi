@@ -132,4 +132,5 @@ def match(
     complete_rings: int = 4,
     pin_landmarks: bool = True,
     scale_b: Optional[float] = None,
+    budget: int = 40,
 ) -> Tuple[FloatArray, Report]: ...
