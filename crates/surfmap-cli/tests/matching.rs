@@ -488,6 +488,19 @@ fn bad_guidance_is_refused_by_name_and_nothing_is_written() {
     let _ = std::fs::remove_dir_all(&base);
 }
 
+/// Runs `surfmap match A B --size 129 -q -o DIR EXTRA…`, expecting success.
+fn match_at_129(a: &Path, b: &Path, dir: &Path, extra: &[&str]) {
+    run_ok(
+        surfmap()
+            .arg("match")
+            .arg(a)
+            .arg(b)
+            .args(["--size", "129", "-q", "-o"])
+            .arg(dir)
+            .args(extra),
+    );
+}
+
 #[test]
 fn beta_given_as_documented_is_the_default_energy() {
     let base = temp_dir("match-beta");
@@ -495,15 +508,7 @@ fn beta_given_as_documented_is_the_default_energy() {
     let s = base.join("surface.obj");
     let run = |extra: &[&str], name: &str| {
         let dir = base.join(name);
-        run_ok(
-            surfmap()
-                .arg("match")
-                .arg(&s)
-                .arg(&s)
-                .args(["--size", "129", "-o"])
-                .arg(&dir)
-                .args(extra),
-        );
+        match_at_129(&s, &s, &dir, extra);
         read_npy(&dir.join("correspondence.npy"))
     };
     // `--beta 1,0.01,5` (the README's form, one comma-separated value) is accepted and
@@ -535,15 +540,7 @@ fn the_budget_caps_every_level_and_zero_lifts_it() {
     surfmap::mesh::io::write_mesh(&b, &mesh).unwrap();
     let run = |extra: &[&str], name: &str| {
         let dir = base.join(name);
-        run_ok(
-            surfmap()
-                .arg("match")
-                .arg(&a)
-                .arg(&b)
-                .args(["--size", "129", "-q", "-o"])
-                .arg(&dir)
-                .args(extra),
-        );
+        match_at_129(&a, &b, &dir, extra);
         let report: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(dir.join("match.json")).unwrap())
                 .unwrap();
