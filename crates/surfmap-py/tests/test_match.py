@@ -78,7 +78,7 @@ def test_the_budget_caps_the_levels_as_on_the_command_line(cli, tmp_path):
     F = np.r_[np.c_[i, i + 1, i + n + 1], np.c_[i, i + n + 1, i + n]]
     VB = V + np.c_[np.zeros(len(V)), np.zeros(len(V)), 0.1 * np.sin(np.pi * V[:, 0])]
     levels = lambda report: [(l["size"], l["iterations"], l["stop"]) for l in report["levels"]]
-    # The default is the command line's default.
+    # The default is the documented 40.
     C, report = surfmap.match(V, F, VB, F, size=129)
     C40, _ = surfmap.match(V, F, VB, F, size=129, budget=40)
     assert np.array_equal(C, C40)
