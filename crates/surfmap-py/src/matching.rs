@@ -134,10 +134,7 @@ pub fn match_meshes<'py>(
         },
         ..Default::default()
     };
-    options.ncg.max_evaluations = budget;
-    if budget == 0 {
-        options.ncg.total_evaluations = 0;
-    }
+    options.ncg.set_budget(budget);
     let guidance = Guidance {
         landmarks: landmarks.map(self::landmarks).transpose()?,
         ..Default::default()

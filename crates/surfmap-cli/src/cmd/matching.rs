@@ -212,10 +212,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         SearchArg::Always => SearchWhen::Always,
     };
     options.similarity_search.level = args.search_level;
-    options.ncg.max_evaluations = args.budget;
-    if args.budget == 0 {
-        options.ncg.total_evaluations = 0;
-    }
+    options.ncg.set_budget(args.budget);
     if let Some(c) = &args.search_candidates {
         if c.len() != 2 || c.iter().any(|x| !x.is_finite() || *x < 0.0) || c[1] >= 1.0 {
             bail!(

@@ -72,6 +72,17 @@ pub struct NcgSettings {
 }
 
 impl NcgSettings {
+    /// Sets the per-level budget ([`NcgSettings::max_evaluations`]); 0 lifts it and the
+    /// whole solve's cap ([`NcgSettings::total_evaluations`]) too, so that every level
+    /// runs to its stopping rule (the thesis's). `surfmap match --budget` and the Python
+    /// `match(..., budget=)`.
+    pub fn set_budget(&mut self, budget: usize) {
+        self.max_evaluations = budget;
+        if budget == 0 {
+            self.total_evaluations = 0;
+        }
+    }
+
     /// The evaluation cap of a level with `size` nodes per side when the finest level has
     /// `finest` (both `2^k + 1`): [`NcgSettings::max_evaluations`] × `((finest − 1)/(size − 1))²`,
     /// or `usize::MAX` without a cap.

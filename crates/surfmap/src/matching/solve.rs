@@ -939,12 +939,10 @@ impl Solver<'_> {
         // The two starts are minimized at once, each on its own φ and similarity, with
         // the budget left before both (they are charged together afterwards).
         let spent = self.spent();
-        let mut alignment_similarity = *similarity;
         let ((from_alignment, cost_alignment), (from_search, cost_search)) = rayon::join(
-            || self.level_charged(k0, phi, &mut alignment_similarity, spent),
+            || self.level_charged(k0, phi, similarity, spent),
             || self.level_charged(k0, &mut other, &mut searched_similarity, spent),
         );
-        *similarity = alignment_similarity;
         self.charge(cost_alignment + cost_search);
         // Kept only when it dominates: a lower energy without matching less.
         let matched = |phi: &Deformation, t: Similarity3| matched_area(&self.energy(k0, t), phi);
