@@ -121,8 +121,13 @@ pub(crate) fn add_hole_features(
             }
         }
     }
-    sa.add_curve_features(&file_a)?;
-    sb.add_curve_features(&file_b)?;
+    // Both surfaces' distance maps at once (each is parallel over its few features).
+    let (done_a, done_b) = rayon::join(
+        || sa.add_curve_features(&file_a),
+        || sb.add_curve_features(&file_b),
+    );
+    done_a?;
+    done_b?;
     Ok((pairs, split_pairs))
 }
 

@@ -340,7 +340,14 @@ pub fn align_rigidly(
         })
         .collect();
     all.extend(principal_axes_starts(a, b, ca, cb));
-    all.extend_from_slice(starts);
+    // The caller's starts can repeat (the plane search's refinements of neighbouring
+    // rotations may end on one similarity: 0–5 of the 52 starts on the 28 ICT and FLAME
+    // pairs); a repeat would only redo the same ICP bit for bit, so the first is kept.
+    for start in starts {
+        if !all.contains(start) {
+            all.push(*start);
+        }
+    }
     let best = all
         .into_par_iter()
         .map(|start| icp(&coarse, b, normals, &closest, start, 40))

@@ -43,6 +43,8 @@ pub struct MatchSurface {
     smooth: Pyramid<[f64; 7]>,
     /// Finest feature distances (ℓ units; unreachable nodes far away).
     feature_distance: Vec<Grid<f64>>,
+    /// The rims of the holes filled for the flattening ([`MatchSurface::hole_rims`]).
+    hole_rims: Vec<Vec<u32>>,
     pub time_images: f64,
 }
 
@@ -116,6 +118,7 @@ impl MatchSurface {
             })
             .collect();
         Ok(Self {
+            hole_rims: hole_rims(mesh),
             uvs: flat.uvs,
             positions: mesh.positions.clone(),
             triangles: mesh.triangles.clone(),
@@ -148,16 +151,8 @@ impl MatchSurface {
 
     /// The rims of the holes filled for the flattening: every boundary loop but the
     /// longest, as closed vertex curves.
-    pub fn hole_rims(&self) -> Vec<Vec<u32>> {
-        let mesh = TriMesh::new(self.positions.clone(), self.triangles.clone());
-        let topo = crate::mesh::Topology::new(&mesh);
-        let mut loops: Vec<Vec<u32>> = topo
-            .boundary_loops
-            .iter()
-            .map(|l| l.vertices.clone())
-            .collect();
-        loops.sort_by_key(|l| std::cmp::Reverse(l.len()));
-        loops.into_iter().skip(1).collect()
+    pub fn hole_rims(&self) -> &[Vec<u32>] {
+        &self.hole_rims
     }
 
     /// Finest grid size.
@@ -324,4 +319,17 @@ impl MatchSurface {
     pub fn vertex_domain_position(&self, v: usize) -> [f64; 2] {
         self.images.transform.to_domain(self.uvs[v])
     }
+}
+
+/// Every boundary loop of `mesh` but the longest (the outer rim), as closed vertex
+/// curves: the rims of the holes that a flattening fills.
+fn hole_rims(mesh: &TriMesh) -> Vec<Vec<u32>> {
+    let topo = crate::mesh::Topology::new(mesh);
+    let mut loops: Vec<Vec<u32>> = topo
+        .boundary_loops
+        .iter()
+        .map(|l| l.vertices.clone())
+        .collect();
+    loops.sort_by_key(|l| std::cmp::Reverse(l.len()));
+    loops.into_iter().skip(1).collect()
 }
