@@ -150,7 +150,8 @@ impl MatchSurface {
     }
 
     /// The rims of the holes filled for the flattening: every boundary loop but the
-    /// longest, as closed vertex curves.
+    /// longest, as closed vertex curves (found from `triangles` when the surface was
+    /// made).
     pub fn hole_rims(&self) -> &[Vec<u32>] {
         &self.hole_rims
     }
