@@ -322,15 +322,12 @@ impl MatchSurface {
     }
 }
 
-/// Every boundary loop of `mesh` but the longest (the outer rim), as closed vertex
-/// curves: the rims of the holes that a flattening fills.
+/// The rims of the holes that a flattening fills ([`crate::mesh::repair::hole_loops`]),
+/// as closed vertex curves.
 fn hole_rims(mesh: &TriMesh) -> Vec<Vec<u32>> {
     let topo = crate::mesh::Topology::new(mesh);
-    let mut loops: Vec<Vec<u32>> = topo
-        .boundary_loops
-        .iter()
-        .map(|l| l.vertices.clone())
-        .collect();
-    loops.sort_by_key(|l| std::cmp::Reverse(l.len()));
-    loops.into_iter().skip(1).collect()
+    crate::mesh::repair::hole_loops(&topo)
+        .into_iter()
+        .map(<[u32]>::to_vec)
+        .collect()
 }

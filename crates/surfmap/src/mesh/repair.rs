@@ -440,20 +440,9 @@ fn drop_non_manifold_faces(mesh: &TriMesh) -> (TriMesh, usize) {
 /// walked. UVs are dropped.
 pub fn fill_holes(mesh: &TriMesh) -> (TriMesh, usize) {
     let topo = Topology::new(mesh);
-    let mut loops: Vec<&[u32]> = topo
-        .boundary_loops
-        .iter()
-        .map(|l| l.vertices.as_slice())
-        .collect();
-    if loops.len() <= 1 {
-        return (
-            TriMesh::new(mesh.positions.clone(), mesh.triangles.clone()),
-            0,
-        );
-    }
-    loops.sort_by_key(|l| std::cmp::Reverse(l.len()));
+    let holes = hole_loops(&topo);
     let mut out = TriMesh::new(mesh.positions.clone(), mesh.triangles.clone());
-    for hole in &loops[1..] {
+    for hole in &holes {
         let n = hole.len() as f64;
         let mut c = [0.0; 3];
         for &v in *hole {
@@ -470,7 +459,19 @@ pub fn fill_holes(mesh: &TriMesh) -> (TriMesh, usize) {
             out.triangles.push([b, a, centre]);
         }
     }
-    (out, loops.len() - 1)
+    (out, holes.len())
+}
+
+/// Every boundary loop of `topo` but the longest (the outer rim), longest first (loops
+/// of equal length in their order in `topo`): the holes [`fill_holes`] fills.
+pub fn hole_loops(topo: &Topology) -> Vec<&[u32]> {
+    let mut loops: Vec<&[u32]> = topo
+        .boundary_loops
+        .iter()
+        .map(|l| l.vertices.as_slice())
+        .collect();
+    loops.sort_by_key(|l| std::cmp::Reverse(l.len()));
+    loops.into_iter().skip(1).collect()
 }
 
 #[cfg(test)]
