@@ -211,6 +211,75 @@ fn a_head_scan_squeezed_onto_a_template_is_flagged() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// The ICT face-and-scalp crop matched onto libigl's whole head (the same units, B 2.2×
+/// A's area): the similarity search proposes a start that squeezes A into a tenth of its
+/// area on B, and the coarsest level solved from it ends lower in energy and matches
+/// more; it is not kept, because from the alignment's start A is matched at a plausible
+/// size. The output is then the search-free one (checked against
+/// `--similarity-search off`), at a plausible area ratio (recomputed here from
+/// A_on_B.obj) and without a warning.
+#[test]
+fn a_search_start_that_squeezes_a_is_not_kept() {
+    let (Some(a), Some(b)) = (
+        shared_file("faces/ict/ict_neutral.obj"),
+        shared_file("faces/face_igl.obj"),
+    ) else {
+        return;
+    };
+    let dir = temp_dir("match-squeeze");
+    let run = run_ok(
+        surfmap()
+            .arg("match")
+            .arg(&a)
+            .arg(&b)
+            .arg("-o")
+            .arg(dir.join("auto")),
+    );
+    let said = format!(
+        "{}{}",
+        String::from_utf8_lossy(&run.stdout),
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(
+        said.contains("not kept: solved from it, the coarsest level matched A at"),
+        "{said}"
+    );
+    assert!(!said.contains("warning:"), "{said}");
+    let report: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("auto").join("match.json")).unwrap(),
+    )
+    .unwrap();
+    let search = &report["alignment"]["search"];
+    assert_eq!(search["kept"], false);
+    assert_eq!(search["implausible_size"], true);
+    assert!(search["area_ratio_search"].as_f64().unwrap() < 1.0 / 3.0, "{search}");
+    let aligned = search["area_ratio_alignment"].as_f64().unwrap();
+    assert!((1.0 / 3.0..=3.0).contains(&aligned), "{search}");
+    assert!(report["min_det"].as_f64().unwrap() > 0.0);
+    let mesh_a = surfmap::read_mesh(&a).unwrap().mesh;
+    let placed = surfmap::read_mesh(&dir.join("auto").join("A_on_B.obj"))
+        .unwrap()
+        .mesh;
+    let ratio = placed_area_ratio(&mesh_a, &placed);
+    assert!((1.0 / 3.0..=3.0).contains(&ratio), "area ratio {ratio}");
+    run_ok(
+        surfmap()
+            .arg("match")
+            .arg(&a)
+            .arg(&b)
+            .arg("--similarity-search")
+            .arg("off")
+            .arg("-q")
+            .arg("-o")
+            .arg(dir.join("off")),
+    );
+    assert_eq!(
+        read_npy(&dir.join("auto").join("correspondence.npy")),
+        read_npy(&dir.join("off").join("correspondence.npy"))
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// The vertex farthest forward (largest z) among those a face uses: the nose tip of a
 /// head facing +z, as the FLAME meshes and the scan do.
 fn nose_tip(mesh: &surfmap::TriMesh) -> [f64; 3] {

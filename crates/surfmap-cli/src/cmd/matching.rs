@@ -91,7 +91,8 @@ pub struct Args {
     pub align: AlignArg,
     /// Search the rotation, scale and translation of φ that lowers the matching energy
     /// per matched area on a coarse level, and go on from it when the coarsest level
-    /// solved from it ends lower without matching less.
+    /// solved from it ends lower without matching less (and, when the alignment's start
+    /// matches A at a plausible size, 1/3–3 times its area on B, does too).
     #[arg(long, value_enum, default_value = "shape")]
     pub similarity_search: SearchArg,
     /// Extra starts of the similarity search: rotated by ±DEG degrees and scaled by
@@ -324,10 +325,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 s.energy_start,
                 s.energy_end,
                 s.evaluations,
-                if s.kept {
-                    "kept"
-                } else {
-                    "not kept: solved from it, the coarsest level did not end lower without matching less"
+                match (s.kept, s.implausible_size, s.area_ratio_search, s.area_ratio_alignment) {
+                    (true, ..) => "kept".to_string(),
+                    (false, true, Some(searched), Some(aligned)) => format!(
+                        "not kept: solved from it, the coarsest level matched A at {searched:.2}× its area on B, \
+                         from the alignment at {aligned:.2}×"
+                    ),
+                    _ => "not kept: solved from it, the coarsest level did not end lower without matching less"
+                        .to_string(),
                 }
             ),
         };

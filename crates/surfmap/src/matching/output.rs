@@ -481,6 +481,14 @@ impl SurfaceMatch {
 /// (a child's onto an adult's).
 pub const AREA_RATIO_DOUBT: f64 = 3.0;
 
+/// Whether a match that changes the matched part's area by the factor `r` is of the
+/// kind surfaces of like size give: `1/`[`AREA_RATIO_DOUBT`]` ≤ r ≤ `[`AREA_RATIO_DOUBT`].
+/// The report warns outside ([`match_warnings`]); the similarity search's start is not
+/// kept when it leads outside and the alignment's does not ([`super::similarity_search`]).
+pub fn plausible_area_ratio(r: f64) -> bool {
+    (1.0 / AREA_RATIO_DOUBT..=AREA_RATIO_DOUBT).contains(&r)
+}
+
 /// What a match report should warn about. Today one check: the matched part of A lands
 /// on B at less than 1/[`AREA_RATIO_DOUBT`] or more than [`AREA_RATIO_DOUBT`] times its
 /// own area — the surfaces were matched in a way no pair of like surfaces is (a whole
@@ -488,7 +496,7 @@ pub const AREA_RATIO_DOUBT: f64 = 3.0;
 pub fn match_warnings(area_ratio: Option<f64>) -> Vec<String> {
     let mut warnings = Vec::new();
     if let Some(r) = area_ratio
-        && !(1.0 / AREA_RATIO_DOUBT..=AREA_RATIO_DOUBT).contains(&r)
+        && !plausible_area_ratio(r)
     {
         warnings.push(format!(
             "A's matched part lands on B at {r:.2}× its own area ({}): the surfaces probably \

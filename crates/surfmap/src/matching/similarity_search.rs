@@ -63,7 +63,12 @@
 //! only proposes: the driver solves the coarsest level from both starts — the
 //! alignment's and the searched one — and goes on from the searched one only when it
 //! *dominates*: its solve ends with a lower energy and at least the same matched area
-//! `M`. With that rule the proposals of level 4 (17², `σ = 1/16`,
+//! `M` — and, when the alignment's solve matches A at a plausible size (its matched part
+//! covers 1/3–3 times its own area on B, [`matched_area_ratio`]), only if the searched
+//! one does too: a whole head matched to the ICT face crop (same units) was squeezed by
+//! the search's start to 0.11 of its area on B, against 0.65 from the alignment's, and
+//! ended lower in energy and matching more (BENCHMARKS.md, "A squeezed start"). With
+//! that rule the proposals of level 4 (17², `σ = 1/16`,
 //! [`SimilaritySearch::level`]) gained most on the FLAME pairs (level 6: 92.3 %, 5:
 //! 91.9 %, 4: 93.1 % on identity, measured with 4 rounds). The energy after local
 //! deformation decides, not the rigid misfit; and the area condition, because on the
@@ -75,8 +80,8 @@
 
 use serde::Serialize;
 
-use super::deformation::{Deformation, node};
-use super::energy::{B_SD, LevelEnergy, Similarity3, Workspace, chi};
+use super::deformation::{Deformation, cell_triangles, jacobian, node};
+use super::energy::{B_CHANNELS, B_G, B_SD, LevelEnergy, Similarity3, Workspace, chi};
 use super::similarity::{Similarity2, fit_similarity_2d};
 
 /// When the coarsest level searches over similarities of φ before its NCG.
@@ -166,8 +171,17 @@ pub struct SimilaritySearchLog {
     pub seconds: f64,
     /// Whether the solve went on from the similarity found: its coarsest level ended
     /// with a lower energy and at least the same matched area as from the alignment's
-    /// start (module docs).
+    /// start, and not at an implausible size (module docs).
     pub kept: bool,
+    /// The area A's matched part covers on B over its own area after the coarsest level
+    /// solved from the alignment's start and from the search's ([`matched_area_ratio`];
+    /// `None` when nothing matched).
+    pub area_ratio_alignment: Option<f64>,
+    pub area_ratio_search: Option<f64>,
+    /// The search's start was not kept because it matched A at an implausible size
+    /// (outside 1/3–3 times its area, [`super::output::plausible_area_ratio`]) while the
+    /// alignment's start did not — whatever the energies.
+    pub implausible_size: bool,
 }
 
 /// The frame of the parametrization `S_q` (module docs): centre `c`, radius `r`.
@@ -256,6 +270,50 @@ fn ratio(energy: &LevelEnergy, phi: &Deformation, buf: &mut Buffers) -> (f64, f6
     } else {
         (f64::INFINITY, m)
     }
+}
+
+/// The area that A's matched part covers on B over its own area, at `phi`:
+///
+/// ```text
+/// Σ_T w_T |T| √det g_B(φ(T)) det Dφ_T  /  Σ_T w_T |T| √det g_A(T),   w_T = χ_A(T) χ_B^ε(φ(T))
+/// ```
+///
+/// over the grid's triangles `T` (B's metric and signed distance the means of the
+/// corners' samples, as in the energy's triangle terms). Near 1 when surfaces of like
+/// size are matched where they correspond; the report's area ratio
+/// ([`super::output::MatchReport::area_ratio`]) measures the same in space on the
+/// output. `None` when nothing is matched or φ folds.
+pub(crate) fn matched_area_ratio(energy: &LevelEnergy, phi: &Deformation) -> Option<f64> {
+    let n = phi.size;
+    let inv_h = (n - 1) as f64;
+    let points: Vec<[f64; 2]> = (0..n * n).map(|k| phi.at(k)).collect();
+    let samples: Vec<[f64; B_CHANNELS]> =
+        points.iter().map(|&p| energy.b.field.sample(p)).collect();
+    let (mut on_a, mut on_b) = (0.0, 0.0);
+    for i in 0..n - 1 {
+        for j in 0..n - 1 {
+            for (t, tri) in cell_triangles(n, i, j).into_iter().enumerate() {
+                let ta = &energy.a.triangles[2 * (i * (n - 1) + j) + t];
+                if ta.chi == 0.0 {
+                    continue;
+                }
+                let mean = |c: usize| tri.iter().map(|&k| samples[k][c]).sum::<f64>() / 3.0;
+                let w = ta.chi * chi(mean(B_SD), energy.epsilon).0;
+                if w == 0.0 {
+                    continue;
+                }
+                let d = jacobian(tri.map(|k| points[k]), t == 1, inv_h);
+                let det_d = d[0][0] * d[1][1] - d[0][1] * d[1][0];
+                let det_b = mean(B_G) * mean(B_G + 2) - mean(B_G + 1).powi(2);
+                if det_d.is_nan() || det_d <= 0.0 {
+                    return None;
+                }
+                on_a += w * ta.weight;
+                on_b += w * ta.area * det_b.max(0.0).sqrt() * det_d;
+            }
+        }
+    }
+    (on_a > 0.0).then(|| on_b / on_a)
 }
 
 /// `M = Σ_k w_k χ_A,k χ_B^ε(φ_k)` (node weights `√det g_A` × quadrature).
@@ -446,6 +504,9 @@ pub(crate) fn search_similarity(
         evaluations: buf.evaluations,
         seconds: clock.elapsed().as_secs_f64(),
         kept: false,
+        area_ratio_alignment: None,
+        area_ratio_search: None,
+        implausible_size: false,
     })
 }
 
@@ -463,6 +524,40 @@ mod tests {
             position: 2.0,
             uncovered: 0.3,
         }
+    }
+
+    /// With one constant metric on both sides, φ scaling the plane by `s` about a point
+    /// (its image inside ω_B) gives A's matched part `s²` times its area on B, whatever
+    /// A's cut-off `χ_A`; the identity gives 1; a fold gives no ratio.
+    #[test]
+    fn matched_area_ratio_of_a_scaling_is_its_square() {
+        let n = 17;
+        let mut e = self_match(n);
+        let g: [f64; 3] = [1.3, 0.1, 0.8];
+        let root_det = (g[0] * g[2] - g[1] * g[1]).sqrt();
+        let mut data = e.b.field.as_slice().to_vec();
+        for v in &mut data {
+            v[B_G..B_G + 3].copy_from_slice(&g);
+        }
+        e.b.field = crate::grid::Grid::from_vec(n, data).unwrap();
+        for t in &mut e.a.triangles {
+            t.weight = t.area * root_det;
+        }
+        assert!(
+            e.a.triangles.iter().any(|t| t.chi < 1.0),
+            "χ_A is not constant"
+        );
+        let scaled = |s: f64| {
+            Deformation::from_map(n, |p| [0.4 + s * (p[0] - 0.4), 0.55 + s * (p[1] - 0.55)])
+        };
+        for s in [1.0, 0.8, 0.35] {
+            let r = matched_area_ratio(&e, &scaled(s)).unwrap();
+            assert!((r - s * s).abs() < 1e-12, "s {s}: ratio {r}");
+        }
+        // A fold: one node pushed across its neighbours.
+        let mut folded = scaled(1.0);
+        folded.displacement[n * (n / 2) + n / 2][0] += 2.0 / (n - 1) as f64;
+        assert_eq!(matched_area_ratio(&e, &folded), None);
     }
 
     /// `∂E/∂q` from the projection against central differences of `E(S_q∘φ)`.

@@ -25,13 +25,15 @@ use super::deformation::{Deformation, node};
 use super::energy::{B_SD, B_X, Betas, LevelEnergy, Similarity3, chi, robust};
 use super::holes::add_hole_features;
 use super::ncg::{LevelLog, NcgSettings, minimize};
+use super::output::plausible_area_ratio;
 use super::precondition::SobolevPreconditioner;
 use super::rigid::{ClosestPoints, align_surfaces};
 use super::similarity::{
     Similarity2, fit_affine_3d_near, fit_similarity_2d, fit_similarity_2d_robust, fit_similarity_3d,
 };
 use super::similarity_search::{
-    SearchWhen, SimilaritySearch, SimilaritySearchLog, matched_area, search_similarity,
+    SearchWhen, SimilaritySearch, SimilaritySearchLog, matched_area, matched_area_ratio,
+    search_similarity,
 };
 use super::surface::MatchSurface;
 use crate::mesh::{SurfacePoint, TriMesh};
@@ -95,7 +97,8 @@ pub struct MatchOptions {
     pub align_rotations: usize,
     /// A search over plane similarities of φ before the solve; the solve goes on from
     /// the similarity found only when the coarsest level solved from it ends with a
-    /// lower energy without matching less ([`super::similarity_search`]).
+    /// lower energy without matching less, at a plausible size when the alignment's
+    /// start gives one ([`super::similarity_search`]).
     pub similarity_search: SimilaritySearch,
     /// Fill holes (eyes, mouth) for the flattenings.
     pub fill_holes: bool,
@@ -914,7 +917,9 @@ impl Solver<'_> {
     /// similarity `s`; when it finds a lower energy per matched area, level `k0` is
     /// solved from both starts, and the searched one is kept (in `phi` and
     /// `similarity`) only when its solve ends with a lower energy *and* at least the
-    /// same matched area. `phi` is `s` on level `k0`'s grid.
+    /// same matched area, *and* — when the alignment's solve matches A at a plausible
+    /// size ([`plausible_area_ratio`] of [`matched_area_ratio`]) — does too. `phi` is
+    /// `s` on level `k0`'s grid.
     fn level_with_search(
         &self,
         k0: usize,
@@ -944,10 +949,20 @@ impl Solver<'_> {
             || self.level_charged(k0, &mut other, &mut searched_similarity, spent),
         );
         self.charge(cost_alignment + cost_search);
-        // Kept only when it dominates: a lower energy without matching less.
+        // Kept only when it dominates — a lower energy without matching less — and
+        // matches A at a plausible size whenever the alignment's start does (a whole
+        // head's face squeezed to a tenth of its area ended lower: BENCHMARKS.md).
         let matched = |phi: &Deformation, t: Similarity3| matched_area(&self.energy(k0, t), phi);
+        let ratio =
+            |phi: &Deformation, t: Similarity3| matched_area_ratio(&self.energy(k0, t), phi);
+        found.area_ratio_alignment = ratio(phi, *similarity);
+        found.area_ratio_search = ratio(&other, searched_similarity);
+        let plausible = |r: Option<f64>| r.is_some_and(plausible_area_ratio);
+        found.implausible_size =
+            plausible(found.area_ratio_alignment) && !plausible(found.area_ratio_search);
         found.kept = from_search.end.total < from_alignment.end.total
-            && matched(&other, searched_similarity) >= matched(phi, *similarity);
+            && matched(&other, searched_similarity) >= matched(phi, *similarity)
+            && !found.implausible_size;
         if found.kept {
             *phi = other;
             *similarity = searched_similarity;
