@@ -252,7 +252,10 @@ fn a_search_start_that_squeezes_a_is_not_kept() {
     let search = &report["alignment"]["search"];
     assert_eq!(search["kept"], false);
     assert_eq!(search["implausible_size"], true);
-    assert!(search["area_ratio_search"].as_f64().unwrap() < 1.0 / 3.0, "{search}");
+    assert!(
+        search["area_ratio_search"].as_f64().unwrap() < 1.0 / 3.0,
+        "{search}"
+    );
     let aligned = search["area_ratio_alignment"].as_f64().unwrap();
     assert!((1.0 / 3.0..=3.0).contains(&aligned), "{search}");
     assert!(report["min_det"].as_f64().unwrap() > 0.0);

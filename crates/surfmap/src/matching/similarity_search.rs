@@ -65,7 +65,7 @@
 //! *dominates*: its solve ends with a lower energy and at least the same matched area
 //! `M` — and, when the alignment's solve matches A at a plausible size (its matched part
 //! covers 1/3–3 times its own area on B, [`matched_area_ratio`]), only if the searched
-//! one does too: a whole head matched to the ICT face crop (same units) was squeezed by
+//! one does too: the ICT face crop matched to a whole head (same units) was squeezed by
 //! the search's start to 0.11 of its area on B, against 0.65 from the alignment's, and
 //! ended lower in energy and matching more (BENCHMARKS.md, "A squeezed start"). With
 //! that rule the proposals of level 4 (17², `σ = 1/16`,
@@ -178,9 +178,10 @@ pub struct SimilaritySearchLog {
     /// `None` when nothing matched).
     pub area_ratio_alignment: Option<f64>,
     pub area_ratio_search: Option<f64>,
-    /// The search's start was not kept because it matched A at an implausible size
-    /// (outside 1/3–3 times its area, [`super::output::plausible_area_ratio`]) while the
-    /// alignment's start did not — whatever the energies.
+    /// From the search's start the coarsest level matched A at an implausible size
+    /// (outside 1/3–3 times its area, [`super::output::plausible_area_ratio`]) and from
+    /// the alignment's it did not: the searched start is then not kept, whatever the
+    /// energies.
     pub implausible_size: bool,
 }
 

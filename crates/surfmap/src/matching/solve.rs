@@ -950,8 +950,9 @@ impl Solver<'_> {
         );
         self.charge(cost_alignment + cost_search);
         // Kept only when it dominates — a lower energy without matching less — and
-        // matches A at a plausible size whenever the alignment's start does (a whole
-        // head's face squeezed to a tenth of its area ended lower: BENCHMARKS.md).
+        // matches A at a plausible size whenever the alignment's start does (the ICT
+        // face crop squeezed to a tenth of its area on a whole head ended lower:
+        // BENCHMARKS.md).
         let matched = |phi: &Deformation, t: Similarity3| matched_area(&self.energy(k0, t), phi);
         let ratio =
             |phi: &Deformation, t: Similarity3| matched_area_ratio(&self.energy(k0, t), phi);
