@@ -953,16 +953,16 @@ impl Solver<'_> {
         // matches A at a plausible size whenever the alignment's start does (the ICT
         // face crop squeezed to a tenth of its area on a whole head ended lower:
         // BENCHMARKS.md).
-        let matched = |phi: &Deformation, t: Similarity3| matched_area(&self.energy(k0, t), phi);
-        let ratio =
-            |phi: &Deformation, t: Similarity3| matched_area_ratio(&self.energy(k0, t), phi);
-        found.area_ratio_alignment = ratio(phi, *similarity);
-        found.area_ratio_search = ratio(&other, searched_similarity);
+        // Both measures read level k0's data only (not the position term's similarity),
+        // so one level serves both starts.
+        let level = self.energy(k0, *similarity);
+        found.area_ratio_alignment = matched_area_ratio(&level, phi);
+        found.area_ratio_search = matched_area_ratio(&level, &other);
         let plausible = |r: Option<f64>| r.is_some_and(plausible_area_ratio);
         found.implausible_size =
             plausible(found.area_ratio_alignment) && !plausible(found.area_ratio_search);
         found.kept = from_search.end.total < from_alignment.end.total
-            && matched(&other, searched_similarity) >= matched(phi, *similarity)
+            && matched_area(&level, &other) >= matched_area(&level, phi)
             && !found.implausible_size;
         if found.kept {
             *phi = other;
