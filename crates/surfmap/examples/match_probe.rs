@@ -2,7 +2,8 @@
 //! [key=value …]` writes one 3D point per vertex of A (NaN = unmatched), the format the
 //! referee in `../shared/match_eval` scores, and prints the per-level log.
 //! Keys: size, k0, bend, reg, feat, pos, soft, tol, ftol (finest level), align (auto|search|none|features),
-//! rot (rotations tried), scale (0/1), alevels, maxev (evaluations on the finest level, 0: no cap).
+//! rot (rotations tried), scale (0/1), alevels, maxev (evaluations on the finest level, 0: no cap),
+//! sob (local metric width, cells), wide (the coarsest level's first metric, ω units).
 
 use std::path::Path;
 use surfmap::matching::{Align, Guidance, Landmarks, MatchOptions, match_surfaces};
@@ -48,6 +49,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     }
                 }
                 "sob" => options.sobolev_cells = f(),
+                "wide" => options.coarsest_sobolev_width = f(),
                 "band" => options.position_band = f(),
                 "tau" => options.position_scale = f(),
                 "hsig" => options.curvature_sigma = f(),

@@ -140,6 +140,23 @@ pub struct LevelLog {
     pub seconds: f64,
 }
 
+impl LevelLog {
+    /// This run of a level followed by `next`, a second run on the same level from
+    /// where this one ended (another metric, [`super::solve`]): one log with both
+    /// runs' iterations, evaluations, history and time, `next`'s end and stop reason.
+    pub fn then(mut self, next: LevelLog) -> LevelLog {
+        self.iterations += next.iterations;
+        self.evaluations += next.evaluations;
+        self.end = next.end;
+        self.stop = next.stop;
+        // `next`'s first entry is its start, this run's last.
+        self.history
+            .extend_from_slice(next.history.get(1..).unwrap_or(&[]));
+        self.seconds += next.seconds;
+        self
+    }
+}
+
 /// Minimizes `energy` over the displacement of `phi` (in place). `refit` is called
 /// every `settings.refit_every` iterations (and before the first) to refit the
 /// similarity of the position term; it must not raise the energy. No iteration starts
