@@ -1049,47 +1049,31 @@ impl Solver<'_> {
             let left = (settings.total_evaluations as f64 - spent).max(0.0);
             budget = budget.min((left / cost) as usize);
         }
+        let mut run =
+            |max_iterations: usize, budget: usize, metric: Option<&SobolevPreconditioner>| {
+                let settings = NcgSettings {
+                    max_iterations,
+                    ..settings
+                };
+                minimize(&mut energy, phi, &settings, budget, k, metric, &mut refit)
+            };
         let wide = self.options.coarsest_sobolev_width;
         let log = if coarsest && wide > 0.0 {
             // First the wide metric, then the local one, half of the iterations and
             // of the evaluations each ([`COARSEST_SOBOLEV_WIDTH`]).
-            let first_half = NcgSettings {
-                max_iterations: settings.max_iterations.div_ceil(2),
-                ..settings
-            };
-            let first = minimize(
-                &mut energy,
-                phi,
-                &first_half,
+            let first = run(
+                settings.max_iterations.div_ceil(2),
                 budget.div_ceil(2),
-                k,
                 metric(wide).as_ref(),
-                &mut refit,
             );
-            let second_half = NcgSettings {
-                max_iterations: settings.max_iterations / 2,
-                ..settings
-            };
-            let second = minimize(
-                &mut energy,
-                phi,
-                &second_half,
+            let second = run(
+                settings.max_iterations / 2,
                 budget.saturating_sub(first.evaluations),
-                k,
                 local.as_ref(),
-                &mut refit,
             );
             first.then(second)
         } else {
-            minimize(
-                &mut energy,
-                phi,
-                &settings,
-                budget,
-                k,
-                local.as_ref(),
-                &mut refit,
-            )
+            run(settings.max_iterations, budget, local.as_ref())
         };
         *similarity = energy.similarity;
         let charged = log.evaluations as f64 * cost;
