@@ -90,13 +90,19 @@ fn matching_two_registered_faces_finds_the_registration() {
         rim[rim.len() / 2]
     );
     // The position weight from the faces' distance in space after aligning them: two
-    // registered ICT faces agree within a few millimetres (σ ≈ 0.003–0.008 of √area),
-    // under the cap (0.01), so the weight is κ/σ² = 0.1/σ².
+    // registered ICT faces agree within a few millimetres along the normals (σ ≈
+    // 0.002–0.004 of √area on the referee's pairs), under the cap, so the weight is
+    // κ/σ² (σ counted from the floor up).
+    use surfmap::matching::{POSITION_KAPPA, POSITION_RESIDUAL_CAP, POSITION_RESIDUAL_FLOOR};
     let sigma = report["shape_residual"].as_f64().unwrap();
     let weight = report["position_weight"].as_f64().unwrap();
-    assert!(sigma > 0.0 && sigma < 0.01, "shape residual {sigma}");
     assert!(
-        (weight * sigma * sigma / 0.1 - 1.0).abs() < 1e-9,
+        sigma > 0.0 && sigma < POSITION_RESIDUAL_CAP,
+        "shape residual {sigma}"
+    );
+    let counted = sigma.max(POSITION_RESIDUAL_FLOOR);
+    assert!(
+        (weight * counted * counted / POSITION_KAPPA - 1.0).abs() < 1e-9,
         "weight {weight}"
     );
     let (phi_shape, _) = read_npy(&dir.join("deformation.npy"));

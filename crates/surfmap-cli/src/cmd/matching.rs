@@ -82,8 +82,9 @@ pub struct Args {
     #[arg(long, value_name = "B,R,F", value_delimiter = ',')]
     pub beta: Option<Vec<f64>>,
     /// A fixed weight of the 3D position term (0 = the thesis energy alone); by default
-    /// it is 0.1/σ², σ the surfaces' RMS distance after aligning them in space (in units
-    /// of √area, counted between 0.001 and 0.01: so between 1000 and 10⁵).
+    /// it is 0.2/σ², σ the surfaces' RMS distance along B's normals after aligning them
+    /// in space (in units of √area, counted between 0.001 and 0.01: so between 2000 and
+    /// 2·10⁵).
     #[arg(long)]
     pub position_weight: Option<f64>,
     /// Initial alignment.
@@ -338,7 +339,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         };
         let position = match report.shape_residual {
             Some(sigma) => format!(
-                ", position weight {:.3e} (the surfaces {sigma:.4} of √area apart in space)",
+                ", position weight {:.3e} (the surfaces {sigma:.4} of √area apart in space, along the normals)",
                 report.position_weight
             ),
             None => format!(", position weight {:.3e} (fixed)", report.position_weight),

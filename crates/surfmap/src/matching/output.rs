@@ -308,7 +308,8 @@ pub struct MatchReport {
     /// one: [`super::PositionMap`]), A's length units to B's (both in the shared unit ℓ).
     pub similarity: super::Similarity3,
     /// The position term's weight `β_pos` used, and the surfaces' RMS distance in space
-    /// (ℓ units) it was set from ([`super::PositionWeight`]; `null` when fixed).
+    /// along B's normals (ℓ units) it was set from ([`super::PositionWeight`]; `null`
+    /// when fixed).
     pub position_weight: f64,
     pub shape_residual: Option<f64>,
     /// The factor B's positions were multiplied by for the match (1: as given; another

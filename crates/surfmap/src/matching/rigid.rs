@@ -33,11 +33,21 @@ pub const KEEP: f64 = 0.7;
 /// (BENCHMARKS.md, "Matching": the coarse starts' targets).
 pub const COARSE_TARGETS: usize = 10_000;
 
-/// The best rigid motion found and its trimmed root-mean-square distance.
+/// The best rigid motion found and its trimmed root-mean-square distances.
 #[derive(Clone, Copy, Debug)]
 pub struct RigidAlignment {
     pub motion: Similarity3,
+    /// `√(Σ |p − q|² / n)` over the kept pairs: moved point `p`, its closest vertex `q`
+    /// of the other surface. It grows with that surface's edges (a point halfway
+    /// between two vertices is half an edge from either), so it measures the sampling
+    /// as much as the shapes; used to pair vertices (a distance scale of the pairs).
     pub rms: f64,
+    /// `√(Σ ((p − q)·n_q)² / n)` over the same pairs, `n_q` the other surface's vertex
+    /// normal: the distance to `q`'s tangent plane, which the ICP step minimizes. On a
+    /// smooth surface sampled with edges `h` the sampling adds only `O(κ h²)`
+    /// (curvature `κ`), so this measures how far the shapes themselves are apart
+    /// ([`super::solve::PositionWeight`]).
+    pub plane_rms: f64,
 }
 
 /// Closest vertices of B by k-d tree.
@@ -270,7 +280,8 @@ fn point_to_plane_step(p: &[[f64; 3]], q: &[[f64; 3]], n: &[[f64; 3]]) -> Option
 /// Trimmed point-to-plane ICP from `start`: pairs each point of A (moved) with its
 /// closest vertex of B, keeps the closest [`KEEP`] of the pairs and takes one
 /// [`point_to_plane_step`] against B's vertex normals `normals`. Returns the motion
-/// and the trimmed root-mean-square point-to-vertex distance.
+/// and the kept pairs' root-mean-square point-to-vertex and point-to-plane distances
+/// (at the pairing of the last iteration).
 fn icp(
     a: &[[f64; 3]],
     b: &[[f64; 3]],
@@ -283,6 +294,7 @@ fn icp(
     let mut pairs: Vec<(f64, usize, usize)> = Vec::with_capacity(a.len());
     let (mut p, mut q, mut n) = (vec![], vec![], vec![]);
     let mut rms = f64::INFINITY;
+    let mut plane_rms = f64::INFINITY;
     for _ in 0..=iterations {
         pairs.clear();
         for (i, x) in a.iter().enumerate() {
@@ -293,6 +305,12 @@ fn icp(
         pairs.select_nth_unstable_by(keep - 1, |x, y| x.0.total_cmp(&y.0));
         let kept = &pairs[..keep];
         rms = (kept.iter().map(|x| x.0).sum::<f64>() / keep as f64).sqrt();
+        plane_rms = (kept
+            .iter()
+            .map(|&(_, i, j)| dot(sub(motion.apply(a[i]), b[j]), normals[j]).powi(2))
+            .sum::<f64>()
+            / keep as f64)
+            .sqrt();
         p.clear();
         q.clear();
         n.clear();
@@ -329,7 +347,11 @@ fn icp(
             break;
         }
     }
-    RigidAlignment { motion, rms }
+    RigidAlignment {
+        motion,
+        rms,
+        plane_rms,
+    }
 }
 
 /// The rigid motion of ℝ³ that best puts surface A (points `a`) onto surface B
@@ -458,6 +480,7 @@ pub fn align_surfaces(
     Some(RigidAlignment {
         motion: inverse(&back.motion),
         rms: back.rms,
+        plane_rms: back.plane_rms,
     })
 }
 

@@ -218,20 +218,30 @@ impl ScaleB {
 ///
 /// `β_pos = κ / clamp(σ, σ_min, σ_max)²`,
 ///
-/// `σ` the RMS distance (ℓ units) between the surfaces after their best rigid alignment
-/// in space (trimmed ICP, [`super::rigid::align_rigidly`]), `κ` = [`POSITION_KAPPA`]
-/// (the term's value per unit area at a residual of `σ` everywhere), `σ_min` =
-/// [`POSITION_RESIDUAL_FLOOR`] (a surface and a moved copy of itself have `σ` ≈ 10⁻¹⁶:
-/// the weight stays at most 10⁵, the largest measured) and `σ_max` =
+/// `σ` the RMS distance (ℓ units) between the surfaces along B's normals after their
+/// best rigid alignment in space (trimmed point-to-plane ICP,
+/// [`super::rigid::align_rigidly`]: [`super::rigid::RigidAlignment::plane_rms`]),
+/// `κ` = [`POSITION_KAPPA`] (the term's value per unit area at a residual of `σ`
+/// everywhere), `σ_min` = [`POSITION_RESIDUAL_FLOOR`] (a surface and a moved copy of
+/// itself have `σ` ≈ 10⁻¹⁶: the weight stays at most `κ/σ_min²` = 2·10⁵) and `σ_max` =
 /// [`POSITION_RESIDUAL_CAP`]: a larger residual is not trusted to mean "the shapes
 /// differ" — on a partial overlap it also measures how ambiguous the overlap is, where
 /// the positions are what anchors the match — so the weight never falls below
-/// `κ/σ_max²` = 1000, the fixed weight used before. Measured in BENCHMARKS.md
-/// ("Matching": "The position term weighted by the shapes' disagreement"): a fixed 1000
-/// was too weak for the ICT pairs (σ ≈ 0.003–0.008 ℓ; 10⁴ gained 2–7 points within 0.02
-/// on partial and resolution) and a fixed 10⁴ too strong for the FLAME identities
-/// (σ ≈ 0.009–0.015 ℓ; −6 points within 0.05), while `κ/σ²` without the cap lost 2.6
-/// points on the FLAME partial pairs with landmarks (σ ≈ 0.011–0.021 ℓ).
+/// `κ/σ_max²` = 2000.
+///
+/// Along the normals, not to B's closest vertices: the distance from a point of A to
+/// the nearest *vertex* of B grows with B's edges, so a coarser B read as a worse
+/// agreement — the same two ICT faces 0.0059 ℓ apart at one resolution and 0.0076 ℓ with
+/// B remeshed 1.6× coarser, against 0.0040 and 0.0041 ℓ along the normals. Measured in
+/// BENCHMARKS.md ("The position weight from distances along the normals", three runs
+/// each, both modes): with `κ` = 0.2 (the closest-vertex distances had 0.1; 0.1 and 0.3
+/// measured too) ICT partial 95.4 → 97.9 % within 0.02 without input and 91.5 → 97.4
+/// with landmarks, resolution 96.6 → 97.7 without input, FLAME partial with landmarks
+/// 61.6 → 65.7; FLAME identity within 0.02 71.0 → 68.9 without input and 72.3 → 70.3
+/// with landmarks (within 0.05 with landmarks 97.1 → 96.1). Earlier, with the closest-vertex distance ("Matching": "The position
+/// term weighted by the shapes' disagreement"): a fixed weight of 1000 was too weak for
+/// the ICT pairs and 10⁴ too strong for the FLAME identities (−6 points within 0.05),
+/// and `κ/σ²` without the cap lost 2.6 points on the FLAME partial pairs with landmarks.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum PositionWeight {
@@ -262,7 +272,7 @@ pub enum PositionWeight {
 pub const COARSEST_SOBOLEV_WIDTH: f64 = 0.25;
 
 /// `κ` of [`PositionWeight::FromShapeResidual`].
-pub const POSITION_KAPPA: f64 = 0.1;
+pub const POSITION_KAPPA: f64 = 0.2;
 
 /// The map `T` of ℝ³ in the position term `β_pos ∫ χ |T(x_A) − x_B∘φ|² dA`, refitted
 /// to the current φ every few iterations (weighted least squares over the matched
@@ -410,8 +420,8 @@ pub struct SurfaceMatch {
     pub similarity: Similarity3,
     /// The position term's weight `β_pos` used ([`PositionWeight`]).
     pub position_weight: f64,
-    /// The surfaces' RMS distance in space after their rigid alignment (ℓ units), from
-    /// which the position weight was set (`None` with a fixed weight).
+    /// The surfaces' RMS distance along B's normals after their rigid alignment (ℓ
+    /// units), from which the position weight was set (`None` with a fixed weight).
     pub shape_residual: Option<f64>,
     pub min_det: f64,
     pub seconds_solve: f64,
@@ -855,8 +865,9 @@ fn shape_alignment(
     };
     let report = AlignmentReport {
         method: format!(
-            "shape: trimmed ICP in space (RMS {:.4} mesh units), {} vertex pairs, domain residual median {:.4}",
+            "shape: trimmed ICP in space (RMS {:.4} mesh units to the closest vertices, {:.4} along the normals), {} vertex pairs, domain residual median {:.4}",
             rigid.rms,
+            rigid.plane_rms,
             r.len(),
             {
                 let mut x = r.clone();
@@ -870,11 +881,11 @@ fn shape_alignment(
         left_out: vec![],
         search: None,
     };
-    Ok((s, motion, report, rigid.rms / unit))
+    Ok((s, motion, report, rigid.plane_rms / unit))
 }
 
-/// The RMS distance (ℓ units) between the surfaces after their best rigid alignment in
-/// space: trimmed ICP from the rigid motion of the paired features' 3D centroids when
+/// The RMS distance (ℓ units) along B's normals between the surfaces after their best
+/// rigid alignment in space: trimmed ICP from the rigid motion of the paired features' 3D centroids when
 /// there are three or more, else from the usual starts ([`align_surfaces`], either way round); `None` when
 /// they cannot be aligned.
 fn shape_residual(
@@ -897,7 +908,7 @@ fn shape_residual(
         &[],
         start,
     )
-    .map(|rigid| rigid.rms / sa.length_unit)
+    .map(|rigid| rigid.plane_rms / sa.length_unit)
 }
 
 struct Solver<'s> {
