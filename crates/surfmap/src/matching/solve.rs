@@ -220,7 +220,9 @@ impl ScaleB {
 ///
 /// `σ` the RMS distance (ℓ units) between the surfaces along B's normals after their
 /// best rigid alignment in space (trimmed point-to-plane ICP,
-/// [`super::rigid::align_rigidly`]: [`super::rigid::RigidAlignment::plane_rms`]),
+/// [`super::rigid::align_rigidly`]: [`super::rigid::RigidAlignment::plane_rms`]; along
+/// A's normals when B, the much smaller surface, is laid onto A:
+/// [`super::rigid::align_surfaces`]),
 /// `κ` = [`POSITION_KAPPA`] (the term's value per unit area at a residual of `σ`
 /// everywhere), `σ_min` = [`POSITION_RESIDUAL_FLOOR`] (a surface and a moved copy of
 /// itself have `σ` ≈ 10⁻¹⁶: the weight stays at most `κ/σ_min²` = 2·10⁵) and `σ_max` =
@@ -238,10 +240,11 @@ impl ScaleB {
 /// measured too) ICT partial 95.4 → 97.9 % within 0.02 without input and 91.5 → 97.4
 /// with landmarks, resolution 96.6 → 97.7 without input, FLAME partial with landmarks
 /// 61.6 → 65.7; FLAME identity within 0.02 71.0 → 68.9 without input and 72.3 → 70.3
-/// with landmarks (within 0.05 with landmarks 97.1 → 96.1). Earlier, with the closest-vertex distance ("Matching": "The position
-/// term weighted by the shapes' disagreement"): a fixed weight of 1000 was too weak for
-/// the ICT pairs and 10⁴ too strong for the FLAME identities (−6 points within 0.05),
-/// and `κ/σ²` without the cap lost 2.6 points on the FLAME partial pairs with landmarks.
+/// with landmarks (within 0.05 with landmarks 97.1 → 96.1). Earlier, with the
+/// closest-vertex distance ("Matching": "The position term weighted by the shapes'
+/// disagreement"): a fixed weight of 1000 was too weak for the ICT pairs and 10⁴ too
+/// strong for the FLAME identities (−6 points within 0.05), and `κ/σ²` without the cap
+/// lost 2.6 points on the FLAME partial pairs with landmarks.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum PositionWeight {
@@ -885,9 +888,9 @@ fn shape_alignment(
 }
 
 /// The RMS distance (ℓ units) along B's normals between the surfaces after their best
-/// rigid alignment in space: trimmed ICP from the rigid motion of the paired features' 3D centroids when
-/// there are three or more, else from the usual starts ([`align_surfaces`], either way round); `None` when
-/// they cannot be aligned.
+/// rigid alignment in space: trimmed ICP from the rigid motion of the paired features'
+/// 3D centroids when there are three or more, else from the usual starts
+/// ([`align_surfaces`], either way round); `None` when they cannot be aligned.
 fn shape_residual(
     sa: &MatchSurface,
     sb: &MatchSurface,
