@@ -239,7 +239,7 @@ fn other_proportions_match_closer_with_the_affine_position_map() {
         };
         ratios.push(gain(0) / gain(1));
     }
-    // Measured: median 3.3 cells with the similarity, 2.8 with the affine map, whose
+    // Measured: median 3.2 cells with the similarity, 2.8 with the affine map, whose
     // x/y ratio is 1.03 (φ takes up the rest: the map is fitted to φ's pairs). At a
     // position weight of 1000 — the weight these surfaces got from the closest-vertex
     // residual; along the normals they are 0.0054 ℓ apart, weight 6809, and the two
