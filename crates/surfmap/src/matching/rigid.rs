@@ -305,12 +305,6 @@ fn icp(
         pairs.select_nth_unstable_by(keep - 1, |x, y| x.0.total_cmp(&y.0));
         let kept = &pairs[..keep];
         rms = (kept.iter().map(|x| x.0).sum::<f64>() / keep as f64).sqrt();
-        plane_rms = (kept
-            .iter()
-            .map(|&(_, i, j)| dot(sub(motion.apply(a[i]), b[j]), normals[j]).powi(2))
-            .sum::<f64>()
-            / keep as f64)
-            .sqrt();
         p.clear();
         q.clear();
         n.clear();
@@ -319,6 +313,14 @@ fn icp(
             q.push(b[j]);
             n.push(normals[j]);
         }
+        plane_rms = (p
+            .iter()
+            .zip(&q)
+            .zip(&n)
+            .map(|((&x, &y), &normal)| dot(sub(x, y), normal).powi(2))
+            .sum::<f64>()
+            / keep as f64)
+            .sqrt();
         let Some(step) = point_to_plane_step(&p, &q, &n) else {
             break;
         };
