@@ -50,6 +50,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 }
                 "sob" => options.sobolev_cells = f(),
                 "wide" => options.coarsest_sobolev_width = f(),
+                "fspace" => options.features_in_space = f() != 0.0,
                 "band" => options.position_band = f(),
                 "tau" => options.position_scale = f(),
                 "hsig" => options.curvature_sigma = f(),
