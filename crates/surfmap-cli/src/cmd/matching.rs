@@ -39,6 +39,16 @@ pub enum SearchArg {
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
+pub enum FeaturesStartArg {
+    /// The features' similarity of the planes, and (with three or more) their rigid
+    /// alignment refined in space: the coarsest level is solved from both and the
+    /// second kept when it ends lower without matching less.
+    Both,
+    /// The features' similarity of the planes only.
+    Plane,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
 pub enum HoleArg {
     /// Pair hole rims when both surfaces have the same number of filled holes.
     Auto,
@@ -90,6 +100,9 @@ pub struct Args {
     /// Initial alignment.
     #[arg(long, value_enum, default_value = "auto")]
     pub align: AlignArg,
+    /// Where φ starts with features or landmarks (`--align auto` or `features`).
+    #[arg(long, value_enum, default_value = "both")]
+    pub features_start: FeaturesStartArg,
     /// Search the rotation, scale and translation of φ that lowers the matching energy
     /// per matched area on a coarse level, and go on from it when the coarsest level
     /// solved from it ends lower without matching less (and, when the alignment's start
@@ -167,6 +180,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         complete_rings: args.complete_rings,
         rim_fit_rings: args.rim_fit_rings,
         pin_landmarks: !args.free_landmarks,
+        features_in_space: matches!(args.features_start, FeaturesStartArg::Both),
         align: match args.align {
             AlignArg::Auto => Align::Auto,
             AlignArg::Features => Align::Features,
@@ -337,6 +351,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 }
             ),
         };
+        let in_space = match &report.alignment.features_in_space {
+            None => String::new(),
+            Some(f) => format!(
+                ", the features' alignment refined in space {} (coarsest level's energy {:.4e} from the features' start, {:.4e} from it)",
+                if f.kept { "kept" } else { "not kept" },
+                f.energy_features,
+                f.energy_space
+            ),
+        };
         let position = match report.shape_residual {
             Some(sigma) => format!(
                 ", position weight {:.3e} (the surfaces {sigma:.4} of √area apart in space, along the normals)",
@@ -379,7 +402,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             )
         };
         outln!(
-            "match: {scaled}{} levels up to {n}², {} iterations, energy {:.4e}, min det Dφ {:.3}, matched {:.1}% of A ({} of {}, {} completed at rims){rims}, {:.1}% of B covered{filled}, {} vertices unmatched for folds ({} flipped, {} collapsed){pinned}, alignment {}{left_out}{searched}{position}, {:.2} s",
+            "match: {scaled}{} levels up to {n}², {} iterations, energy {:.4e}, min det Dφ {:.3}, matched {:.1}% of A ({} of {}, {} completed at rims){rims}, {:.1}% of B covered{filled}, {} vertices unmatched for folds ({} flipped, {} collapsed){pinned}, alignment {}{left_out}{in_space}{searched}{position}, {:.2} s",
             report.levels.len(),
             report.iterations,
             report.energy,
