@@ -706,6 +706,24 @@ fn registration_errors(dir: &Path, mesh_b: &surfmap::TriMesh) -> Vec<Option<f64>
         .collect()
 }
 
+/// The registered ICT neutral and jaw-open faces (paths, meshes) and A's boundary loops,
+/// longest first (outer rim, mouth, eyes); `None` without ../shared.
+fn neutral_and_jaw_open() -> Option<(
+    PathBuf,
+    PathBuf,
+    surfmap::TriMesh,
+    surfmap::TriMesh,
+    Vec<surfmap::mesh::BoundaryLoop>,
+)> {
+    let a = shared_file("faces/ict/ict_neutral.obj")?;
+    let b = shared_file("faces/ict/ict_jawopen.obj")?;
+    let mesh_a = surfmap::read_mesh(&a).unwrap().mesh;
+    let mesh_b = surfmap::read_mesh(&b).unwrap().mesh;
+    let mut loops = surfmap::mesh::Topology::new(&mesh_a).boundary_loops;
+    loops.sort_by_key(|l| std::cmp::Reverse(l.vertices.len()));
+    Some((a, b, mesh_a, mesh_b, loops))
+}
+
 #[test]
 fn an_open_mouth_is_matched_lip_to_lip() {
     // Neutral against jaw open (registered: vertex i ↔ vertex i). The closed mouth is a
@@ -717,17 +735,10 @@ fn an_open_mouth_is_matched_lip_to_lip() {
     // position term weighted by the shapes' disagreement"). The split and the whole
     // rim are compared without the rim fit, to see the split alone; the fit (the
     // default) then carries the rim onto B's at mesh resolution, and must do better.
-    let (Some(a), Some(b)) = (
-        shared_file("faces/ict/ict_neutral.obj"),
-        shared_file("faces/ict/ict_jawopen.obj"),
-    ) else {
+    let Some((a, b, _, mesh_b, loops)) = neutral_and_jaw_open() else {
         return;
     };
-    let mesh_a = surfmap::read_mesh(&a).unwrap().mesh;
-    let mesh_b = surfmap::read_mesh(&b).unwrap().mesh;
     // The mouth's rim: the longest boundary loop after the outer one.
-    let mut loops = surfmap::mesh::Topology::new(&mesh_a).boundary_loops;
-    loops.sort_by_key(|l| std::cmp::Reverse(l.vertices.len()));
     let mouth = loops[1].vertices.clone();
     let mut errors = vec![];
     for (name, extra) in [
@@ -798,17 +809,10 @@ fn landmarks_that_moved_with_the_jaw_are_refined_in_space() {
     // On these whole faces the solve recovers from either start; on the referee's
     // cropped, remeshed pair the plane start left 566 vertices unmatched (BENCHMARKS.md,
     // "Two starts with landmarks").
-    let (Some(a), Some(b)) = (
-        shared_file("faces/ict/ict_neutral.obj"),
-        shared_file("faces/ict/ict_jawopen.obj"),
-    ) else {
+    let Some((a, b, mesh_a, mesh_b, loops)) = neutral_and_jaw_open() else {
         return;
     };
-    let mesh_a = surfmap::read_mesh(&a).unwrap().mesh;
-    let mesh_b = surfmap::read_mesh(&b).unwrap().mesh;
     // Holes by length: outer rim, mouth, two eyes; corners = extreme x of each hole.
-    let mut loops = surfmap::mesh::Topology::new(&mesh_a).boundary_loops;
-    loops.sort_by_key(|l| std::cmp::Reverse(l.vertices.len()));
     let x = |v: &u32| mesh_a.positions[*v as usize][0];
     let mut ids = vec![];
     for hole in &loops[1..4] {
