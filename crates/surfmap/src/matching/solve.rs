@@ -137,7 +137,9 @@ pub struct MatchOptions {
     pub coarsest_sobolev_width: f64,
     /// With three or more paired features or landmarks, also solve the coarsest level
     /// from the features' alignment refined in space, and go on from whichever start
-    /// ends lower without matching less ([`FeatureStarts`]).
+    /// ends lower without matching less ([`FeatureStarts`]); not when the similarity
+    /// search runs after the features' alignment ([`SearchWhen::Always`]), which then
+    /// takes the coarsest level.
     pub features_in_space: bool,
     /// Report the vertices of image triangles that turn over or collapse in space as
     /// unmatched rather than wrong ([`super::output::check_folds`]).
@@ -814,7 +816,14 @@ pub fn solve(
         if k > k0 {
             phi = phi.prolongate();
         }
-        if k == k0
+        if k == k0 && search {
+            // The similarity search, when asked for with features (`SearchWhen::Always`),
+            // takes the coarsest level instead of the start from space.
+            let (log, searched) = solver.level_with_search(k0, s, &mut phi, &mut similarity);
+            alignment.search = searched;
+            alignment.features_in_space = None;
+            levels.push(log);
+        } else if k == k0
             && let Some((s_space, motion, _, _)) = &in_space
         {
             let starts =
@@ -823,10 +832,6 @@ pub fn solve(
                 (f.energy_features, f.energy_space, f.kept) = starts.1;
             }
             levels.push(starts.0);
-        } else if k == k0 && search {
-            let (log, searched) = solver.level_with_search(k0, s, &mut phi, &mut similarity);
-            alignment.search = searched;
-            levels.push(log);
         } else {
             levels.push(solver.level(k, &mut phi, &mut similarity));
         }
