@@ -10,7 +10,9 @@ whether the two binaries wrote byte-identical correspondences.
 
     /opt/peers-venv/bin/python scripts/ab_match_speed.py --pairs /tmp/surfmap_pairs \
         --base /tmp/surfmap_old --new target/release/surfmap --rounds 5 \
-        [--only identity/0,partial/00] [--extra '--landmarks ...']
+        [--only identity/0,partial/00] [--extra '--landmarks {pair}/landmarks.json']
+
+`{pair}` in --extra stands for each pair's folder.
 """
 import argparse
 import filecmp
@@ -26,6 +28,7 @@ from match_common import selected_pairs
 
 
 def run(binary, d, out, extra):
+    extra = [x.replace("{pair}", d) for x in extra]
     cmd = [binary, "match", os.path.join(d, "A.obj"), os.path.join(d, "B.obj"), "-o", out, "-q"] + extra
     t = time.time()
     subprocess.run(cmd, check=True, capture_output=True)
