@@ -639,7 +639,7 @@ fn the_wide_metric_grows_a_shrunken_start_into_place() {
 /// With landmarks, the coarsest level is solved also from their alignment refined in
 /// space ([`FeatureStarts`]), which is kept when it ends lower. B here is A with its
 /// lower part pulled down (a jaw opening), and two of the four landmarks sit on that
-/// part: the landmarks' similarity of the planes is then off in scale and position,
+/// part: the landmarks' similarity of the planes is pulled towards the two that moved,
 /// while the surfaces still agree in space over most of their area.
 #[test]
 fn landmarks_that_moved_with_the_surface_start_from_space() {
