@@ -557,6 +557,12 @@ fn bad_guidance_is_refused_by_name_and_nothing_is_written() {
     // Two weights where β takes three.
     let err = fails(&[s, s, "--beta", "1,2"], &out);
     assert!(err.contains("--beta takes three weights"), "{err}");
+    // A similarity search on a grid of one cell (it panicked before the check).
+    let err = fails(
+        &[s, s, "--similarity-search", "always", "--search-level", "0"],
+        &out,
+    );
+    assert!(err.contains("search level must be at least 1"), "{err}");
     // A scale factor for B that is not a positive number.
     let err = fails(&[s, s, "--scale-b", "0"], &out);
     assert!(

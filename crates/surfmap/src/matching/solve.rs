@@ -691,6 +691,11 @@ pub fn solve(
             options.coarsest_level
         )));
     }
+    if options.similarity_search.when != SearchWhen::Off && options.similarity_search.level == 0 {
+        return Err(MatchError::Option(
+            "search level must be at least 1 (the similarity search's grid 2^k + 1), got 0".into(),
+        ));
+    }
     let k0 = options.coarsest_level;
     if options.hole_features == HoleFeatures::On {
         let (ha, hb) = (sa.hole_rims().len(), sb.hole_rims().len());
