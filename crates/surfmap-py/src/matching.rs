@@ -4,12 +4,14 @@
 
 use numpy::IntoPyArray;
 use numpy::ndarray::Array2;
-use pyo3::exceptions::PyValueError;
+use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use surfmap::matching::{
-    Align, Guidance, Landmarks, MatchError, MatchOptions, ScaleB, match_surfaces, output,
+    Align, Guidance, HoleFeatures, Landmarks, MatchError, MatchOptions, ScaleB, SearchWhen,
+    match_surfaces, output,
 };
+use surfmap::raster::FeatureFile;
 
 use crate::arrays;
 use crate::convert::to_dict;
@@ -44,33 +46,98 @@ fn landmarks(d: &Bound<'_, PyDict>) -> PyResult<Landmarks> {
     })
 }
 
+/// Feature curves given as `argument` for a mesh of `vertices` vertices: the JSON of
+/// `surfmap match --features-a` as a dict, `{"features": [{"name", "vertices", "closed"},
+/// …]}`, or just its list (as `geometry_images(features=…)`); numpy integers and arrays
+/// are read as their values.
+fn features(value: &Bound<'_, PyAny>, argument: &str, vertices: usize) -> PyResult<FeatureFile> {
+    let py = value.py();
+    let wrapped = if value.is_instance_of::<PyDict>() {
+        value.clone()
+    } else {
+        let d = PyDict::new(py);
+        d.set_item("features", value)?;
+        d.into_any()
+    };
+    let kwargs = PyDict::new(py);
+    kwargs.set_item(
+        "default",
+        py.import("operator")?
+            .call_method1("methodcaller", ("tolist",))?,
+    )?;
+    let json: String = py
+        .import("json")?
+        .call_method("dumps", (wrapped,), Some(&kwargs))
+        .map_err(|e| {
+            PyTypeError::new_err(format!(
+                "{argument}: expected {{\"features\": [{{\"name\": str, \"vertices\": [int, …], \"closed\": bool}}, …]}} or its list, \
+                 not convertible to JSON: {e}"
+            ))
+        })?
+        .extract()?;
+    FeatureFile::parse(&json, vertices)
+        .map_err(|e| PyValueError::new_err(format!("{argument}: {e}")))
+}
+
 /// Matches surface A onto surface B: a smooth, fold-free correspondence found by
 /// multiscale registration of their geometry images (``surfmap match``; thesis §2.2).
+/// The keywords are the command line's flags, with their defaults (``fill_holes=False``:
+/// ``--no-fill-holes``; ``pin_landmarks=False``: ``--free-landmarks``).
 ///
 /// ``VA``, ``VB``: (n, 3) float arrays; ``FA``, ``FB``: (m, 3) integer arrays (discs,
-/// holes filled for the solve). ``landmarks``: optional ``{"names": [...], "A": [vertex
-/// ids of A], "B": [vertex ids of B]}``. ``size``: finest grid (2^k + 1). ``align``:
-/// ``"auto"`` (landmarks when given, else the shapes in space), ``"features"``,
-/// ``"shape"`` or ``"none"``. ``keep_folds``: keep the vertices of image triangles that
-/// turn over or collapse in space (by default they are unmatched). ``rim_fit_rings``:
-/// rings of A's vertices around each hole rim that follow it when the rim is carried
-/// exactly onto B's paired rim (0: leave the rims where φ puts them). ``complete_rings``:
-/// rings of vertices next to the matched region completed from their matched neighbours
-/// where φ just misses B, after smoothing the matched border (0: leave them unmatched and
-/// φ's matches as they are). ``pin_landmarks``: match each landmark exactly to its vertex
-/// of B in the output, the vertices around it following (``False``: where φ puts it).
-/// ``scale_b``: ``None`` takes B as given unless the two sizes (√area) differ by more
-/// than 5 times, then as in other units (B multiplied by the nearest power of ten for the
-/// match; the report's ``scale_b``); a number multiplies B by it (1.0: as given).
+/// holes filled for the solve).
+///
+/// Guidance. ``landmarks``: optional ``{"names": [...], "A": [vertex ids of A], "B":
+/// [vertex ids of B]}``. ``features_a``, ``features_b``: feature curves of A and of B,
+/// paired by name (both or neither): ``{"features": [{"name": str, "vertices": [int, …],
+/// "closed": bool}, …]}`` — the JSON of ``--features-a`` — or just its list.
+/// ``hole_features``: the rims of filled holes paired as features, ``"auto"`` (when both
+/// surfaces have as many filled holes), ``"on"`` (an error when the counts differ) or
+/// ``"off"``. ``whole_hole_rims``: match each hole rim as one closed curve (by default an
+/// elongated pair — a mouth, an eye — is matched as two arcs split at its corners, upper
+/// lip to upper lip). ``fill_holes``: ``False`` refuses surfaces with holes instead of
+/// filling them for the solve.
+///
+/// Solve. ``size``: finest grid (2^k + 1). ``beta``: energy weights ``(B, R, F)`` —
+/// bending, regularization, features (thesis 2.16; default ``(1, 0.01, 5)``), finite and
+/// ≥ 0. ``position_weight``: a fixed weight ≥ 0 of the 3D position term (0: the thesis
+/// energy alone); ``None`` sets it from the surfaces' distance along B's normals after
+/// aligning them in space (``report["position_weight"]``, ``report["shape_residual"]``).
+/// ``align``: ``"auto"`` (features/landmarks when given, else the shapes in space),
+/// ``"features"``, ``"shape"`` or ``"none"``. ``features_start``: where φ starts with
+/// features or landmarks, ``"both"`` (their similarity of the planes and, with three or
+/// more, their alignment refined in space: the coarsest level is solved from both and the
+/// second kept when it ends lower without matching less;
+/// ``report["alignment"]["features_in_space"]``) or ``"plane"`` (the first alone).
+/// ``similarity_search``: search the rotation, scale and translation of φ that lowers the
+/// matching energy per matched area on a coarse level, ``"shape"`` (only when the start
+/// comes from the shapes in space, without features or landmarks), ``"always"`` or
+/// ``"off"`` (``report["alignment"]["search"]``). ``search_candidates``: the search's extra
+/// starts ``(DEG, SCALE)``, rotated by ±DEG degrees and scaled by (1 ± SCALE), DEG ≥ 0 and
+/// SCALE in [0, 1) (``None`` or ``(0, 0)``: from the start alone). ``search_level``: level
+/// k ≥ 1 of the search's energy (grid 2^k + 1; at most the solve's coarsest level, 6).
 /// ``budget``: most energy evaluations per level, counted at the finest level (a level
 /// 2^j times coarser may use 4^j times as many), as ``surfmap match --budget``; 0 lets
 /// every level run to its stopping rule (the thesis's).
 ///
+/// Output. ``keep_folds``: keep the vertices of image triangles that turn over or
+/// collapse in space (by default they are unmatched). ``rim_fit_rings``: rings of A's
+/// vertices around each hole rim that follow it when the rim is carried exactly onto B's
+/// paired rim (0: leave the rims where φ puts them). ``complete_rings``: rings of vertices
+/// next to the matched region completed from their matched neighbours where φ just misses
+/// B, after smoothing the matched border (0: leave them unmatched and φ's matches as they
+/// are). ``pin_landmarks``: match each landmark exactly to its vertex of B in the output,
+/// the vertices around it following (``False``: where φ puts it).
+/// ``scale_b``: ``None`` takes B as given unless the two sizes (√area) differ by more
+/// than 5 times, then as in other units (B multiplied by the nearest power of ten for the
+/// match; the report's ``scale_b``); a number multiplies B by it (1.0: as given).
+///
 /// Returns ``(correspondence, report)``: an (n_A, 4) float64 array of rows ``[triangle
 /// of B, b0, b1, b2]`` (triangle −1 where A's vertex has no counterpart) — the command
-/// line's ``correspondence.npy`` — and the dictionary of its ``match.json``. Doubts about
-/// the result (``report["warnings"]``, e.g. A squeezed into a small part of B) are also
-/// raised as ``RuntimeWarning``.
+/// line's ``correspondence.npy`` — and the dictionary of its ``match.json`` (the options
+/// used under ``report["options"]``). Doubts about the result (``report["warnings"]``,
+/// e.g. A squeezed into a small part of B) are also raised as ``RuntimeWarning``. A value
+/// the command line would refuse raises ``ValueError`` naming the argument.
 ///
 /// >>> import numpy as np, surfmap
 /// >>> n = 17
@@ -83,8 +150,12 @@ fn landmarks(d: &Bound<'_, PyDict>) -> PyResult<Landmarks> {
 /// >>> C, report = surfmap.match(V, F, VB, F, size=65)
 /// >>> C.shape, report["min_det"] > 0, report["matched_fraction_a"] > 0.9
 /// ((289, 4), True, True)
+/// >>> corners = {"features": [{"name": f"c{k}", "vertices": [v]} for k, v in enumerate([0, n - 1, n * n - 1])]}
+/// >>> C, report = surfmap.match(V, F, VB, F, size=65, features_a=corners, features_b=corners, beta=(1, 0.01, 10))
+/// >>> report["alignment"]["method"], report["options"]["betas"]["features"]
+/// ('features', 10.0)
 #[pyfunction]
-#[pyo3(name = "match", signature = (VA, FA, VB, FB, *, landmarks=None, size=257, align="auto", keep_folds=false, rim_fit_rings=8, complete_rings=4, pin_landmarks=true, scale_b=None, budget=40))]
+#[pyo3(name = "match", signature = (VA, FA, VB, FB, *, landmarks=None, features_a=None, features_b=None, size=257, align="auto", features_start="both", keep_folds=false, rim_fit_rings=8, complete_rings=4, pin_landmarks=true, scale_b=None, budget=40, hole_features="auto", whole_hole_rims=false, fill_holes=true, beta=None, position_weight=None, similarity_search="shape", search_candidates=None, search_level=4))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub fn match_meshes<'py>(
     py: Python<'py>,
@@ -93,15 +164,40 @@ pub fn match_meshes<'py>(
     VB: &Bound<'py, PyAny>,
     FB: &Bound<'py, PyAny>,
     landmarks: Option<&Bound<'py, PyDict>>,
+    features_a: Option<&Bound<'py, PyAny>>,
+    features_b: Option<&Bound<'py, PyAny>>,
     size: usize,
     align: &str,
+    features_start: &str,
     keep_folds: bool,
     rim_fit_rings: usize,
     complete_rings: usize,
     pin_landmarks: bool,
     scale_b: Option<f64>,
     budget: usize,
+    hole_features: &str,
+    whole_hole_rims: bool,
+    fill_holes: bool,
+    beta: Option<Vec<f64>>,
+    position_weight: Option<f64>,
+    similarity_search: &str,
+    search_candidates: Option<Vec<f64>>,
+    search_level: usize,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>)> {
+    // As the command line's `--features-a` and `--features-b` (each requires the other).
+    match (features_a.is_some(), features_b.is_some()) {
+        (true, false) => {
+            return Err(PyValueError::new_err(
+                "features_a requires features_b: the feature curves of A are paired with B's by name",
+            ));
+        }
+        (false, true) => {
+            return Err(PyValueError::new_err(
+                "features_b requires features_a: the feature curves of B are paired with A's by name",
+            ));
+        }
+        _ => {}
+    }
     surfmap::grid::grid_level(size).map_err(|e| PyValueError::new_err(format!("size: {e}")))?;
     let a = arrays::mesh(VA, FA)?;
     let b = arrays::mesh(VB, FB)?;
@@ -117,6 +213,7 @@ pub fn match_meshes<'py>(
     let mut options = MatchOptions {
         size,
         scale_b,
+        fill_holes,
         drop_folds: !keep_folds,
         rim_fit_rings,
         complete_rings,
@@ -132,12 +229,68 @@ pub fn match_meshes<'py>(
                 )));
             }
         },
+        features_in_space: match features_start {
+            "both" => true,
+            "plane" => false,
+            other => {
+                return Err(PyValueError::new_err(format!(
+                    "features_start must be 'both' or 'plane', got '{other}'"
+                )));
+            }
+        },
+        hole_features: match hole_features {
+            "auto" => HoleFeatures::Auto,
+            "on" => HoleFeatures::On,
+            "off" => HoleFeatures::Off,
+            other => {
+                return Err(PyValueError::new_err(format!(
+                    "hole_features must be 'auto', 'on' or 'off', got '{other}'"
+                )));
+            }
+        },
+        split_hole_rims: if whole_hole_rims {
+            0.0
+        } else {
+            surfmap::matching::holes::SPLIT_HOLE_RIMS
+        },
         ..Default::default()
     };
+    if let Some(b) = &beta {
+        options
+            .set_betas(b, "beta")
+            .map_err(PyValueError::new_err)?;
+    }
+    if let Some(w) = position_weight {
+        options
+            .set_position_weight(w, "position_weight")
+            .map_err(PyValueError::new_err)?;
+    }
+    options.similarity_search.when = match similarity_search {
+        "shape" => SearchWhen::Shape,
+        "off" => SearchWhen::Off,
+        "always" => SearchWhen::Always,
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "similarity_search must be 'shape', 'off' or 'always', got '{other}'"
+            )));
+        }
+    };
+    // Checked by the library (`MatchError::Option`, a ValueError here), as for the CLI.
+    options.similarity_search.level = search_level;
     options.ncg.set_budget(budget);
+    if let Some(c) = &search_candidates {
+        options
+            .set_search_candidates(c, "search_candidates")
+            .map_err(PyValueError::new_err)?;
+    }
     let guidance = Guidance {
         landmarks: landmarks.map(self::landmarks).transpose()?,
-        ..Default::default()
+        features_a: features_a
+            .map(|f| features(f, "features_a", a.num_vertices()))
+            .transpose()?,
+        features_b: features_b
+            .map(|f| features(f, "features_b", b.num_vertices()))
+            .transpose()?,
     };
     let (corr, report) = py
         .detach(|| -> Result<_, MatchError> {

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import surfmap
-from conftest import run_cli
+from conftest import run_cli, wavy_grid
 
 
 def test_match_equals_the_command_line(cli, data, tmp_path):
@@ -114,3 +114,240 @@ def test_match_errors():
         surfmap.match(V, F, V, F, size=65, scale_b=-1.0)
     with pytest.raises(ValueError, match="size: grid size 100"):
         surfmap.match(V, F, V, F, size=100)
+
+
+def ict_face_features(V):
+    """Three feature curves on an ICT face (vertex ids; the registered faces share them):
+    the nose tip, a point of the chin and a brow line of five vertices."""
+
+    def front(x, y):  # the frontmost of the vertices nearest to (x, y) in the face's plane
+        near = np.argsort((V[:, 0] - x) ** 2 + (V[:, 1] - y) ** 2)[:30]
+        return int(near[np.argmax(V[near, 2])])
+
+    return {
+        "features": [
+            {"name": "nose", "vertices": [int(np.argmax(V[:, 2]))]},
+            {"name": "chin", "vertices": [front(0, -9)]},
+            {"name": "brow", "vertices": [front(x, 6) for x in (-4, -2, 0, 2, 4)]},
+        ]
+    }
+
+
+# What match.json must agree on between the two (the energies may differ in the last
+# digit: parallel sums).
+AGREED = ("matched_vertices_a", "min_det", "flipped_triangles", "collapsed_triangles", "holes_filled_a", "options")
+
+
+def test_feature_curves_match_as_on_the_command_line(cli, data, tmp_path):
+    # Neutral against jaw open (registered: vertex i ↔ vertex i), guided by three feature
+    # curves; the chin moved with the jaw. From both starts (the default) and from the
+    # features' plane alone: each the command line's table and report.
+    a, b = data / "faces" / "ict" / "ict_neutral.obj", data / "faces" / "ict" / "ict_jawopen.obj"
+    VA, FA = surfmap.read_mesh(a)
+    VB, FB = surfmap.read_mesh(b)
+    features = ict_face_features(VA)
+    fa, fb = tmp_path / "fa.json", tmp_path / "fb.json"
+    fa.write_text(json.dumps(features))
+    fb.write_text(json.dumps(features))
+    reports = {}
+    for start, flags in (("both", []), ("plane", ["--features-start", "plane"])):
+        out = tmp_path / start
+        run_cli(cli, "match", a, b, "-o", out, "--size", "65", "-q", "--features-a", fa, "--features-b", fb, *flags)
+        kwargs = {"features_start": "plane"} if flags else {}
+        C, report = surfmap.match(VA, FA, VB, FB, size=65, features_a=features, features_b=features, **kwargs)
+        assert np.array_equal(C, np.load(out / "correspondence.npy")), start
+        cli_report = json.loads((out / "match.json").read_text())
+        for key in AGREED:
+            assert report[key] == cli_report[key], (start, key)
+        # The alignment from the features: they reached the solve.
+        assert report["alignment"]["method"] == cli_report["alignment"]["method"] == "features"
+        reports[start] = report
+    both, plane = reports["both"], reports["plane"]
+    # The features' alignment refined in space was tried (and, the chin having moved,
+    # kept) only from both starts.
+    assert both["options"]["features_in_space"] is True and both["alignment"]["features_in_space"]["kept"]
+    assert plane["options"]["features_in_space"] is False and plane["alignment"]["features_in_space"] is None
+
+
+def holey_pair(n=33):
+    """A bump over [-1, 1]² with an elongated hole (a mouth), and a bent, turned and
+    moved copy (same triangles)."""
+    x, y = np.meshgrid(np.linspace(-1, 1, n), np.linspace(-1, 1, n))
+    V = np.c_[x.ravel(), y.ravel(), (0.3 * np.exp(-2 * ((x - 0.3) ** 2 + y**2))).ravel()]
+    i = np.arange(n * (n - 1)).reshape(n - 1, n)[:, :-1].ravel()
+    F = np.r_[np.c_[i, i + 1, i + n + 1], np.c_[i, i + n + 1, i + n]]
+    m = V[F, :2].mean(1)
+    F = F[(m[:, 0] / 0.4) ** 2 + ((m[:, 1] + 0.4) / 0.12) ** 2 > 1]
+    used = np.unique(F)
+    index = np.full(len(V), -1)
+    index[used] = np.arange(len(used))
+    V, F = V[used], index[F]
+    VB = V + np.c_[np.zeros(len(V)), np.zeros(len(V)), 0.1 * np.sin(np.pi * V[:, 0])]
+    c, s = np.cos(0.3), np.sin(0.3)
+    VB = VB @ np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]]).T + [0.5, 0.0, 0.0]
+    return V, F, VB
+
+
+@pytest.fixture(scope="module")
+def holey(tmp_path_factory):
+    """The holey pair as arrays (read back from the files the command line is given),
+    the two files, and the default match's report."""
+    V, F, VB = holey_pair()
+    d = tmp_path_factory.mktemp("holey")
+    a, b = d / "a.obj", d / "b.obj"
+    surfmap.write_obj(str(a), V, F)
+    surfmap.write_obj(str(b), VB, F)
+    VA, FA = surfmap.read_mesh(a)
+    VB, FB = surfmap.read_mesh(b)
+    _, default = surfmap.match(VA, FA, VB, FB, size=65)
+    return (VA, FA, VB, FB), (a, b), default
+
+
+def betas(report):
+    b = report["options"]["betas"]
+    return b["bend"], b["reg"], b["features"]
+
+
+# (keywords, the command line's flags, what the report says with them — not by default)
+OPTIONS = {
+    "beta": (
+        {"beta": (2.0, 0.02, 3.0)},
+        ["--beta", "2,0.02,3"],
+        lambda r: betas(r) == (2.0, 0.02, 3.0),
+    ),
+    "position_weight": (
+        {"position_weight": 0.0},
+        ["--position-weight", "0"],
+        lambda r: r["position_weight"] == 0.0
+        and r["options"]["position_weight"] == "fixed"
+        and r["shape_residual"] is None,
+    ),
+    "similarity_search": (
+        {"similarity_search": "off"},
+        ["--similarity-search", "off"],
+        lambda r: r["options"]["similarity_search"]["when"] == "off" and r["alignment"]["search"] is None,
+    ),
+    "search_candidates": (
+        {"search_candidates": (5.0, 0.05), "search_level": 3},
+        ["--search-candidates", "5,0.05", "--search-level", "3"],
+        lambda r: r["options"]["similarity_search"]["candidate_angle"] == pytest.approx(np.radians(5.0), rel=1e-12)
+        and r["options"]["similarity_search"]["candidate_log_scale"] == pytest.approx(np.log(1.05), rel=1e-12)
+        and r["options"]["similarity_search"]["level"] == 3,
+    ),
+    "hole_features": (
+        {"hole_features": "off"},
+        ["--hole-features", "off"],
+        lambda r: r["options"]["hole_features"] == "off" and r["alignment"]["hole_pairs"] == [],
+    ),
+    "whole_hole_rims": (
+        {"whole_hole_rims": True},
+        ["--whole-hole-rims"],
+        lambda r: r["options"]["split_hole_rims"] == 0
+        and len(r["alignment"]["hole_pairs"]) == 1
+        and r["alignment"]["split_holes"] == [],
+    ),
+}
+
+
+@pytest.mark.parametrize("name", list(OPTIONS))
+def test_each_option_reaches_the_report_as_on_the_command_line(name, cli, holey, tmp_path):
+    kwargs, flags, reported = OPTIONS[name]
+    arrays, (a, b), default = holey
+    assert not reported(default), "the default already reads as the option"
+    C, report = surfmap.match(*arrays, size=65, **kwargs)
+    assert reported(report), report["options"]
+    run_cli(cli, "match", a, b, "-o", tmp_path, "--size", "65", "--quiet", *flags)
+    assert np.array_equal(C, np.load(tmp_path / "correspondence.npy"))
+    cli_report = json.loads((tmp_path / "match.json").read_text())
+    for key in AGREED:
+        assert report[key] == cli_report[key], key
+
+
+def test_the_defaults_are_the_command_lines(holey):
+    _, _, default = holey
+    options = default["options"]
+    assert betas(default) == (1.0, 0.01, 5.0) and "from_shape_residual" in options["position_weight"]
+    assert options["similarity_search"]["when"] == "shape" and options["similarity_search"]["level"] == 4
+    assert options["similarity_search"]["candidate_angle"] == options["similarity_search"]["candidate_log_scale"] == 0
+    assert options["hole_features"] == "auto" and options["split_hole_rims"] == 2.0 and options["fill_holes"]
+    assert options["features_in_space"] is True
+    # The hole filled and its rims paired as features, split at the corners; the
+    # alignment from the shapes, and the similarity search after it.
+    assert default["holes_filled_a"] == 1 and default["alignment"]["split_holes"] == [0]
+    assert default["alignment"]["search"] is not None
+
+
+def test_fill_holes_false_refuses_a_surface_with_holes(cli, holey, tmp_path):
+    arrays, (a, b), _ = holey
+    with pytest.raises(surfmap.MeshError, match="(?s)surface A: .*found 2 boundary loops"):
+        surfmap.match(*arrays, size=65, fill_holes=False)
+    r = run_cli(cli, "match", a, b, "-o", tmp_path, "--size", "65", "--no-fill-holes", ok=False)
+    assert r.returncode != 0 and "2 boundary loops" in r.stderr
+
+
+def test_features_as_a_list_with_numpy_ids_are_the_same_features(holey):
+    arrays, _, _ = holey
+    VA = arrays[0]
+    ids = [int(np.argmin(np.linalg.norm(VA[:, :2] - p, axis=1))) for p in ([-0.8, -0.8], [0.8, -0.8], [0.0, 0.8])]
+    as_dict = {"features": [{"name": f"p{k}", "vertices": [v], "closed": False} for k, v in enumerate(ids)]}
+    as_list = [{"name": f"p{k}", "vertices": np.array([v])} for k, v in enumerate(ids)]
+    C, report = surfmap.match(*arrays, size=65, features_a=as_dict, features_b=as_dict)
+    C2, report2 = surfmap.match(*arrays, size=65, features_a=as_list, features_b=as_list)
+    assert report["alignment"]["method"] == "features" and np.array_equal(C, C2)
+
+
+def test_bad_features_and_option_values_name_the_argument():
+    V, F, VB = holey_pair(9)
+    one = {"features": [{"name": "p", "vertices": [0]}]}
+    cases = [
+        ({"features_a": one}, "features_a requires features_b"),
+        ({"features_b": one}, "features_b requires features_a"),
+        (
+            {"features_a": {"features": [{"name": "p", "vertices": [10_000]}]}, "features_b": one},
+            "features_a: feature 'p'",
+        ),
+        ({"features_a": one, "features_b": {"features": []}}, "features_b: feature file: .*empty"),
+        ({"features_a": one, "features_b": {"curves": []}}, "features_b: feature file: unknown field"),
+        ({"beta": (1.0, 2.0)}, "beta takes three weights B,R,F"),
+        ({"beta": (1.0, -2.0, 3.0)}, "beta: weights must be finite and ≥ 0"),
+        ({"beta": (1.0, float("nan"), 3.0)}, "beta: weights must be finite and ≥ 0"),
+        ({"position_weight": -1.0}, "position_weight must be finite and ≥ 0, got -1"),
+        ({"position_weight": float("inf")}, "position_weight must be finite and ≥ 0"),
+        ({"features_start": "space"}, "features_start must be 'both' or 'plane', got 'space'"),
+        ({"hole_features": "maybe"}, "hole_features must be 'auto', 'on' or 'off', got 'maybe'"),
+        ({"similarity_search": "sometimes"}, "similarity_search must be 'shape', 'off' or 'always'"),
+        ({"search_candidates": (5.0,)}, "search_candidates takes DEG,SCALE"),
+        ({"search_candidates": (5.0, 1.0)}, "search_candidates takes DEG,SCALE"),
+        ({"search_candidates": (-5.0, 0.1)}, "search_candidates takes DEG,SCALE"),
+        ({"search_level": 0}, "search level must be at least 1"),
+    ]
+    for kwargs, message in cases:
+        with pytest.raises(ValueError, match=message):
+            surfmap.match(V, F, VB, F, size=65, **kwargs)
+    # Not data JSON can hold: a TypeError naming the argument.
+    with pytest.raises(TypeError, match="features_a: expected"):
+        surfmap.match(V, F, VB, F, size=65, features_a={"features": [{"name": "p", "vertices": {0}}]}, features_b=one)
+    # Hole rims paired on demand where one surface has no hole: the library's refusal.
+    with pytest.raises(ValueError, match="hole features pair the rims one to one"):
+        surfmap.match(V, F, *wavy_grid(9), size=65, hole_features="on")
+
+
+@pytest.mark.parametrize(
+    "kwargs,flags",
+    [
+        ({"beta": (1.0, 2.0)}, ["--beta", "1,2"]),
+        ({"beta": (1.0, -2.0, 3.0)}, ["--beta", "1,-2,3"]),
+        ({"position_weight": -1.0}, ["--position-weight=-1"]),
+        ({"search_candidates": (5.0, 1.0)}, ["--search-candidates", "5,1"]),
+    ],
+)
+def test_refused_values_have_the_command_lines_message(kwargs, flags, cli, tmp_path):
+    V, F, VB = holey_pair(9)
+    a = tmp_path / "a.obj"
+    surfmap.write_obj(str(a), V, F)
+    with pytest.raises(ValueError) as e:
+        surfmap.match(V, F, V, F, size=65, **kwargs)
+    r = run_cli(cli, "match", a, a, "-o", tmp_path / "out", *flags, ok=False)
+    (argument,) = kwargs
+    assert r.returncode != 0
+    assert f"error: {e.value}".replace(argument, "--" + argument.replace("_", "-"), 1) in r.stderr

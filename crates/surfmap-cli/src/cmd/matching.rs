@@ -8,8 +8,8 @@ use std::path::PathBuf;
 use super::advice::flatten_error_message;
 use anyhow::{Context, bail};
 use surfmap::matching::{
-    Align, Guidance, HoleFeatures, Landmarks, MatchError, MatchOptions, PositionWeight, ScaleB,
-    SearchWhen, match_surfaces, output, pictures, write_match_folder,
+    Align, Guidance, HoleFeatures, Landmarks, MatchError, MatchOptions, ScaleB, SearchWhen,
+    match_surfaces, output, pictures, write_match_folder,
 };
 use surfmap::raster::FeatureFile;
 use surfmap::render::save_png;
@@ -113,8 +113,8 @@ pub struct Args {
     /// (1 ± SCALE) (the lowest energy is kept); 0,0 searches from the start alone.
     #[arg(long, value_name = "DEG,SCALE", value_delimiter = ',')]
     pub search_candidates: Option<Vec<f64>>,
-    /// Level k of the similarity search's energy (grid 2^k + 1; at most the solve's
-    /// coarsest level, 6).
+    /// Level k of the similarity search's energy (grid 2^k + 1; at least 1, at most the
+    /// solve's coarsest level, 6).
     #[arg(long, value_name = "K", default_value_t = 4)]
     pub search_level: usize,
     /// Most energy evaluations per level, counted at the finest level (a level 2^j
@@ -200,27 +200,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ..Default::default()
     };
     if let Some(b) = &args.beta {
-        if b.len() != 3 {
-            bail!(
-                "--beta takes three weights B,R,F (bending, regularization, features; default 1,0.01,5), got {}",
-                b.len()
-            );
-        }
-        if b.iter().any(|x| !x.is_finite() || *x < 0.0) {
-            bail!("--beta: weights must be finite and ≥ 0, got {b:?}");
-        }
-        (
-            options.betas.bend,
-            options.betas.reg,
-            options.betas.features,
-        ) = (b[0], b[1], b[2]);
+        options.set_betas(b, "--beta").map_err(anyhow::Error::msg)?;
     }
     if let Some(w) = args.position_weight {
-        if !w.is_finite() || w < 0.0 {
-            bail!("--position-weight must be finite and ≥ 0, got {w}");
-        }
-        options.betas.position = w;
-        options.position_weight = PositionWeight::Fixed;
+        options
+            .set_position_weight(w, "--position-weight")
+            .map_err(anyhow::Error::msg)?;
     }
     options.similarity_search.when = match args.similarity_search {
         SearchArg::Off => SearchWhen::Off,
@@ -230,13 +215,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     options.similarity_search.level = args.search_level;
     options.ncg.set_budget(args.budget);
     if let Some(c) = &args.search_candidates {
-        if c.len() != 2 || c.iter().any(|x| !x.is_finite() || *x < 0.0) || c[1] >= 1.0 {
-            bail!(
-                "--search-candidates takes DEG,SCALE: degrees ≥ 0 and a scale step in [0, 1), got {c:?}"
-            );
-        }
-        options.similarity_search.candidate_angle = c[0].to_radians();
-        options.similarity_search.candidate_log_scale = (1.0 + c[1]).ln();
+        options
+            .set_search_candidates(c, "--search-candidates")
+            .map_err(anyhow::Error::msg)?;
     }
     options.scale_b = match args.scale_b.as_str() {
         "auto" => ScaleB::Auto,

@@ -1,5 +1,5 @@
 # Type stubs of the Rust extension surfmap._surfmap (docstrings: help(surfmap.flatten), …).
-# tests/test_stubs.py checks that every function here has the runtime's parameters.
+# tests/test_docs.py checks that every function here has the runtime's parameters.
 
 import os
 from typing import Any, Callable, Dict, List, Literal, Optional, Sequence, Tuple, Union
@@ -125,12 +125,23 @@ def match(
     FB: IndexArray,
     *,
     landmarks: Optional[Dict[str, Any]] = None,
+    features_a: Optional[Union[Dict[str, Any], Sequence[Dict[str, Any]]]] = None,
+    features_b: Optional[Union[Dict[str, Any], Sequence[Dict[str, Any]]]] = None,
     size: int = 257,
-    align: str = "auto",
+    align: Literal["auto", "features", "shape", "none"] = "auto",
+    features_start: Literal["both", "plane"] = "both",
     keep_folds: bool = False,
     rim_fit_rings: int = 8,
     complete_rings: int = 4,
     pin_landmarks: bool = True,
     scale_b: Optional[float] = None,
     budget: int = 40,
+    hole_features: Literal["auto", "on", "off"] = "auto",
+    whole_hole_rims: bool = False,
+    fill_holes: bool = True,
+    beta: Optional[Sequence[float]] = None,
+    position_weight: Optional[float] = None,
+    similarity_search: Literal["shape", "off", "always"] = "shape",
+    search_candidates: Optional[Sequence[float]] = None,
+    search_level: int = 4,
 ) -> Tuple[FloatArray, Report]: ...

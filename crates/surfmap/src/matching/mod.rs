@@ -15,6 +15,7 @@ pub mod deformation;
 pub mod energy;
 pub mod holes;
 pub mod ncg;
+mod options;
 pub mod output;
 pub mod pictures;
 pub mod pin;
