@@ -74,10 +74,34 @@ pub fn option_message(e: &OptionError) -> String {
     }
 }
 
+/// A defect that stops `match`, worded for it: it fills holes itself (unless
+/// `fill_holes=False`) and cannot cut a closed surface open — the part to match is cut
+/// out with `surfmap.crop` — while the repairs are the same calls as for `flatten`.
+pub fn match_defect_message(d: &Defect) -> String {
+    let remedy = match d.kind {
+        DefectKind::SeveralBoundaryLoops => Some(
+            "match fills all but the longest for the solve (the correspondence is reported \
+             for the real surface only): leave fill_holes at True.",
+        ),
+        DefectKind::ClosedSurface | DefectKind::PositiveGenus => Some(
+            "match maps discs: cut the part to match out of it with surfmap.crop(V, F, \
+             center=…, radius=…) (e.g. the face of a head scan), or open it in a mesh editor.",
+        ),
+        kind => python_remedy(kind),
+    };
+    with_remedy(d, remedy)
+}
+
 /// A flattening error's message with its remedy as Python calls.
 pub fn flatten_error_message(e: &FlattenError) -> String {
+    worded_flatten_error(e, defect_message)
+}
+
+/// As [`flatten_error_message`], the defects worded by `wording` (`match`:
+/// [`match_defect_message`]).
+pub fn worded_flatten_error(e: &FlattenError, wording: surfmap::report::DefectWording) -> String {
     match e {
-        FlattenError::NotADisc(defects) => not_a_disc_message(defects, defect_message),
+        FlattenError::NotADisc(defects) => not_a_disc_message(defects, wording),
         FlattenError::Degenerate(inner) => {
             format!("{inner}; surfmap.repair(V, F, drop_degenerate=True) removes them")
         }

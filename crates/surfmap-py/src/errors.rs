@@ -50,12 +50,21 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 
 /// A `MeshError` with `message` and the defects it is about.
 pub fn mesh_error(message: impl Into<String>, defects: &[Defect]) -> PyErr {
+    mesh_error_worded(message, defects, advice::defect_message)
+}
+
+/// [`mesh_error`], the defects' messages worded by `wording`.
+fn mesh_error_worded(
+    message: impl Into<String>,
+    defects: &[Defect],
+    wording: surfmap::report::DefectWording,
+) -> PyErr {
     let message = message.into();
     Python::attach(|py| {
         let err = MeshError::new_err(message);
         let list = defects
             .iter()
-            .map(|d| crate::convert::to_python(py, &ReportedDefect::new(d, advice::defect_message)))
+            .map(|d| crate::convert::to_python(py, &ReportedDefect::new(d, wording)))
             .collect::<PyResult<Vec<_>>>()
             .and_then(|items| PyList::new(py, items));
         match list.and_then(|l| err.value(py).setattr("defects", l)) {
@@ -73,14 +82,25 @@ pub fn flatten_error(e: FlattenError) -> PyErr {
 
 /// [`flatten_error`] with its message after `about` (e.g. `"surface A: "`).
 pub fn flatten_error_about(e: FlattenError, about: &str) -> PyErr {
-    let message = format!("{about}{}", advice::flatten_error_message(&e));
+    flatten_error_worded(e, about, advice::defect_message)
+}
+
+/// As [`flatten_error_about`], the defects worded by `wording`.
+pub fn flatten_error_worded(
+    e: FlattenError,
+    about: &str,
+    wording: surfmap::report::DefectWording,
+) -> PyErr {
+    let message = format!("{about}{}", advice::worded_flatten_error(&e, wording));
     match e {
-        FlattenError::NotADisc(defects) => mesh_error(message, &defects),
+        FlattenError::NotADisc(defects) => mesh_error_worded(message, &defects, wording),
         FlattenError::Index(_)
         | FlattenError::Degenerate(_)
-        | FlattenError::NoAdmissibleStart { .. } => mesh_error(message, &[]),
-        FlattenError::Cut(CutError::Defects(defects)) => mesh_error(message, &defects),
-        FlattenError::Cut(CutError::Index(_)) => mesh_error(message, &[]),
+        | FlattenError::NoAdmissibleStart { .. } => mesh_error_worded(message, &[], wording),
+        FlattenError::Cut(CutError::Defects(defects)) => {
+            mesh_error_worded(message, &defects, wording)
+        }
+        FlattenError::Cut(CutError::Index(_)) => mesh_error_worded(message, &[], wording),
         FlattenError::Option(_)
         | FlattenError::GivenStartLength { .. }
         | FlattenError::GivenStartFlipped(_)

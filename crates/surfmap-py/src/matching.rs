@@ -13,15 +13,17 @@ use surfmap::matching::{
 };
 use surfmap::raster::FeatureFile;
 
+use crate::advice::match_defect_message;
 use crate::arrays;
 use crate::convert::to_dict;
-use crate::errors::{SolverError, flatten_error_about};
+use crate::errors::{SolverError, flatten_error_worded};
 
 fn match_error(e: MatchError) -> PyErr {
     match e {
-        MatchError::Flatten { surface, source } => flatten_error_about(
+        MatchError::Flatten { surface, source } => flatten_error_worded(
             source,
             &surface.map_or(String::new(), |s| format!("surface {s}: ")),
+            match_defect_message,
         ),
         MatchError::Guidance(_) | MatchError::Option(_) | MatchError::Grid(_) => {
             PyValueError::new_err(e.to_string())

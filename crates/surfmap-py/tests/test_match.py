@@ -278,11 +278,33 @@ def test_the_defaults_are_the_command_lines(holey):
 
 
 def test_fill_holes_false_refuses_a_surface_with_holes(cli, holey, tmp_path):
+    # The remedy is match's own (fill the holes), not flatten's (cut them open).
     arrays, (a, b), _ = holey
-    with pytest.raises(surfmap.MeshError, match="(?s)surface A: .*found 2 boundary loops"):
+    with pytest.raises(surfmap.MeshError, match="(?s)surface A: .*found 2 boundary loops") as e:
         surfmap.match(*arrays, size=65, fill_holes=False)
+    message = str(e.value)
+    assert "leave fill_holes at True" in message and "cut=" not in message, message
+    assert "leave fill_holes at True" in e.value.defects[0]["message"]
     r = run_cli(cli, "match", a, b, "-o", tmp_path, "--size", "65", "--no-fill-holes", ok=False)
     assert r.returncode != 0 and "2 boundary loops" in r.stderr
+    assert "leave out --no-fill-holes" in r.stderr and "--cut-holes" not in r.stderr, r.stderr
+
+
+def test_a_closed_surface_is_refused_with_the_crop_that_opens_it(cli, holey, tmp_path):
+    # An octahedron (closed, genus 0) as B: match maps discs and cannot cut one open, so
+    # the remedy is surfmap crop, not flatten's seams.
+    V = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], float)
+    F = np.array([[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]])
+    arrays, (a, _), _ = holey
+    with pytest.raises(surfmap.MeshError, match="(?s)surface B: .*closed") as e:
+        surfmap.match(arrays[0], arrays[1], V, F, size=65)
+    assert "surfmap.crop(V, F, center=" in str(e.value) and "cut=" not in str(e.value), str(e.value)
+    b = tmp_path / "octahedron.obj"
+    surfmap.write_obj(str(b), V, F)
+    r = run_cli(cli, "match", a, b, "-o", tmp_path / "out", "--size", "65", ok=False)
+    assert r.returncode != 0 and "closed" in r.stderr
+    assert "surfmap crop" in r.stderr and "--cut-along" not in r.stderr, r.stderr
+    assert not (tmp_path / "out").exists()
 
 
 def test_features_as_a_list_with_numpy_ids_are_the_same_features(holey):

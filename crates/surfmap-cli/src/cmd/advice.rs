@@ -48,6 +48,25 @@ pub fn defect_message(d: &Defect) -> String {
     with_remedy(d, flag_remedy(d.kind))
 }
 
+/// A defect that stops `surfmap match`, worded for that command: it fills holes itself
+/// (unless `--no-fill-holes`) and cannot cut a closed surface open — the part to match is
+/// cut out with `surfmap crop` — while the repairs are the same flags as for flatten.
+pub fn match_defect_message(d: &Defect) -> String {
+    let remedy = match d.kind {
+        DefectKind::SeveralBoundaryLoops => Some(
+            "surfmap match fills all but the longest for the solve (the correspondence is \
+             reported for the real surface only): leave out --no-fill-holes.",
+        ),
+        DefectKind::ClosedSurface | DefectKind::PositiveGenus => Some(
+            "surfmap match maps discs: cut the part to match out of it with surfmap crop \
+             (e.g. the face of a head scan: --center X,Y,Z --radius R), or open it in a mesh \
+             editor.",
+        ),
+        kind => flag_remedy(kind),
+    };
+    with_remedy(d, remedy)
+}
+
 /// A numeric option out of range, as the flag that set it.
 pub fn option_message(e: &OptionError) -> String {
     match e {
@@ -74,8 +93,17 @@ pub fn flatten_error(e: FlattenError) -> anyhow::Error {
 /// The message of a flattening error whose remedy has a flag (`None`: the library's
 /// message says it all).
 pub fn flatten_error_message(e: &FlattenError) -> Option<String> {
+    worded_flatten_error(e, defect_message)
+}
+
+/// As [`flatten_error_message`], the defects worded by `wording` (`surfmap match`:
+/// [`match_defect_message`]).
+pub fn worded_flatten_error(
+    e: &FlattenError,
+    wording: surfmap::report::DefectWording,
+) -> Option<String> {
     Some(match e {
-        FlattenError::NotADisc(defects) => not_a_disc_message(defects, defect_message),
+        FlattenError::NotADisc(defects) => not_a_disc_message(defects, wording),
         FlattenError::Degenerate(inner) => {
             format!("{inner}; run with --drop-degenerate or fix the mesh")
         }

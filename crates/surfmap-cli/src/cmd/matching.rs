@@ -5,7 +5,7 @@
 
 use std::path::PathBuf;
 
-use super::advice::flatten_error_message;
+use super::advice::{match_defect_message, worded_flatten_error};
 use anyhow::{Context, bail};
 use surfmap::matching::{
     Align, Guidance, HoleFeatures, Landmarks, MatchError, MatchOptions, ScaleB, SearchWhen,
@@ -249,13 +249,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let matched = match_surfaces(&mesh_a, &mesh_b, &guidance, &options)
         .map_err(|e| match &e {
             // The flattening's remedies as this command's flags.
-            MatchError::Flatten { surface, source } => match flatten_error_message(source) {
-                Some(message) => anyhow::anyhow!(
-                    "cannot flatten {}: {message}",
-                    surface.map_or("the surface".to_string(), |s| format!("surface {s}"))
-                ),
-                None => e.into(),
-            },
+            MatchError::Flatten { surface, source } => {
+                match worded_flatten_error(source, match_defect_message) {
+                    Some(message) => anyhow::anyhow!(
+                        "cannot flatten {}: {message}",
+                        surface.map_or("the surface".to_string(), |s| format!("surface {s}"))
+                    ),
+                    None => e.into(),
+                }
+            }
             _ => e.into(),
         })
         .with_context(|| {
