@@ -46,3 +46,60 @@ impl MatchOptions {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_refused_value_leaves_the_options_as_they_were_and_names_the_argument() {
+        let mut o = MatchOptions::default();
+        let before = (
+            o.betas.bend,
+            o.betas.reg,
+            o.betas.features,
+            o.betas.position,
+        );
+        for bad in [&[1.0, 2.0][..], &[1.0, -1.0, 5.0], &[1.0, f64::NAN, 5.0]] {
+            let e = o.set_betas(bad, "--beta").unwrap_err();
+            assert!(e.starts_with("--beta"), "{e}");
+        }
+        for bad in [-1.0, f64::INFINITY] {
+            assert!(
+                o.set_position_weight(bad, "w")
+                    .unwrap_err()
+                    .starts_with("w ")
+            );
+        }
+        for bad in [&[5.0][..], &[5.0, 1.0], &[-5.0, 0.1]] {
+            assert!(o.set_search_candidates(bad, "c").is_err());
+        }
+        let after = (
+            o.betas.bend,
+            o.betas.reg,
+            o.betas.features,
+            o.betas.position,
+        );
+        assert_eq!(format!("{before:?}"), format!("{after:?}"));
+        assert_eq!(o.position_weight, MatchOptions::default().position_weight);
+    }
+
+    #[test]
+    fn accepted_values_are_set_in_the_solver_s_units() {
+        let mut o = MatchOptions::default();
+        o.set_betas(&[2.0, 0.02, 3.0], "beta").unwrap();
+        assert_eq!(
+            (o.betas.bend, o.betas.reg, o.betas.features),
+            (2.0, 0.02, 3.0)
+        );
+        o.set_position_weight(0.0, "w").unwrap();
+        assert_eq!(
+            (o.betas.position, o.position_weight),
+            (0.0, PositionWeight::Fixed)
+        );
+        o.set_search_candidates(&[90.0, 0.1], "c").unwrap();
+        let s = &o.similarity_search;
+        assert!((s.candidate_angle - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
+        assert!((s.candidate_log_scale.exp() - 1.1).abs() < 1e-15);
+    }
+}
