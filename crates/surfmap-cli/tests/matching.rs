@@ -563,6 +563,12 @@ fn bad_guidance_is_refused_by_name_and_nothing_is_written() {
         &out,
     );
     assert!(err.contains("search level must be at least 1"), "{err}");
+    // A negative outer-rim tolerance.
+    let err = fails(&[s, s, "--rim-tolerance=-1"], &out);
+    assert!(
+        err.contains("--rim-tolerance must be a finite number of edges ≥ 0"),
+        "{err}"
+    );
     // A scale factor for B that is not a positive number.
     let err = fails(&[s, s, "--scale-b", "0"], &out);
     assert!(

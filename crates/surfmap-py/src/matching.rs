@@ -129,7 +129,11 @@ fn features(value: &Bound<'_, PyAny>, argument: &str, vertices: usize) -> PyResu
 /// next to the matched region completed from their matched neighbours where φ just misses
 /// B, after smoothing the matched border (0: leave them unmatched and φ's matches as they
 /// are). ``pin_landmarks``: match each landmark exactly to its vertex of B in the output,
-/// the vertices around it following (``False``: where φ puts it).
+/// the vertices around it following (``False``: where φ puts it). ``rim_tolerance``: how
+/// far past B's outer rim, in mean edges of the vertex, the prediction of a vertex φ left
+/// unmatched may fall and the vertex still be matched to the rim (``--rim-tolerance``;
+/// more matches more of A along a tight crop of B, and more vertices without a
+/// counterpart).
 /// ``scale_b``: ``None`` takes B as given unless the two sizes (√area) differ by more
 /// than 5 times, then as in other units (B multiplied by the nearest power of ten for the
 /// match; the report's ``scale_b``); a number multiplies B by it (1.0: as given).
@@ -157,7 +161,7 @@ fn features(value: &Bound<'_, PyAny>, argument: &str, vertices: usize) -> PyResu
 /// >>> report["alignment"]["method"], report["options"]["betas"]["features"]
 /// ('features', 10.0)
 #[pyfunction]
-#[pyo3(name = "match", signature = (VA, FA, VB, FB, *, landmarks=None, features_a=None, features_b=None, size=257, align="auto", features_start="both", keep_folds=false, rim_fit_rings=8, complete_rings=4, pin_landmarks=true, scale_b=None, budget=40, hole_features="auto", whole_hole_rims=false, fill_holes=true, beta=None, position_weight=None, similarity_search="shape", search_candidates=None, search_level=4))]
+#[pyo3(name = "match", signature = (VA, FA, VB, FB, *, landmarks=None, features_a=None, features_b=None, size=257, align="auto", features_start="both", keep_folds=false, rim_fit_rings=8, complete_rings=4, pin_landmarks=true, scale_b=None, budget=40, hole_features="auto", whole_hole_rims=false, fill_holes=true, beta=None, position_weight=None, similarity_search="shape", search_candidates=None, search_level=4, rim_tolerance=0.5))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub fn match_meshes<'py>(
     py: Python<'py>,
@@ -185,6 +189,7 @@ pub fn match_meshes<'py>(
     similarity_search: &str,
     search_candidates: Option<Vec<f64>>,
     search_level: usize,
+    rim_tolerance: f64,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>)> {
     // As the command line's `--features-a` and `--features-b` (each requires the other).
     match (features_a.is_some(), features_b.is_some()) {
@@ -280,6 +285,9 @@ pub fn match_meshes<'py>(
     // Checked by the library (`MatchError::Option`, a ValueError here), as for the CLI.
     options.similarity_search.level = search_level;
     options.ncg.set_budget(budget);
+    options
+        .set_rim_tolerance(rim_tolerance, "rim_tolerance")
+        .map_err(PyValueError::new_err)?;
     if let Some(c) = &search_candidates {
         options
             .set_search_candidates(c, "search_candidates")

@@ -239,6 +239,11 @@ OPTIONS = {
         ["--hole-features", "off"],
         lambda r: r["options"]["hole_features"] == "off" and r["alignment"]["hole_pairs"] == [],
     ),
+    "rim_tolerance": (
+        {"rim_tolerance": 3.0},
+        ["--rim-tolerance", "3"],
+        lambda r: r["options"]["complete_tolerance"]["elsewhere"] == 3.0,
+    ),
     "whole_hole_rims": (
         {"whole_hole_rims": True},
         ["--whole-hole-rims"],
@@ -342,6 +347,7 @@ def test_bad_features_and_option_values_name_the_argument():
         ({"search_candidates": (5.0, 1.0)}, "search_candidates takes DEG,SCALE"),
         ({"search_candidates": (-5.0, 0.1)}, "search_candidates takes DEG,SCALE"),
         ({"search_level": 0}, "search level must be at least 1"),
+        ({"rim_tolerance": -1.0}, "rim_tolerance must be a finite number of edges ≥ 0"),
     ]
     for kwargs, message in cases:
         with pytest.raises(ValueError, match=message):
@@ -373,3 +379,25 @@ def test_refused_values_have_the_command_lines_message(kwargs, flags, cli, tmp_p
     (argument,) = kwargs
     assert r.returncode != 0
     assert f"error: {e.value}".replace(argument, "--" + argument.replace("_", "-"), 1) in r.stderr
+
+
+def test_a_wider_rim_tolerance_matches_more_of_a_along_b_s_crop():
+    # B: the part x > -0.5 of A (the same triangles, moved): A's vertices past B's cut
+    # have no counterpart. A wider outer-rim tolerance matches more of A along the cut
+    # (and, its price, some of A past it); the default leaves A two edges past the cut
+    # unmatched (partial correspondence).
+    V, F, _ = holey_pair(25)
+    keep = V[F].mean(1)[:, 0] > -0.5
+    used = np.unique(F[keep])
+    index = np.full(len(V), -1)
+    index[used] = np.arange(len(used))
+    VB, FB = V[used] + [0.3, -0.2, 0.1], index[F[keep]]
+    far_past = V[:, 0] < -0.5 - 2 * (2.0 / 24)
+    matched, matched_far_past = {}, {}
+    for t in (0.0, 0.5, 3.0):
+        C, report = surfmap.match(V, F, VB, FB, size=65, rim_tolerance=t)
+        assert report["options"]["complete_tolerance"]["elsewhere"] == t
+        matched[t] = int((C[:, 0] >= 0).sum())
+        matched_far_past[t] = int((C[far_past, 0] >= 0).sum())
+    assert matched[0.0] <= matched[0.5] < matched[3.0], matched
+    assert matched_far_past[0.0] == matched_far_past[0.5] == 0, matched_far_past

@@ -135,6 +135,13 @@ pub struct Args {
     /// unmatched and keeps φ's matches as they are.
     #[arg(long, value_name = "N", default_value_t = surfmap::matching::complete::COMPLETE_RINGS)]
     pub complete_rings: usize,
+    /// How far past B's outer rim (in mean edges of the vertex) the prediction of a vertex
+    /// that φ left unmatched may fall and the vertex still be matched to the rim. The
+    /// default, half an edge, keeps partial correspondence (the part of A beyond B's crop
+    /// unmatched); more matches more of A along a tight crop of B, and more vertices that
+    /// have no counterpart (BENCHMARKS.md: 3 edges matches every vertex near the rim).
+    #[arg(long, value_name = "EDGES", default_value_t = surfmap::matching::complete::COMPLETE_TOLERANCE.elsewhere)]
+    pub rim_tolerance: f64,
     /// Rings of A's vertices around each hole rim that follow it when the rim is carried
     /// exactly onto B's paired rim (holes match holes: eyes to eyes, mouth to mouth);
     /// wider where the rim moves far; 0 leaves the rims where φ puts them.
@@ -214,6 +221,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     options.similarity_search.level = args.search_level;
     options.ncg.set_budget(args.budget);
+    options
+        .set_rim_tolerance(args.rim_tolerance, "--rim-tolerance")
+        .map_err(anyhow::Error::msg)?;
     if let Some(c) = &args.search_candidates {
         options
             .set_search_candidates(c, "--search-candidates")

@@ -144,4 +144,5 @@ def match(
     similarity_search: Literal["shape", "off", "always"] = "shape",
     search_candidates: Optional[Sequence[float]] = None,
     search_level: int = 4,
+    rim_tolerance: float = 0.5,
 ) -> Tuple[FloatArray, Report]: ...

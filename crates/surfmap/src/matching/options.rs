@@ -1,6 +1,6 @@
 //! Checked setters of [`MatchOptions`] for the values a user gives: `surfmap match`'s
-//! `--beta`, `--position-weight` and `--search-candidates`, and the Python `match`'s
-//! `beta`, `position_weight` and `search_candidates`. One check and one message for
+//! `--beta`, `--position-weight`, `--search-candidates` and `--rim-tolerance`, and the
+//! Python `match`'s `beta`, `position_weight`, `search_candidates` and `rim_tolerance`. One check and one message for
 //! both; `name` is the argument as the caller spells it, and the message starts with it.
 
 use super::{MatchOptions, PositionWeight};
@@ -30,6 +30,20 @@ impl MatchOptions {
         }
         self.betas.position = w;
         self.position_weight = PositionWeight::Fixed;
+        Ok(())
+    }
+
+    /// The outer-rim tolerance of rim completion
+    /// ([`super::complete::Tolerance::elsewhere`], in mean edges of the vertex): finite
+    /// and ≥ 0 (0 matches no vertex whose prediction misses B's outer rim).
+    pub fn set_rim_tolerance(&mut self, edges: f64, name: &str) -> Result<(), String> {
+        if !edges.is_finite() || edges < 0.0 {
+            return Err(format!(
+                "{name} must be a finite number of edges ≥ 0 (default {}), got {edges}",
+                super::complete::COMPLETE_TOLERANCE.elsewhere
+            ));
+        }
+        self.complete_tolerance.elsewhere = edges;
         Ok(())
     }
 
@@ -74,6 +88,13 @@ mod tests {
         for bad in [&[5.0][..], &[5.0, 1.0], &[-5.0, 0.1]] {
             assert!(o.set_search_candidates(bad, "c").is_err());
         }
+        for bad in [-0.1, f64::NAN] {
+            assert!(o.set_rim_tolerance(bad, "r").unwrap_err().starts_with("r "));
+        }
+        assert_eq!(
+            o.complete_tolerance,
+            MatchOptions::default().complete_tolerance
+        );
         let after = (
             o.betas.bend,
             o.betas.reg,
@@ -101,5 +122,11 @@ mod tests {
         let s = &o.similarity_search;
         assert!((s.candidate_angle - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
         assert!((s.candidate_log_scale.exp() - 1.1).abs() < 1e-15);
+        o.set_rim_tolerance(3.0, "r").unwrap();
+        assert_eq!(o.complete_tolerance.elsewhere, 3.0);
+        assert_eq!(
+            o.complete_tolerance.interior,
+            MatchOptions::default().complete_tolerance.interior
+        );
     }
 }
