@@ -1,7 +1,8 @@
 //! Checked setters of [`MatchOptions`] for the values a user gives: `surfmap match`'s
 //! `--beta`, `--position-weight`, `--search-candidates` and `--rim-tolerance`, and the
-//! Python `match`'s `beta`, `position_weight`, `search_candidates` and `rim_tolerance`. One check and one message for
-//! both; `name` is the argument as the caller spells it, and the message starts with it.
+//! Python `match`'s `beta`, `position_weight`, `search_candidates` and `rim_tolerance`.
+//! One check and one message for both; `name` is the argument as the caller spells it,
+//! and the message starts with it.
 
 use super::{MatchOptions, PositionWeight};
 
