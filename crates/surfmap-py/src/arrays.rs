@@ -6,9 +6,11 @@
 use numpy::ndarray::{Array2, Ix2};
 use numpy::{Element, IntoPyArray, PyArray, PyArray2, PyUntypedArray, PyUntypedArrayMethods};
 use numpy::{PyArrayDescrMethods, PyArrayMethods};
-use pyo3::exceptions::PyValueError;
+use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 use surfmap::TriMesh;
+use surfmap::raster::FeatureFile;
 
 use crate::errors::mesh_error;
 
@@ -288,4 +290,42 @@ pub fn triangle_array<'py>(py: Python<'py>, triangles: &[[u32; 3]]) -> Bound<'py
             .map(|t| t.map(i64::from))
             .collect::<Vec<_>>(),
     )
+}
+
+/// Feature curves given as `argument` for a mesh of `vertices` vertices: the JSON of
+/// `surfmap match --features-a` or `surfmap images --features` as a dict,
+/// `{"features": [{"name", "vertices", "closed"}, …]}`, or just its list; numpy integers
+/// and arrays are read as their values. Not JSON data: a `TypeError`; a bad file (names,
+/// ids out of range): a `ValueError`, both naming the argument.
+pub fn feature_file(
+    value: &Bound<'_, PyAny>,
+    argument: &str,
+    vertices: usize,
+) -> PyResult<FeatureFile> {
+    let py = value.py();
+    let wrapped = if value.is_instance_of::<PyDict>() {
+        value.clone()
+    } else {
+        let d = PyDict::new(py);
+        d.set_item("features", value)?;
+        d.into_any()
+    };
+    let kwargs = PyDict::new(py);
+    kwargs.set_item(
+        "default",
+        py.import("operator")?
+            .call_method1("methodcaller", ("tolist",))?,
+    )?;
+    let json: String = py
+        .import("json")?
+        .call_method("dumps", (wrapped,), Some(&kwargs))
+        .map_err(|e| {
+            PyTypeError::new_err(format!(
+                "{argument}: expected {{\"features\": [{{\"name\": str, \"vertices\": [int, …], \"closed\": bool}}, …]}} or its list, \
+                 not convertible to JSON: {e}"
+            ))
+        })?
+        .extract()?;
+    FeatureFile::parse(&json, vertices)
+        .map_err(|e| PyValueError::new_err(format!("{argument}: {e}")))
 }

@@ -6,7 +6,7 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use surfmap::grid::Grid;
-use surfmap::raster::{FeatureFile, FeatureSource, GeometryPyramid, RasterError};
+use surfmap::raster::{FeatureSource, GeometryPyramid, RasterError};
 use surfmap::{FlattenOptions, GeometryImages, GeometryImagesOptions};
 
 use crate::arrays;
@@ -86,18 +86,9 @@ pub fn geometry_images<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let mesh = arrays::mesh(V, F)?;
     surfmap::grid::grid_level(size).map_err(|e| PyValueError::new_err(format!("size: {e}")))?;
-    let features = match features {
-        Some(list) => {
-            let wrapped = PyDict::new(py);
-            wrapped.set_item("features", list)?;
-            let json: String = py
-                .import("json")?
-                .call_method1("dumps", (wrapped,))?
-                .extract()?;
-            Some(FeatureFile::parse(&json, mesh.num_vertices()).map_err(raster_error)?)
-        }
-        None => None,
-    };
+    let features = features
+        .map(|f| arrays::feature_file(f, "features", mesh.num_vertices()))
+        .transpose()?;
     let uvs = match UV {
         Some(uv) => arrays::uvs(uv, "UV", mesh.num_vertices())?,
         None => {

@@ -4,14 +4,13 @@
 
 use numpy::IntoPyArray;
 use numpy::ndarray::Array2;
-use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use surfmap::matching::{
     Align, Guidance, HoleFeatures, Landmarks, MatchError, MatchOptions, ScaleB, SearchWhen,
     match_surfaces, output,
 };
-use surfmap::raster::FeatureFile;
 
 use crate::advice::match_defect_message;
 use crate::arrays;
@@ -46,39 +45,6 @@ fn landmarks(d: &Bound<'_, PyDict>) -> PyResult<Landmarks> {
         a: get("A")?.extract()?,
         b: get("B")?.extract()?,
     })
-}
-
-/// Feature curves given as `argument` for a mesh of `vertices` vertices: the JSON of
-/// `surfmap match --features-a` as a dict, `{"features": [{"name", "vertices", "closed"},
-/// …]}`, or just its list (as `geometry_images(features=…)`); numpy integers and arrays
-/// are read as their values.
-fn features(value: &Bound<'_, PyAny>, argument: &str, vertices: usize) -> PyResult<FeatureFile> {
-    let py = value.py();
-    let wrapped = if value.is_instance_of::<PyDict>() {
-        value.clone()
-    } else {
-        let d = PyDict::new(py);
-        d.set_item("features", value)?;
-        d.into_any()
-    };
-    let kwargs = PyDict::new(py);
-    kwargs.set_item(
-        "default",
-        py.import("operator")?
-            .call_method1("methodcaller", ("tolist",))?,
-    )?;
-    let json: String = py
-        .import("json")?
-        .call_method("dumps", (wrapped,), Some(&kwargs))
-        .map_err(|e| {
-            PyTypeError::new_err(format!(
-                "{argument}: expected {{\"features\": [{{\"name\": str, \"vertices\": [int, …], \"closed\": bool}}, …]}} or its list, \
-                 not convertible to JSON: {e}"
-            ))
-        })?
-        .extract()?;
-    FeatureFile::parse(&json, vertices)
-        .map_err(|e| PyValueError::new_err(format!("{argument}: {e}")))
 }
 
 /// Matches surface A onto surface B: a smooth, fold-free correspondence found by
@@ -296,10 +262,10 @@ pub fn match_meshes<'py>(
     let guidance = Guidance {
         landmarks: landmarks.map(self::landmarks).transpose()?,
         features_a: features_a
-            .map(|f| features(f, "features_a", a.num_vertices()))
+            .map(|f| arrays::feature_file(f, "features_a", a.num_vertices()))
             .transpose()?,
         features_b: features_b
-            .map(|f| features(f, "features_b", b.num_vertices()))
+            .map(|f| arrays::feature_file(f, "features_b", b.num_vertices()))
             .transpose()?,
     };
     let (corr, report) = py
