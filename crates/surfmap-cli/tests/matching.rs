@@ -197,19 +197,19 @@ fn a_head_scan_squeezed_onto_a_template_is_flagged() {
         serde_json::from_str(&std::fs::read_to_string(dir.join("match.json")).unwrap()).unwrap();
     assert!(report["min_det"].as_f64().unwrap() > 0.0);
     assert_eq!(report["warnings"].as_array().unwrap().len(), 1);
-    // A as the match saw it: the same repairs, in --repair's order.
-    use surfmap::mesh::repair;
+    // The outputs are numbered as the scan file (the match ran on the repaired scan).
     let a = surfmap::read_mesh(&scan).unwrap().mesh;
-    let (a, _) = repair::drop_degenerate(&a);
-    let (a, _) = repair::fix_non_manifold(&a);
-    let a = repair::reorient(&a).map_or(a, |(m, _)| m);
-    let (a, _) = repair::keep_component(&a, repair::ComponentChoice::Largest).unwrap();
-    let (a, _) = repair::drop_unreferenced(&a);
     let placed = surfmap::read_mesh(&dir.join("A_on_B.obj")).unwrap().mesh;
     assert_eq!(placed.num_vertices(), a.num_vertices());
+    assert_eq!(
+        report["input_numbering"]["vertices_a"].as_u64(),
+        Some(a.num_vertices() as u64)
+    );
+    // The report's ratio is over the repaired A's matched faces; A_on_B.obj leaves out
+    // the few faces around the second copies of the 12 vertices the repair split.
     let ratio = placed_area_ratio(&a, &placed);
     assert!(
-        (report["area_ratio"].as_f64().unwrap() / ratio - 1.0).abs() < 1e-9,
+        (report["area_ratio"].as_f64().unwrap() / ratio - 1.0).abs() < 1e-3,
         "report {} against {ratio}",
         report["area_ratio"]
     );
@@ -889,4 +889,190 @@ fn landmarks_that_moved_with_the_jaw_are_refined_in_space() {
         (both.0, both.1),
         (plane.0, plane.1)
     );
+}
+
+/// `surfmap match --repair` matches the repaired surfaces but writes its outputs, and
+/// reads landmark ids, in the files' own numbering. A is the demo surface with an unused
+/// vertex in front (every id shifted by one), every fifth face the wrong way round and a
+/// loose triangle; B the same surface rotated and moved, its vertices in reverse order and
+/// every third face the wrong way round. The truth is known (A's vertex i + 1 is B's
+/// n − 1 − i), so each row, read as B's triangle as given with its barycentrics in that
+/// triangle's corner order, must land at the true place; the landmarks given in the
+/// files' ids are matched exactly (pinned) to their B vertices; `A_on_B.obj` has one
+/// vertex per row and A's faces as matched, turned the right way; a landmark on a vertex
+/// the repairs removed is refused by name.
+#[test]
+fn a_repaired_pair_is_written_in_the_files_numbering() {
+    let base = temp_dir("match-repaired");
+    run_demo(&base, 10);
+    let clean = surfmap::read_mesh(&base.join("surface.obj")).unwrap().mesh;
+    let n = clean.positions.len();
+    let area = clean.area();
+    let write = |name: &str, positions: &[[f64; 3]], faces: &[[u32; 3]]| {
+        let mut text = String::new();
+        for p in positions {
+            text += &format!("v {} {} {}\n", p[0], p[1], p[2]);
+        }
+        for f in faces {
+            text += &format!("f {} {} {}\n", f[0] + 1, f[1] + 1, f[2] + 1);
+        }
+        let path = base.join(name);
+        std::fs::write(&path, text).unwrap();
+        path
+    };
+    // A: unused vertex 0, every fifth face flipped, a loose triangle far away.
+    let mut pos_a = vec![[50.0, 50.0, 50.0]];
+    pos_a.extend(&clean.positions);
+    let mut faces_a: Vec<[u32; 3]> = clean
+        .triangles
+        .iter()
+        .enumerate()
+        .map(|(t, f)| {
+            let f = f.map(|v| v + 1);
+            if t % 5 == 0 { [f[0], f[2], f[1]] } else { f }
+        })
+        .collect();
+    let loose = pos_a.len() as u32;
+    pos_a.extend([[40.0, 0.0, 0.0], [41.0, 0.0, 0.0], [40.0, 1.0, 0.0]]);
+    faces_a.push([loose, loose + 1, loose + 2]);
+    // B: rotated 30° about (1, 1, 1)/√3 and moved; vertex v of the clean surface is B's
+    // n − 1 − v; every third face flipped.
+    let (s, c) = (30f64.to_radians().sin(), 30f64.to_radians().cos());
+    let k = 1.0 / 3f64.sqrt();
+    let rotate = |p: [f64; 3]| -> [f64; 3] {
+        // Rodrigues: p cos + (k × p) sin + k (k·p)(1 − cos), k = (1,1,1)/√3.
+        let kp = [k * (p[2] - p[1]), k * (p[0] - p[2]), k * (p[1] - p[0])];
+        let kd = k * (p[0] + p[1] + p[2]);
+        [0, 1, 2].map(|i| p[i] * c + kp[i] * s + k * kd * (1.0 - c) + [0.3, -0.2, 0.5][i])
+    };
+    let moved: Vec<[f64; 3]> = clean.positions.iter().map(|&p| rotate(p)).collect();
+    let pos_b: Vec<[f64; 3]> = (0..n).map(|j| moved[n - 1 - j]).collect();
+    let faces_b: Vec<[u32; 3]> = clean
+        .triangles
+        .iter()
+        .enumerate()
+        .map(|(t, f)| {
+            let f = f.map(|v| (n - 1 - v as usize) as u32);
+            if t % 3 == 0 { [f[0], f[2], f[1]] } else { f }
+        })
+        .collect();
+    let a = write("a.obj", &pos_a, &faces_a);
+    let b = write("b.obj", &pos_b, &faces_b);
+    // Three landmarks, in the files' ids: A's vertex 1 + v is B's n − 1 − v.
+    let marks = [3usize, n / 2, n - 5];
+    let lm = format!(
+        r#"{{"names": ["p", "q", "r"], "A": [{}, {}, {}], "B": [{}, {}, {}]}}"#,
+        marks[0] + 1,
+        marks[1] + 1,
+        marks[2] + 1,
+        n - 1 - marks[0],
+        n - 1 - marks[1],
+        n - 1 - marks[2]
+    );
+    std::fs::write(base.join("lm.json"), lm).unwrap();
+    let dir = base.join("out");
+    let out = run_ok(
+        surfmap()
+            .arg("match")
+            .arg(&a)
+            .arg(&b)
+            .args(["--repair", "--size", "129", "--landmarks"])
+            .arg(base.join("lm.json"))
+            .arg("-o")
+            .arg(&dir),
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("outputs numbered as the files given")
+            && stdout.contains("4 vertices of A removed by the repairs are unmatched"),
+        "{stdout}"
+    );
+    let (shape, rows) = read_npy(&dir.join("correspondence.npy"));
+    assert_eq!(shape, vec![pos_a.len(), 4]);
+    let point = |r: &[f64]| -> [f64; 3] {
+        let f = faces_b[r[0] as usize];
+        [0, 1, 2].map(|i| (0..3).map(|k| r[1 + k] * pos_b[f[k] as usize][i]).sum())
+    };
+    let mut errors = vec![];
+    for (row, r) in rows.chunks_exact(4).enumerate() {
+        let on_surface = (1..=n).contains(&row);
+        if !on_surface {
+            assert_eq!(r[0], -1.0, "row {row} has no counterpart");
+            continue;
+        }
+        if r[0] < 0.0 {
+            continue;
+        }
+        let p = point(r);
+        let truth = moved[row - 1];
+        errors.push(((0..3).map(|i| (p[i] - truth[i]).powi(2)).sum::<f64>()).sqrt() / area.sqrt());
+    }
+    assert!(
+        errors.len() as f64 >= 0.99 * n as f64,
+        "{} of {n} matched",
+        errors.len()
+    );
+    errors.sort_by(f64::total_cmp);
+    let median = errors[errors.len() / 2];
+    let p99 = errors[errors.len() * 99 / 100];
+    assert!(
+        median < 0.002 && p99 < 0.01,
+        "median {median}, 99th percentile {p99}"
+    );
+    // The landmarks are pinned onto their B vertices (the files' ids read right).
+    for &v in &marks {
+        let p = point(&rows[4 * (v + 1)..4 * (v + 2)]);
+        let q = moved[v];
+        let d = ((0..3).map(|i| (p[i] - q[i]).powi(2)).sum::<f64>()).sqrt();
+        assert!(
+            d < 1e-9 * area.sqrt().max(1.0),
+            "landmark at A {} off by {d}",
+            v + 1
+        );
+    }
+    // A_on_B: one vertex per row; A's surface faces, turned the way B's surface faces.
+    let placed = surfmap::read_mesh(&dir.join("A_on_B.obj")).unwrap().mesh;
+    assert_eq!(placed.positions.len(), pos_a.len());
+    assert!(placed.triangles.len() as f64 >= 0.98 * clean.triangles.len() as f64);
+    let normal = |p: [[f64; 3]; 3]| {
+        let (u, v) = (
+            [0, 1, 2].map(|i| p[1][i] - p[0][i]),
+            [0, 1, 2].map(|i| p[2][i] - p[0][i]),
+        );
+        [
+            u[1] * v[2] - u[2] * v[1],
+            u[2] * v[0] - u[0] * v[2],
+            u[0] * v[1] - u[1] * v[0],
+        ]
+    };
+    for f in &placed.triangles {
+        assert!(f.iter().all(|&v| (1..=n as u32).contains(&v)), "{f:?}");
+        let image = normal(f.map(|v| placed.positions[v as usize]));
+        // The clean surface's own face there, moved: the orientation B has as a surface.
+        let own = normal(f.map(|v| moved[v as usize - 1]));
+        let dot: f64 = (0..3).map(|i| image[i] * own[i]).sum();
+        assert!(dot > 0.0, "face {f:?} turned over in A_on_B.obj");
+    }
+    // A landmark on the unused vertex the repairs removed.
+    std::fs::write(
+        base.join("lm0.json"),
+        r#"{"names": ["gone"], "A": [0], "B": [7]}"#,
+    )
+    .unwrap();
+    let err = fails(
+        &[
+            a.to_str().unwrap(),
+            b.to_str().unwrap(),
+            "--repair",
+            "-q",
+            "--landmarks",
+            base.join("lm0.json").to_str().unwrap(),
+        ],
+        &base.join("refused"),
+    );
+    assert!(
+        err.contains("landmark 'gone'") && err.contains("removed by the repairs"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&base);
 }

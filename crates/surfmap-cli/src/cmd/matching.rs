@@ -8,11 +8,13 @@ use std::path::PathBuf;
 use super::advice::{match_defect_message, worded_flatten_error};
 use anyhow::{Context, bail};
 use surfmap::matching::{
-    Align, Guidance, HoleFeatures, Landmarks, MatchError, MatchOptions, ScaleB, SearchWhen,
-    match_surfaces, output, pictures, write_match_folder,
+    Align, Guidance, HoleFeatures, InputNumbering, Landmarks, MatchError, MatchOptions, ScaleB,
+    SearchWhen, match_surfaces, output, pictures, write_match_folder,
 };
+use surfmap::mesh::repair::FaceOrigins;
 use surfmap::raster::FeatureFile;
 use surfmap::render::save_png;
+use surfmap::{SurfacePoint, TriMesh};
 
 use super::{RepairArgs, load_mesh};
 
@@ -178,8 +180,22 @@ fn read_features(path: &Option<PathBuf>, vertices: usize) -> anyhow::Result<Opti
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     let clock = std::time::Instant::now();
-    let mesh_a = args.repair.apply(load_mesh(&args.a)?.mesh, args.quiet)?;
-    let mesh_b = args.repair.apply(load_mesh(&args.b)?.mesh, args.quiet)?;
+    // Repaired meshes are matched; the outputs (and the landmark and feature ids read)
+    // are numbered as the files are.
+    let input_a = load_mesh(&args.a)?.mesh;
+    let input_b = load_mesh(&args.b)?.mesh;
+    let (mesh_a, origins_a) = args.repair.apply_tracked(&input_a, args.quiet)?;
+    let (mesh_b, origins_b) = args.repair.apply_tracked(&input_b, args.quiet)?;
+    let renumber = origins_a.is_some() || origins_b.is_some();
+    let copies =
+        |input: &surfmap::TriMesh, repaired: &surfmap::TriMesh, origins: &Option<FaceOrigins>| {
+            match origins {
+                Some(o) => o.vertex_copies(input, repaired),
+                None => (0..input.num_vertices() as u32).map(Some).collect(),
+            }
+        };
+    let copies_a = copies(&input_a, &mesh_a, &origins_a);
+    let copies_b = copies(&input_b, &mesh_b, &origins_b);
     let mut options = MatchOptions {
         size: args.size,
         fill_holes: !args.no_fill_holes,
@@ -247,14 +263,35 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                     p.display()
                 )
             })?;
-            Some(lm)
+            Some(if renumber {
+                lm.renumbered(&copies_a, &copies_b)
+                    .with_context(|| format!("landmarks file {}", p.display()))?
+            } else {
+                lm
+            })
         }
         None => None,
     };
+    let features = |path: &Option<PathBuf>, copies: &[Option<u32>]| -> anyhow::Result<_> {
+        let Some(file) = read_features(path, copies.len())? else {
+            return Ok(None);
+        };
+        Ok(Some(if renumber {
+            file.renumbered(copies).with_context(|| {
+                format!(
+                    "features file {}",
+                    path.as_ref()
+                        .map_or(String::new(), |p| p.display().to_string())
+                )
+            })?
+        } else {
+            file
+        }))
+    };
     let guidance = Guidance {
         landmarks,
-        features_a: read_features(&args.features_a, mesh_a.num_vertices())?,
-        features_b: read_features(&args.features_b, mesh_b.num_vertices())?,
+        features_a: features(&args.features_a, &copies_a)?,
+        features_b: features(&args.features_b, &copies_b)?,
     };
     let matched = match_surfaces(&mesh_a, &mesh_b, &guidance, &options)
         .map_err(|e| match &e {
@@ -278,10 +315,48 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             )
         })?;
     let checked = matched.checked_correspondence(&mesh_a, &mesh_b, options.drop_folds)?;
-    let report = matched.report(&checked, &options);
+    let mut report = matched.report(&checked, &options);
     let corr = checked.points;
     // Pictures are drawn before anything is written: an error leaves no partial folder.
     let placed = output::a_on_b(&mesh_a, &mesh_b, &matched, &corr);
+    // The files' numbering: each input vertex of A takes its copy's counterpart, each
+    // point of B goes back to the input face it lies on.
+    let numbered = renumber.then(|| {
+        let points: Vec<Option<SurfacePoint>> = copies_a
+            .iter()
+            .map(|c| {
+                let p = c.and_then(|v| corr[v as usize])?;
+                Some(origins_b.as_ref().map_or(p, |o| o.point(p)))
+            })
+            .collect();
+        // A's faces as matched (the repaired ones, consistently oriented), on the input's
+        // vertex numbers; where a repair split a vertex into copies, its row is one
+        // copy's, and the faces around the others are left out (their corner's place on
+        // B is not the row's).
+        let faces_a = match &origins_a {
+            Some(o) => TriMesh::new(
+                input_a.positions.clone(),
+                (0..mesh_a.triangles.len())
+                    .filter_map(|t| {
+                        let source = input_a.triangles[o.face[t] as usize];
+                        let tri = o.corner[t].map(|k| source[k as usize]);
+                        (0..3)
+                            .all(|k| copies_a[tri[k] as usize] == Some(mesh_a.triangles[t][k]))
+                            .then_some(tri)
+                    })
+                    .collect(),
+            ),
+            None => input_a.clone(),
+        };
+        let placed = output::a_on_b(&faces_a, &input_b, &matched, &points);
+        report.input_numbering = Some(InputNumbering {
+            vertices_a: input_a.num_vertices(),
+            vertices_b: input_b.num_vertices(),
+            triangles_b: input_b.triangles.len(),
+            removed_vertices_a: copies_a.iter().filter(|c| c.is_none()).count(),
+        });
+        (points, placed)
+    });
     let drawn = if args.pictures {
         vec![
             (
@@ -297,7 +372,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     } else {
         vec![]
     };
-    let mut written = write_match_folder(&args.output, &matched, &corr, &placed, &report)
+    let (out_corr, out_placed) = numbered.as_ref().map_or((&corr, &placed), |(c, p)| (c, p));
+    let mut written = write_match_folder(&args.output, &matched, out_corr, out_placed, &report)
         .with_context(|| format!("cannot write the match into {}", args.output.display()))?;
     for (name, img) in &drawn {
         let path = args.output.join(name);
@@ -412,6 +488,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             clock.elapsed().as_secs_f64(),
             n = report.grid_size,
         );
+        if let Some(n) = &report.input_numbering {
+            outln!(
+                "outputs numbered as the files given ({} vertices of A, {} triangles of B){}",
+                n.vertices_a,
+                n.triangles_b,
+                match n.removed_vertices_a {
+                    0 => String::new(),
+                    r => format!("; {r} vertices of A removed by the repairs are unmatched"),
+                }
+            );
+        }
         outln!("wrote into {}:", args.output.display());
         for p in &written {
             outln!(

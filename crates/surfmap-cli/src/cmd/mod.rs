@@ -53,12 +53,55 @@ pub struct RepairArgs {
     /// Every repair that needs no parameter, for a raw scan: --drop-degenerate,
     /// --fix-non-manifold, --reorient, --keep-largest (unless --component is given),
     /// --drop-unreferenced. Each one that changes something is reported. Vertex numbers
-    /// change when vertices are dropped or split; every output follows the repaired mesh.
+    /// change when vertices are dropped or split: the outputs follow the repaired mesh,
+    /// except `surfmap match`'s, which (like the ids it reads) are numbered as the files.
     #[arg(long)]
     pub repair: bool,
 }
 
 impl RepairArgs {
+    /// Whether any repair was asked for.
+    pub fn asked(&self) -> bool {
+        let Self {
+            weld,
+            drop_degenerate,
+            reorient,
+            keep_largest,
+            component,
+            drop_unreferenced,
+            fix_non_manifold,
+            repair,
+        } = self;
+        weld.is_some()
+            || *drop_degenerate
+            || *reorient
+            || *keep_largest
+            || component.is_some()
+            || *drop_unreferenced
+            || *fix_non_manifold
+            || *repair
+    }
+
+    /// [`Self::apply`], and where each face of the result came from in `mesh`
+    /// (`None` when no repair was asked for: the mesh is returned as read). The UVs are
+    /// dropped (they carried the tags; see [`surfmap::mesh::repair::FaceOrigins`]).
+    pub fn apply_tracked(
+        &self,
+        mesh: &surfmap::TriMesh,
+        quiet: bool,
+    ) -> anyhow::Result<(surfmap::TriMesh, Option<surfmap::mesh::repair::FaceOrigins>)> {
+        use anyhow::Context as _;
+        use surfmap::mesh::repair::FaceOrigins;
+        if !self.asked() {
+            return Ok((mesh.clone(), None));
+        }
+        let mut repaired = self.apply(FaceOrigins::tag(mesh), quiet)?;
+        let origins = FaceOrigins::read(&repaired)
+            .context("internal error: the repairs lost track of the input's faces")?;
+        repaired.uvs = None;
+        Ok((repaired, Some(origins)))
+    }
+
     pub fn apply(
         &self,
         mut mesh: surfmap::TriMesh,

@@ -30,7 +30,9 @@ pub mod surface;
 pub use deformation::Deformation;
 pub use energy::{Betas, EnergyTerms, Similarity3};
 pub use ncg::{LevelLog, NcgSettings, StopReason};
-pub use output::{FoldCheck, MatchReport, PointMap, check_folds, write_match_folder};
+pub use output::{
+    FoldCheck, InputNumbering, MatchReport, PointMap, check_folds, write_match_folder,
+};
 pub use similarity::Similarity2;
 pub use similarity_search::{SearchWhen, SimilaritySearch, SimilaritySearchLog};
 pub use solve::{

@@ -325,6 +325,24 @@ pub struct MatchReport {
     pub seconds_images: f64,
     pub seconds_solve: f64,
     pub options: MatchOptions,
+    /// Set when the surfaces were repaired before the match (the CLI's `--repair` and
+    /// the like): the counts above are of the repaired meshes, while the outputs
+    /// (`correspondence.npy`, `A_on_B.obj`) are numbered as the meshes were given.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub input_numbering: Option<InputNumbering>,
+}
+
+/// The meshes as given, when the outputs were numbered back to them from repaired ones
+/// ([`crate::mesh::repair::FaceOrigins`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct InputNumbering {
+    /// Vertices of A as given: the rows of `correspondence.npy`.
+    pub vertices_a: usize,
+    /// Vertices and faces of B as given: the triangles the rows point into.
+    pub vertices_b: usize,
+    pub triangles_b: usize,
+    /// Vertices of A as given that the repairs removed (their rows are unmatched).
+    pub removed_vertices_a: usize,
 }
 
 /// A per-vertex correspondence after the checks of [`SurfaceMatch::checked_correspondence`].
@@ -469,6 +487,7 @@ impl SurfaceMatch {
             seconds_images: self.a.time_images + self.b.time_images,
             seconds_solve: self.seconds_solve,
             options: options.clone(),
+            input_numbering: None,
         }
     }
 }

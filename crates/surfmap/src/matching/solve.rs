@@ -69,6 +69,38 @@ pub struct Landmarks {
     pub b: Vec<u32>,
 }
 
+impl Landmarks {
+    /// The landmarks renumbered onto repaired meshes: `copies_a[v]` (`copies_b[v]`) is
+    /// the repaired vertex of A (B) that stands for input vertex `v`
+    /// ([`crate::mesh::repair::FaceOrigins::vertex_copies`]). An id beyond the input
+    /// mesh, or whose vertex the repairs removed, is an error naming the landmark.
+    pub fn renumbered(
+        &self,
+        copies_a: &[Option<u32>],
+        copies_b: &[Option<u32>],
+    ) -> Result<Self, MatchError> {
+        let mut out = self.clone();
+        for (side, ids, copies) in [("A", &mut out.a, copies_a), ("B", &mut out.b, copies_b)] {
+            for (i, v) in ids.iter_mut().enumerate() {
+                let name = self.names.get(i).map_or("?", |s| s.as_str());
+                let Some(copy) = copies.get(*v as usize) else {
+                    return Err(MatchError::Guidance(format!(
+                        "landmark '{name}': vertex {v} of {side} does not exist ({side} has {} vertices)",
+                        copies.len()
+                    )));
+                };
+                *v = copy.ok_or_else(|| {
+                    MatchError::Guidance(format!(
+                        "landmark '{name}': vertex {v} of {side} was removed by the repairs \
+                         (every face around it went); pick a vertex of the part that is kept"
+                    ))
+                })?;
+            }
+        }
+        Ok(out)
+    }
+}
+
 /// Optional user guidance, paired by name between A and B.
 #[derive(Clone, Debug, Default)]
 pub struct Guidance {

@@ -474,6 +474,112 @@ pub fn hole_loops(topo: &Topology) -> Vec<&[u32]> {
     loops.into_iter().skip(1).collect()
 }
 
+/// Where the faces of a repaired mesh came from in the mesh as read, so that results on
+/// the repaired mesh can be given back in the input's numbering (the CLI's `match
+/// --repair` writes its correspondence against the files as given).
+///
+/// **How it is tracked.** [`FaceOrigins::tag`] replaces the mesh's UVs by per-corner
+/// tags: corner `k` of face `t` gets the UV `(t, k)`. Every repair here carries
+/// per-corner UVs along with the faces it keeps — [`retain_faces`] filters them,
+/// [`reorient`] swaps them with the corners, [`weld`], [`fix_non_manifold`] and
+/// [`drop_unreferenced`] renumber vertices and leave each face's corners as they were —
+/// so after any sequence of them [`FaceOrigins::read`] finds, for each face, the input
+/// face and which of its corners each corner is (both exact: integers below 2⁵³ as
+/// f64). A unit test runs every repair on a tagged mesh and checks the positions.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FaceOrigins {
+    /// For each face of the repaired mesh, the face of the input.
+    pub face: Vec<u32>,
+    /// For each face of the repaired mesh, which corner of its input face each of its
+    /// three corners is (`[0, 2, 1]` after [`reorient`] flipped it).
+    pub corner: Vec<[u8; 3]>,
+}
+
+impl FaceOrigins {
+    /// `mesh` with its UVs replaced by the per-corner tags `(face, corner)`.
+    pub fn tag(mesh: &TriMesh) -> TriMesh {
+        let n = mesh.triangles.len();
+        TriMesh {
+            positions: mesh.positions.clone(),
+            triangles: mesh.triangles.clone(),
+            uvs: Some(Uvs::PerCorner {
+                coords: (0..n)
+                    .flat_map(|t| (0..3).map(move |k| [t as f64, k as f64]))
+                    .collect(),
+                indices: (0..n as u32)
+                    .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
+                    .collect(),
+            }),
+        }
+    }
+
+    /// The origins of a mesh made by repairs from a [`FaceOrigins::tag`]ged one, or
+    /// `None` when it carries no such tags (its UVs were not the tags, or were lost).
+    pub fn read(repaired: &TriMesh) -> Option<Self> {
+        let Some(Uvs::PerCorner { coords, indices }) = &repaired.uvs else {
+            return None;
+        };
+        if indices.len() != repaired.triangles.len() {
+            return None;
+        }
+        let mut face = Vec::with_capacity(indices.len());
+        let mut corner = Vec::with_capacity(indices.len());
+        for ids in indices {
+            let tags = ids.map(|i| coords.get(i as usize).copied());
+            let [Some(t0), Some(t1), Some(t2)] = tags else {
+                return None;
+            };
+            let f = t0[0];
+            let corners = [t0[1], t1[1], t2[1]];
+            let valid = [t1[0], t2[0]].iter().all(|&g| g == f)
+                && f >= 0.0
+                && f.fract() == 0.0
+                && f < u32::MAX as f64
+                && corners.iter().all(|&c| c == 0.0 || c == 1.0 || c == 2.0)
+                && corners[0] != corners[1]
+                && corners[1] != corners[2]
+                && corners[0] != corners[2];
+            if !valid {
+                return None;
+            }
+            face.push(f as u32);
+            corner.push(corners.map(|c| c as u8));
+        }
+        Some(Self { face, corner })
+    }
+
+    /// A point of the repaired mesh as the same point of the input mesh: its input face,
+    /// each barycentric coordinate on the input corner it belongs to.
+    pub fn point(&self, p: super::SurfacePoint) -> super::SurfacePoint {
+        let t = p.triangle as usize;
+        let mut barycentric = [0.0; 3];
+        for k in 0..3 {
+            barycentric[self.corner[t][k] as usize] = p.barycentric[k];
+        }
+        super::SurfacePoint {
+            triangle: self.face[t],
+            barycentric,
+        }
+    }
+
+    /// For each vertex of `input`, a vertex of `repaired` that stands for it (a corner
+    /// of a face kept from one of its faces; the first such, when a repair split it into
+    /// copies), or `None` when the repairs dropped every face around it.
+    pub fn vertex_copies(&self, input: &TriMesh, repaired: &TriMesh) -> Vec<Option<u32>> {
+        let mut copies = vec![None; input.positions.len()];
+        for (t, tri) in repaired.triangles.iter().enumerate() {
+            let source = input.triangles[self.face[t] as usize];
+            for k in 0..3 {
+                let v = source[self.corner[t][k] as usize] as usize;
+                if copies[v].is_none() {
+                    copies[v] = Some(tri[k]);
+                }
+            }
+        }
+        copies
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -696,6 +802,104 @@ mod tests {
         }
         let (one, _) = keep_component(&fixed, ComponentChoice::Largest).unwrap();
         assert!(Topology::new(&one).is_disc());
+    }
+
+    /// A grid disc given every defect the repairs handle — a crack (a duplicated row of
+    /// vertices), a fin on an interior edge, a face the wrong way round, a degenerate
+    /// face, a loose triangle, an unused vertex — tagged, then repaired in the CLI's order
+    /// (weld, degenerate, unreferenced, non-manifold, reorient, largest component,
+    /// unreferenced): the origins read back put every corner of every repaired face on
+    /// its input corner's position (exactly, or within the weld's tolerance), map points
+    /// to the same 3D place, and give every input vertex a copy at its place except the
+    /// ones whose faces all went.
+    #[test]
+    fn face_origins_follow_every_repair() {
+        use crate::mesh::SurfacePoint;
+        use crate::mesh::generate::grid_disc;
+        let disc = grid_disc(6); // 7×7 vertices, row-major, spacing 1/6
+        let mut m = disc.clone();
+        // The crack: faces touching row 3 above the diagonal use copies of its vertices.
+        let copy0 = m.positions.len() as u32;
+        for i in 0..7 {
+            let p = m.positions[21 + i];
+            m.positions.push([p[0], p[1], p[2] + 1e-9]);
+        }
+        for (t, tri) in m.triangles.iter_mut().enumerate() {
+            if t % 2 == 0 {
+                for v in tri.iter_mut() {
+                    if (21..28).contains(v) {
+                        *v = copy0 + (*v - 21);
+                    }
+                }
+            }
+        }
+        let fin = m.positions.len() as u32;
+        m.positions.push([1.5 / 6.0, 1.0 / 6.0, 0.2]);
+        m.triangles.push([8, 9, fin]);
+        m.triangles[40].swap(0, 1); // the wrong way round
+        m.triangles.push([3, 3, 4]); // degenerate
+        let loose = m.positions.len() as u32;
+        m.positions
+            .extend([[5.0, 5.0, 0.0], [6.0, 5.0, 0.0], [5.0, 6.0, 0.0]]);
+        m.triangles.push([loose, loose + 1, loose + 2]);
+        m.positions.push([9.0, 9.0, 9.0]); // unused
+        let unused = m.positions.len() - 1;
+
+        let tagged = FaceOrigins::tag(&m);
+        let (r, _) = weld(&tagged, 1e-6);
+        let (r, _) = drop_degenerate(&r);
+        let (r, _) = drop_unreferenced(&r);
+        let (r, fix) = fix_non_manifold(&r);
+        assert_eq!(fix.cut_edges, 1);
+        let (r, flipped) = reorient(&r).unwrap();
+        assert_eq!(flipped, 1);
+        let (r, _) = keep_component(&r, ComponentChoice::Largest).unwrap();
+        let (r, _) = drop_unreferenced(&r);
+        assert!(Topology::new(&r).is_disc());
+        assert_eq!(r.triangles.len(), disc.triangles.len());
+
+        let origins = FaceOrigins::read(&r).expect("tags carried through");
+        assert_eq!(origins.face.len(), r.triangles.len());
+        let close = |x: [f64; 3], y: [f64; 3]| (0..3).all(|i| (x[i] - y[i]).abs() <= 1e-6);
+        for (t, tri) in r.triangles.iter().enumerate() {
+            let source = m.triangles[origins.face[t] as usize];
+            for k in 0..3 {
+                let input_corner = source[origins.corner[t][k] as usize];
+                assert!(close(
+                    r.positions[tri[k] as usize],
+                    m.positions[input_corner as usize]
+                ));
+            }
+        }
+        // The flipped face came back with two corners swapped.
+        let t40 = origins.face.iter().position(|&f| f == 40).unwrap();
+        assert_eq!(origins.corner[t40], [0, 2, 1]);
+        // A point keeps its place.
+        for t in [0, t40, r.triangles.len() - 1] {
+            let p = SurfacePoint {
+                triangle: t as u32,
+                barycentric: [0.2, 0.3, 0.5],
+            };
+            let q = origins.point(p);
+            assert!(close(
+                p.position(&r.positions, &r.triangles),
+                q.position(&m.positions, &m.triangles)
+            ));
+        }
+        let copies = origins.vertex_copies(&m, &r);
+        for (v, c) in copies.iter().enumerate() {
+            let dropped = v == fin as usize || v >= loose as usize;
+            match c {
+                Some(c) => {
+                    assert!(!dropped, "vertex {v}");
+                    assert!(close(r.positions[*c as usize], m.positions[v]));
+                }
+                None => assert!(dropped, "vertex {v} lost"),
+            }
+        }
+        assert_eq!(copies[unused], None);
+        // An untagged mesh has no origins.
+        assert_eq!(FaceOrigins::read(&m), None);
     }
 
     /// A manifold mesh is returned unchanged.

@@ -75,6 +75,27 @@ impl FeatureFile {
         }
         Ok(())
     }
+
+    /// The file renumbered onto a repaired mesh: `copies[v]` is the repaired vertex that
+    /// stands for input vertex `v` ([`crate::mesh::repair::FaceOrigins::vertex_copies`]);
+    /// a vertex the repairs removed is an error naming the feature. Checked against the
+    /// input first ([`FeatureFile::validate`] with `copies.len()` vertices).
+    pub fn renumbered(&self, copies: &[Option<u32>]) -> Result<Self, RasterError> {
+        self.validate(copies.len())?;
+        let mut out = self.clone();
+        for f in &mut out.features {
+            for v in &mut f.vertices {
+                *v = copies[*v as usize].ok_or_else(|| RasterError::Feature {
+                    name: f.name.clone(),
+                    problem: format!(
+                        "vertex {v} was removed by the repairs (every face around it went); \
+                         pick vertices of the part that is kept"
+                    ),
+                })?;
+            }
+        }
+        Ok(out)
+    }
 }
 
 /// An RGB mask painted over texture space; row 0 is the top of the image (texture `v = 1`).
@@ -173,6 +194,30 @@ pub enum FeatureSource<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Ids move to their copies; a removed vertex or one beyond the input is refused
+    /// with the feature's name.
+    #[test]
+    fn renumbering_onto_a_repaired_mesh() {
+        let file = FeatureFile::parse(
+            r#"{"features": [{"name": "brow", "vertices": [0, 2]}, {"name": "lip", "vertices": [3]}]}"#,
+            4,
+        )
+        .unwrap();
+        let moved = file.renumbered(&[Some(5), None, Some(1), Some(0)]).unwrap();
+        assert_eq!(moved.features[0].vertices, vec![5, 1]);
+        assert_eq!(moved.features[1].vertices, vec![0]);
+        let err = file
+            .renumbered(&[Some(5), None, Some(1), None])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("lip") && err.contains("vertex 3 was removed"),
+            "{err}"
+        );
+        let err = file.renumbered(&[Some(0); 3]).unwrap_err().to_string();
+        assert!(err.contains("vertex 3 does not exist"), "{err}");
+    }
 
     #[test]
     fn parses_and_validates() {
