@@ -1076,3 +1076,79 @@ fn a_repaired_pair_is_written_in_the_files_numbering() {
     );
     let _ = std::fs::remove_dir_all(&base);
 }
+
+/// Two whole FLAME heads (the template and a random sample: the head, an annulus open
+/// at the neck and the mouth, plus two eyeballs; vertex i ↔ vertex i) with `--repair`
+/// (the eyeballs go): the head flattened from its neck has a strongly anisotropic
+/// metric, where the mouth rim's distance map once ran out of its update budget
+/// ("Eikonal solver did not settle"). Now the match is made; its rows, numbered as the
+/// files, put the head's vertices at their registered counterparts and leave the
+/// eyeballs' unmatched.
+#[test]
+fn whole_flame_heads_match_after_repair() {
+    let (Some(a), Some(b)) = (
+        shared_file("faces/flame/flame_template.ply"),
+        shared_file("faces/flame/flame_sample02.ply"),
+    ) else {
+        return;
+    };
+    let dir = temp_dir("match-heads");
+    run_ok(
+        surfmap()
+            .arg("match")
+            .arg(&a)
+            .arg(&b)
+            .args(["--repair", "-q", "-o"])
+            .arg(&dir),
+    );
+    let mesh_b = surfmap::read_mesh(&b).unwrap().mesh;
+    let (shape, rows) = read_npy(&dir.join("correspondence.npy"));
+    assert_eq!(shape, vec![mesh_b.num_vertices(), 4]);
+    // The head is the largest component: its vertices are the ones faces of it use.
+    let topo = surfmap::Topology::new(&mesh_b);
+    let mut sizes = vec![0usize; topo.num_components];
+    for &c in &topo.face_component {
+        sizes[c as usize] += 1;
+    }
+    let head = (0..sizes.len()).max_by_key(|&c| sizes[c]).unwrap();
+    let mut on_head = vec![false; mesh_b.num_vertices()];
+    for (t, f) in mesh_b.triangles.iter().enumerate() {
+        if topo.face_component[t] as usize == head {
+            f.iter().for_each(|&v| on_head[v as usize] = true);
+        }
+    }
+    let scale = mesh_b.area().sqrt();
+    let (mut matched, mut close) = (0, 0);
+    for (v, r) in rows.chunks_exact(4).enumerate() {
+        if !on_head[v] {
+            assert_eq!(r[0], -1.0, "eyeball vertex {v} matched");
+            continue;
+        }
+        if r[0] < 0.0 {
+            continue;
+        }
+        matched += 1;
+        let f = mesh_b.triangles[r[0] as usize];
+        let p: [f64; 3] = [0, 1, 2].map(|i| {
+            (0..3)
+                .map(|k| r[1 + k] * mesh_b.positions[f[k] as usize][i])
+                .sum()
+        });
+        let q = mesh_b.positions[v];
+        let d = ((0..3).map(|i| (p[i] - q[i]).powi(2)).sum::<f64>()).sqrt();
+        close += usize::from(d <= 0.02 * scale);
+    }
+    let heads = on_head.iter().filter(|&&h| h).count();
+    assert!(
+        matched as f64 >= 0.95 * heads as f64,
+        "{matched} of {heads} matched"
+    );
+    assert!(
+        close as f64 >= 0.9 * matched as f64,
+        "{close} of {matched} within 0.02"
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("match.json")).unwrap()).unwrap();
+    assert!(report["min_det"].as_f64().unwrap() > 0.0);
+    let _ = std::fs::remove_dir_all(&dir);
+}
