@@ -305,3 +305,64 @@ fn face_with_open_eyes_and_mouth_with_fill_holes() {
     assert!(dir.join("images.json").is_file());
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// With a repair, feature ids are the file's: the demo surface with an unused vertex in
+/// front (every id one higher) and `--repair` gives, for the same features (their ids one
+/// higher), byte for byte the feature images of the surface itself.
+#[test]
+fn feature_ids_with_a_repair_are_the_file_s() {
+    let dir = temp_dir("images-repair-ids");
+    let (surface, _) = demo(&dir);
+    let clean = surfmap::read_mesh(&surface).unwrap().mesh;
+    let mut text = String::from("v 9 9 9\n");
+    for p in &clean.positions {
+        text += &format!("v {:?} {:?} {:?}\n", p[0], p[1], p[2]);
+    }
+    for f in &clean.triangles {
+        text += &format!("f {} {} {}\n", f[0] + 2, f[1] + 2, f[2] + 2);
+    }
+    let shifted = dir.join("shifted.obj");
+    std::fs::write(&shifted, text).unwrap();
+    let features = |name: &str, offset: u32| {
+        let path = dir.join(name);
+        let ids = |v: [u32; 4]| format!("{:?}", v.map(|x| x + offset));
+        std::fs::write(
+            &path,
+            format!(
+                r#"{{"features": [{{"name": "arc", "vertices": {}}}, {{"name": "spot", "vertices": [{}]}}]}}"#,
+                ids([5, 6, 7, 8]),
+                40 + offset
+            ),
+        )
+        .unwrap();
+        path
+    };
+    let (plain, moved) = (features("plain.json", 0), features("moved.json", 1));
+    for (mesh, f, out, extra) in [
+        (&surface, &plain, "clean", None),
+        (&shifted, &moved, "shifted", Some("--repair")),
+    ] {
+        let mut args: Vec<&std::ffi::OsStr> = vec![
+            mesh.as_os_str(),
+            "-o".as_ref(),
+            "--size".as_ref(),
+            "65".as_ref(),
+            "--no-pyramid".as_ref(),
+            "--features".as_ref(),
+            f.as_os_str(),
+        ];
+        let out_dir = dir.join(out);
+        args.insert(2, out_dir.as_os_str());
+        if let Some(e) = extra {
+            args.push(e.as_ref());
+        }
+        let out = run(&args);
+        assert!(out.status.success(), "{}", stderr(&out));
+    }
+    for name in ["feature_0.npy", "feature_1.npy"] {
+        let a = std::fs::read(dir.join("clean").join(name)).unwrap();
+        let b = std::fs::read(dir.join("shifted").join(name)).unwrap();
+        assert!(a == b, "{name} differs");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

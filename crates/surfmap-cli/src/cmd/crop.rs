@@ -30,7 +30,8 @@ pub struct Args {
         required_unless_present = "center_vertex"
     )]
     pub center: Option<Vec<f64>>,
-    /// Centre of the ball: a vertex of the mesh (0-based, after any repair).
+    /// Centre of the ball: a vertex of the mesh (0-based, as numbered in the file, also
+    /// with repairs).
     #[arg(long, value_name = "V")]
     pub center_vertex: Option<usize>,
     /// Measure distance along the surface (shortest paths over the edges) instead of in
@@ -38,8 +39,8 @@ pub struct Args {
     /// the ears.
     #[arg(long)]
     pub geodesic: bool,
-    /// Also write, one per line, the input vertex each output vertex came from (0-based,
-    /// numbered after any repair).
+    /// Also write, one per line, the vertex of the file each output vertex came from
+    /// (0-based, as numbered in the file, also with repairs).
     #[arg(long, value_name = "FILE")]
     pub ids: Option<PathBuf>,
     #[command(flatten)]
@@ -49,17 +50,21 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let mesh = args.repair.apply(load_mesh(&args.mesh)?.mesh, args.quiet)?;
+    // Vertex ids in and out are the file's; the crop runs on the repaired mesh.
+    let input = load_mesh(&args.mesh)?.mesh;
+    let (mesh, origins) = args.repair.apply_tracked(&input, args.quiet)?;
+    let sources = origins.map(|o| o.vertex_sources(&input, &mesh));
+    let file_id = |v: u32| sources.as_ref().map_or(v, |s| s[v as usize].unwrap_or(v));
     let centre = match (&args.center, args.center_vertex) {
         (Some(c), _) => match c[..] {
             [x, y, z] => [x, y, z],
             _ => bail!("--center takes three numbers X,Y,Z, got {}", c.len()),
         },
-        (None, Some(v)) => match mesh.positions.get(v) {
+        (None, Some(v)) => match input.positions.get(v) {
             Some(&p) => p,
             None => bail!(
                 "--center-vertex {v}: the mesh has {} vertices (0-based)",
-                mesh.positions.len()
+                input.positions.len()
             ),
         },
         (None, None) => bail!("give --center X,Y,Z or --center-vertex V"),
@@ -74,7 +79,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     write_mesh(&args.output, &crop.mesh)
         .with_context(|| format!("cannot write {}", args.output.display()))?;
     if let Some(path) = &args.ids {
-        let text: String = crop.vertex_ids.iter().map(|v| format!("{v}\n")).collect();
+        let text: String = crop
+            .vertex_ids
+            .iter()
+            .map(|&v| format!("{}\n", file_id(v)))
+            .collect();
         surfmap::fsutil::write_atomically(path, |w| w.write_all(text.as_bytes()))
             .with_context(|| format!("cannot write {}", path.display()))?;
     }
@@ -95,7 +104,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             centre[0],
             centre[1],
             centre[2],
-            crop.seed,
+            file_id(crop.seed),
             topo.boundary_loops.len(),
             if topo.is_disc() { ", a disc" } else { "" },
             args.output.display()

@@ -53,7 +53,9 @@ pub struct Args {
 
 pub fn run(args: Args) -> anyhow::Result<()> {
     let file = load_mesh(&args.mesh)?;
-    let mesh = args.repair.apply(file.mesh, args.quiet)?;
+    // Feature ids are read in the file's numbering; the images are of the repaired mesh.
+    let (mesh, origins) = args.repair.apply_tracked(&file.mesh, args.quiet)?;
+    let copies = origins.map(|o| o.vertex_copies(&file.mesh, &mesh));
     // Check the cheap inputs before the flattening.
     let options = GeometryImagesOptions {
         size: args.size,
@@ -65,10 +67,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Some(p) => {
             let json = std::fs::read_to_string(p)
                 .with_context(|| format!("cannot read features file {}", p.display()))?;
-            Some(
-                FeatureFile::parse(&json, mesh.num_vertices())
-                    .with_context(|| format!("invalid features file {}", p.display()))?,
-            )
+            let parsed = match &copies {
+                None => FeatureFile::parse(&json, mesh.num_vertices()),
+                Some(c) => FeatureFile::parse(&json, c.len()).and_then(|f| f.renumbered(c)),
+            };
+            Some(parsed.with_context(|| format!("invalid features file {}", p.display()))?)
         }
         None => None,
     };

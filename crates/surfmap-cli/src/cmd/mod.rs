@@ -52,9 +52,10 @@ pub struct RepairArgs {
     pub fix_non_manifold: bool,
     /// Every repair that needs no parameter, for a raw scan: --drop-degenerate,
     /// --fix-non-manifold, --reorient, --keep-largest (unless --component is given),
-    /// --drop-unreferenced. Each one that changes something is reported. Vertex numbers
-    /// change when vertices are dropped or split: the outputs follow the repaired mesh,
-    /// except `surfmap match`'s, which (like the ids it reads) are numbered as the files.
+    /// --drop-unreferenced. Each one that changes something is reported. A mesh written
+    /// is the repaired one (its vertex numbers change when vertices are dropped or
+    /// split); vertex ids read or written — landmarks, features, `match`'s
+    /// correspondence, `crop`'s --center-vertex and --ids — are the file's.
     #[arg(long)]
     pub repair: bool,
 }
@@ -83,8 +84,10 @@ impl RepairArgs {
     }
 
     /// [`Self::apply`], and where each face of the result came from in `mesh`
-    /// (`None` when no repair was asked for: the mesh is returned as read). The UVs are
-    /// dropped (they carried the tags; see [`surfmap::mesh::repair::FaceOrigins`]).
+    /// (`None` when no repair was asked for: the mesh is returned as read). The origins
+    /// come from repairing a copy whose UVs are tags ([`surfmap::mesh::repair::FaceOrigins`]);
+    /// a mesh with UVs of its own is repaired once more to keep them (the repairs are
+    /// deterministic: the same faces come out).
     pub fn apply_tracked(
         &self,
         mesh: &surfmap::TriMesh,
@@ -95,10 +98,20 @@ impl RepairArgs {
         if !self.asked() {
             return Ok((mesh.clone(), None));
         }
-        let mut repaired = self.apply(FaceOrigins::tag(mesh), quiet)?;
-        let origins = FaceOrigins::read(&repaired)
+        let mut tagged = self.apply(FaceOrigins::tag(mesh), quiet)?;
+        let origins = FaceOrigins::read(&tagged)
             .context("internal error: the repairs lost track of the input's faces")?;
-        repaired.uvs = None;
+        let repaired = if mesh.uvs.is_some() {
+            let own = self.apply(mesh.clone(), true)?;
+            anyhow::ensure!(
+                own.triangles == tagged.triangles,
+                "internal error: the repairs did not repeat themselves"
+            );
+            own
+        } else {
+            tagged.uvs = None;
+            tagged
+        };
         Ok((repaired, Some(origins)))
     }
 

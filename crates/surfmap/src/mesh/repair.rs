@@ -562,6 +562,19 @@ impl FaceOrigins {
         }
     }
 
+    /// For each vertex of `repaired`, the vertex of `input` it stands for (`None` for a
+    /// vertex no face uses).
+    pub fn vertex_sources(&self, input: &TriMesh, repaired: &TriMesh) -> Vec<Option<u32>> {
+        let mut sources = vec![None; repaired.positions.len()];
+        for (t, tri) in repaired.triangles.iter().enumerate() {
+            let source = input.triangles[self.face[t] as usize];
+            for k in 0..3 {
+                sources[tri[k] as usize] = Some(source[self.corner[t][k] as usize]);
+            }
+        }
+        sources
+    }
+
     /// For each vertex of `input`, a vertex of `repaired` that stands for it (a corner
     /// of a face kept from one of its faces; the first such, when a repair split it into
     /// copies), or `None` when the repairs dropped every face around it.
@@ -898,6 +911,19 @@ mod tests {
             }
         }
         assert_eq!(copies[unused], None);
+        // Each repaired vertex goes back to an input vertex at its place, and a copy goes
+        // back to the vertex it is a copy of.
+        let sources = origins.vertex_sources(&m, &r);
+        for (v, s) in sources.iter().enumerate() {
+            let s = s.expect("every repaired vertex is on a face") as usize;
+            assert!(close(r.positions[v], m.positions[s]));
+        }
+        for (v, c) in copies.iter().enumerate() {
+            if let Some(c) = c {
+                let back = sources[*c as usize].unwrap() as usize;
+                assert!(close(m.positions[back], m.positions[v]));
+            }
+        }
         // An untagged mesh has no origins.
         assert_eq!(FaceOrigins::read(&m), None);
     }
