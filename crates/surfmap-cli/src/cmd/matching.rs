@@ -187,13 +187,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let (mesh_a, origins_a) = args.repair.apply_tracked(&input_a, args.quiet)?;
     let (mesh_b, origins_b) = args.repair.apply_tracked(&input_b, args.quiet)?;
     let renumber = origins_a.is_some() || origins_b.is_some();
-    let copies =
-        |input: &surfmap::TriMesh, repaired: &surfmap::TriMesh, origins: &Option<FaceOrigins>| {
-            match origins {
-                Some(o) => o.vertex_copies(input, repaired),
-                None => (0..input.num_vertices() as u32).map(Some).collect(),
-            }
-        };
+    let copies = |input: &TriMesh, repaired: &TriMesh, origins: &Option<FaceOrigins>| match origins
+    {
+        Some(o) => o.vertex_copies(input, repaired),
+        None => (0..input.num_vertices() as u32).map(Some).collect(),
+    };
     let copies_a = copies(&input_a, &mesh_a, &origins_a);
     let copies_b = copies(&input_b, &mesh_b, &origins_b);
     let mut options = MatchOptions {

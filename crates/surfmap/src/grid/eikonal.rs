@@ -89,8 +89,10 @@ pub(crate) fn triangle_update(du: f64, dv: f64, u: [f64; 2], v: [f64; 2], g: [f6
 /// ever smaller amounts, and at 10⁻¹³ the whole FLAME head flattened from its neck
 /// (eigenvalue ratio of `g` 19 at the median, 700 at the 99th percentile) took 96
 /// million updates for 34,000 nodes and ran out of the budget; at 10⁻⁹ it takes 2.5
-/// million, and the match is bit for bit the one the unlimited 10⁻¹³ run gives (as are
-/// the face pairs', which settle in about one update per node either way).
+/// million, and the match is bit for bit the one the unlimited 10⁻¹³ run gives. Face
+/// pairs settle in about one update per node either way; their distance maps move by
+/// at most this fraction, which the solve turns into other last digits (half of the
+/// benchmark's outputs changed, its scores by hundredths of a point: BENCHMARKS.md).
 const REOPEN_TOLERANCE: f64 = 1e-9;
 
 /// Solves the Eikonal equation on the grid of the per-node metric `metric`
