@@ -19,7 +19,7 @@ as given). With `--repair` the outputs are numbered as the files given; vertices
 removed are unmatched, and the line also gives the fraction among the others.
 
     python3 scripts/sweep_match.py [--surfmap target/release/surfmap] [--data ../shared/data]
-        [--only NAME,...] [--max-faces N]
+        [--only NAME,...] [--max-faces N] [--out DIR]      # needs numpy
 """
 import argparse
 import json
