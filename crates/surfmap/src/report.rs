@@ -33,11 +33,27 @@ pub fn with_remedy(d: &Defect, remedy: Option<&str>) -> String {
 }
 
 /// The message of [`crate::FlattenError::NotADisc`], each defect on its own line
-/// worded by `wording`.
+/// worded by `wording`; a remedy already given for an earlier line is not repeated (a
+/// closed surface with handles is both closed and of positive genus, and `surfmap
+/// match` has one remedy for the two).
 pub fn not_a_disc_message(defects: &[Defect], wording: DefectWording) -> String {
+    let mut given: Vec<String> = vec![];
     let lines: Vec<String> = defects
         .iter()
-        .map(|d| format!("  - {}", wording(d)))
+        .map(|d| {
+            let text = wording(d);
+            let remedy = text.strip_prefix(d.problem.as_str()).map(str::trim);
+            match remedy {
+                Some(r) if !r.is_empty() && given.iter().any(|g| g == r) => {
+                    format!("  - {} (remedy as above)", d.problem)
+                }
+                Some(r) if !r.is_empty() => {
+                    given.push(r.to_string());
+                    format!("  - {text}")
+                }
+                _ => format!("  - {text}"),
+            }
+        })
         .collect();
     format!(
         "the mesh cannot be flattened as a disc:\n{}",
@@ -296,6 +312,32 @@ mod tests {
     use super::*;
     use crate::mesh::generate;
     use crate::{FlattenOptions, flatten};
+
+    #[test]
+    fn a_remedy_is_given_once() {
+        // A torus is closed and has a handle: two defects; worded with one remedy for
+        // both, it is said once.
+        let torus = generate::torus(2.0, 0.5, 12, 8);
+        let defects: Vec<Defect> = validate(&torus, &Topology::new(&torus))
+            .into_iter()
+            .filter(|d| d.blocks_flattening)
+            .collect();
+        assert_eq!(defects.len(), 2, "{defects:?}");
+        let same: DefectWording = |d| with_remedy(d, Some("Cut it open."));
+        let message = not_a_disc_message(&defects, same);
+        assert_eq!(message.matches("Cut it open.").count(), 1, "{message}");
+        assert_eq!(
+            message.matches("(remedy as above)").count(),
+            defects.len() - 1,
+            "{message}"
+        );
+        // Different remedies are all given.
+        let own: DefectWording = |d| d.message();
+        let message = not_a_disc_message(&defects, own);
+        for d in &defects {
+            assert!(message.contains(&d.message()), "{message}");
+        }
+    }
 
     /// The front ends' wording of a non-disc mesh is the library's message when they
     /// word each defect as the library does, and their remedy replaces the library's.
