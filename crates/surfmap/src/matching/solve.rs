@@ -84,10 +84,7 @@ impl Landmarks {
             for (i, v) in ids.iter_mut().enumerate() {
                 let name = self.names.get(i).map_or("?", |s| s.as_str());
                 let Some(copy) = copies.get(*v as usize) else {
-                    return Err(MatchError::Guidance(format!(
-                        "landmark '{name}': vertex {v} of {side} does not exist ({side} has {} vertices)",
-                        copies.len()
-                    )));
+                    return Err(no_such_landmark_vertex(name, side, *v, copies.len()));
                 };
                 *v = copy.ok_or_else(|| {
                     MatchError::Guidance(format!(
@@ -99,6 +96,13 @@ impl Landmarks {
         }
         Ok(out)
     }
+}
+
+/// A landmark whose vertex id is beyond its surface's `vertices`.
+fn no_such_landmark_vertex(name: &str, side: &str, v: u32, vertices: usize) -> MatchError {
+    MatchError::Guidance(format!(
+        "landmark '{name}': vertex {v} of {side} does not exist ({side} has {vertices} vertices)"
+    ))
 }
 
 /// Optional user guidance, paired by name between A and B.
@@ -576,11 +580,12 @@ fn paired_features(
         for (i, name) in lm.names.iter().enumerate() {
             for (side, ids, mesh) in [("A", &lm.a, a), ("B", &lm.b, b)] {
                 if ids[i] as usize >= mesh.num_vertices() {
-                    return Err(MatchError::Guidance(format!(
-                        "landmark '{name}': vertex {} of {side} does not exist ({side} has {} vertices)",
+                    return Err(no_such_landmark_vertex(
+                        name,
+                        side,
                         ids[i],
-                        mesh.num_vertices()
-                    )));
+                        mesh.num_vertices(),
+                    ));
                 }
             }
             fa.push(FeatureCurve {
