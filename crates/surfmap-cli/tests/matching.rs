@@ -569,6 +569,12 @@ fn bad_guidance_is_refused_by_name_and_nothing_is_written() {
         err.contains("--rim-tolerance must be a finite number of edges ≥ 0"),
         "{err}"
     );
+    // A relief wider than the parameter square.
+    let err = fails(&[s, s, "--relief=2"], &out);
+    assert!(
+        err.contains("--relief must be a width in [0, 1] of the parameter square"),
+        "{err}"
+    );
     // A scale factor for B that is not a positive number.
     let err = fails(&[s, s, "--scale-b", "0"], &out);
     assert!(

@@ -244,6 +244,11 @@ OPTIONS = {
         ["--rim-tolerance", "3"],
         lambda r: r["options"]["complete_tolerance"]["elsewhere"] == 3.0,
     ),
+    "relief": (
+        {"relief": 0.1},
+        ["--relief", "0.1"],
+        lambda r: r["options"]["position_relief"] == 0.1,
+    ),
     "whole_hole_rims": (
         {"whole_hole_rims": True},
         ["--whole-hole-rims"],
@@ -348,6 +353,8 @@ def test_bad_features_and_option_values_name_the_argument():
         ({"search_candidates": (-5.0, 0.1)}, "search_candidates takes DEG,SCALE"),
         ({"search_level": 0}, "search level must be at least 1"),
         ({"rim_tolerance": -1.0}, "rim_tolerance must be a finite number of edges ≥ 0"),
+        ({"relief": 1.5}, r"relief must be a width in \[0, 1\]"),
+        ({"relief": float("nan")}, r"relief must be a width in \[0, 1\]"),
     ]
     for kwargs, message in cases:
         with pytest.raises(ValueError, match=message):

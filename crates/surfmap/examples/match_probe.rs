@@ -53,6 +53,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 "fspace" => options.features_in_space = f() != 0.0,
                 "band" => options.position_band = f(),
                 "tau" => options.position_scale = f(),
+                "relief" => options.position_relief = f(),
                 "hsig" => options.curvature_sigma = f(),
                 "snap" => options.snap_cells = f(),
                 "split" => options.split_hole_rims = f(),

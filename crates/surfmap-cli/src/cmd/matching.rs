@@ -144,6 +144,14 @@ pub struct Args {
     /// have no counterpart (BENCHMARKS.md: 3 edges matches every vertex near the rim).
     #[arg(long, value_name = "EDGES", default_value_t = surfmap::matching::complete::COMPLETE_TOLERANCE.elsewhere)]
     pub rim_tolerance: f64,
+    /// Compare the surfaces in space after their smooth difference in shape: the position
+    /// term's residual smoothed by a Gaussian this wide (a fraction of the parameter
+    /// square; 0.1 measured) becomes part of its target, so only the detail pulls. For
+    /// faces of different people it matches more of the face closely (FLAME identity
+    /// pairs: 69 → 76 % within 0.02); it also trusts the smooth part of a poor start
+    /// (BENCHMARKS.md, "The position term's relief"). 0: off.
+    #[arg(long, value_name = "WIDTH", default_value_t = 0.0)]
+    pub relief: f64,
     /// Rings of A's vertices around each hole rim that follow it when the rim is carried
     /// exactly onto B's paired rim (holes match holes: eyes to eyes, mouth to mouth);
     /// wider where the rim moves far; 0 leaves the rims where φ puts them.
@@ -237,6 +245,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     options.ncg.set_budget(args.budget);
     options
         .set_rim_tolerance(args.rim_tolerance, "--rim-tolerance")
+        .map_err(anyhow::Error::msg)?;
+    options
+        .set_position_relief(args.relief, "--relief")
         .map_err(anyhow::Error::msg)?;
     if let Some(c) = &args.search_candidates {
         options

@@ -191,6 +191,16 @@ pub fn gaussian_filter<T: Vector>(img: &Grid<T>, sigma_nodes: f64) -> Grid<T> {
     filter_strided(img, sigma_nodes, 1)
 }
 
+/// [`gaussian_filter`] restricted to the rows and columns `0, step, 2·step, …` (only
+/// those are computed): a grid `(n − 1)/step + 1` nodes wide. `step` must divide `n − 1`.
+pub fn gaussian_filter_restricted<T: Vector>(
+    img: &Grid<T>,
+    sigma_nodes: f64,
+    step: usize,
+) -> Grid<T> {
+    filter_strided(img, sigma_nodes, step)
+}
+
 #[cfg(test)]
 #[allow(clippy::needless_range_loop)]
 mod tests {

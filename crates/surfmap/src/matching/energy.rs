@@ -21,8 +21,9 @@
 //! * `E_pos^ε` (ours, not the thesis's): `∫ χ^ε |T(x_A) − x_B∘φ|² √det g_A` with a map
 //!   `T(x) = M x + t` of ℝ³ fitted jointly ([`super::similarity`]): the surfaces' 3D
 //!   shapes, compared after the best rigid motion and scale — by default allowing
-//!   also a regularized affine part ([`super::solve::PositionMap`]). The gradient holds
-//!   `T` fixed; it is refitted to φ between iterations.
+//!   also a regularized affine part ([`super::solve::PositionMap`]) — plus, per node, the
+//!   smooth part of the residual ([`super::solve::POSITION_RELIEF`]). The gradient holds
+//!   `T` and that offset fixed; both are refitted to φ between iterations.
 //!
 //! `χ^ε(ξ) = χ_A^ε(ξ)·χ_B^ε(φ(ξ))` (2.14) with `χ_S^ε = max(1 − dist(·, S)/ε, 0)`,
 //! computed from the signed boundary-distance images. Node integrals use the
@@ -310,6 +311,13 @@ pub(crate) struct LevelEnergy {
     /// `(αl, αa)` of (2.8).
     pub alpha: (f64, f64),
     pub similarity: Similarity3,
+    /// Per node, added to `T(x_A)` in the position term (empty: nothing): the smooth
+    /// part of the term's residual ([`super::solve::relief_offsets`]), held fixed like
+    /// `T` and refitted with it.
+    pub position_offset: Vec<[f64; 3]>,
+    /// Whether the refits set `position_offset` (off for the coarsest level's wide
+    /// phase; [`super::solve::POSITION_RELIEF`]).
+    pub relief: bool,
     /// Cut-off width of `χ_B` in the position term (at least ε).
     pub position_band: f64,
     /// Scale `τ` (ℓ units) of the position term's robust penalty ([`robust`]); 0: plain
@@ -529,7 +537,10 @@ impl LevelEnergy {
                 let (chi_p, dchi_p) = chi(sv[B_SD], self.position_band.max(eps));
                 let chi_p = chi_a * chi_p;
                 let dchi_p = [chi_a * dchi_p * sdx[B_SD], chi_a * dchi_p * sdy[B_SD]];
-                let y = self.similarity.apply(self.a.x[k]);
+                let mut y = self.similarity.apply(self.a.x[k]);
+                if let Some(o) = self.position_offset.get(k) {
+                    y = std::array::from_fn(|c| y[c] + o[c]);
+                }
                 let r: [f64; 3] = std::array::from_fn(|c| y[c] - sv[B_X + c]);
                 let r2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
                 let rdx = r[0] * sdx[B_X] + r[1] * sdx[B_X + 1] + r[2] * sdx[B_X + 2];
@@ -907,6 +918,8 @@ pub(crate) mod tests {
                 matrix: [[0.9, -0.1, 0.0], [0.1, 0.9, 0.05], [0.0, -0.05, 0.95]],
                 translation: [0.02, -0.01, 0.03],
             },
+            position_offset: vec![],
+            relief: false,
         }
     }
 

@@ -48,6 +48,20 @@ impl MatchOptions {
         Ok(())
     }
 
+    /// The position term's relief width σ (ω units, [`super::solve::POSITION_RELIEF`]):
+    /// finite, in `[0, 1]`; 0 turns it off.
+    pub fn set_position_relief(&mut self, width: f64, name: &str) -> Result<(), String> {
+        if !width.is_finite() || !(0.0..=1.0).contains(&width) {
+            return Err(format!(
+                "{name} must be a width in [0, 1] of the parameter square (0: off; {} is \
+                 what BENCHMARKS.md measured), got {width}",
+                super::solve::POSITION_RELIEF
+            ));
+        }
+        self.position_relief = width;
+        Ok(())
+    }
+
     /// The similarity search's extra starts `[DEG, SCALE]`: rotated by ±DEG degrees and
     /// scaled by (1 ± SCALE); degrees ≥ 0, the scale step in [0, 1).
     pub fn set_search_candidates(&mut self, c: &[f64], name: &str) -> Result<(), String> {
