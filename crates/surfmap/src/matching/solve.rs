@@ -1417,7 +1417,10 @@ pub(crate) fn relief_offsets(e: &LevelEnergy, phi: &Deformation, width: f64) -> 
     // their spacings) and read back bilinearly: 1/16 of the work at 257².
     let sigma = width * (n - 1) as f64;
     let mut step = 1;
-    while (8 * step) as f64 <= sigma && (n - 1) % (2 * step) == 0 && (n - 1) / (2 * step) >= 16 {
+    while (8 * step) as f64 <= sigma
+        && (n - 1).is_multiple_of(2 * step)
+        && (n - 1) / (2 * step) >= 16
+    {
         step *= 2;
     }
     let smooth = gaussian_filter_restricted(&Grid::from_parts(n, data), sigma, step);
