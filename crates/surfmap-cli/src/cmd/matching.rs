@@ -146,10 +146,10 @@ pub struct Args {
     pub rim_tolerance: f64,
     /// Compare the surfaces in space after their smooth difference in shape: the position
     /// term's residual smoothed by a Gaussian this wide (a fraction of the parameter
-    /// square; 0.1 measured) becomes part of its target, so only the detail pulls. For
-    /// faces of different people it matches more of the face closely (FLAME identity
-    /// pairs: 69 → 76 % within 0.02); it also trusts the smooth part of a poor start
-    /// (BENCHMARKS.md, "The position term's relief"). 0: off.
+    /// square; 0.1 measured) becomes part of its target, so only the detail pulls; the
+    /// coarsest level places the match without it first. For faces of different people
+    /// it matches more of the face closely (FLAME identity pairs: 69 → 74 % within 0.02;
+    /// BENCHMARKS.md, "The position term's relief"). 0: off.
     #[arg(long, value_name = "WIDTH", default_value_t = 0.0)]
     pub relief: f64,
     /// Rings of A's vertices around each hole rim that follow it when the rim is carried

@@ -359,16 +359,17 @@ pub enum PositionMap {
 /// every slope. With the relief the target is `T(x_A) + R`, `R` the residual
 /// `x_B∘φ − T(x_A)` smoothed by a Gaussian of width σ: the smooth part of the difference
 /// is taken as given and only the detail pulls, as a non-rigid ICP takes a smooth
-/// deformation as free. It is off while the coarsest level descends in the wide metric
-/// (there the term's pull towards the fitted map is what places φ; with the relief from
-/// the start, a crop that covers one side of a face drifted), and the starts that level
-/// compares are compared without it ([`Solver::plain_energy`]). Measured in BENCHMARKS.md
-/// ("Matching": "The position term's relief"): FLAME identity without input 68.9 → 75.7 %
-/// within 0.02 (three runs), the ICT tracks within ±0.4 points. Not the default: it
-/// also takes the smooth part of a *wrong* start as given, and a start a quarter too
-/// small (`the_wide_metric_grows_a_shrunken_start_into_place`) is then grown into
-/// place less (median 1.6 cells and 92.7 % matched, against 0.96 and 98 %). σ was
-/// chosen from 0.05 / 0.1 / 0.2 on the FLAME pairs.
+/// deformation as free. But it takes the smooth part of *any* residual as given, a
+/// start's error too, so the coarsest level first places φ without it (the wide, then
+/// the local metric, as by default) and only then goes on with it, in a third phase in
+/// the local metric; the finer levels use it throughout, and the starts the coarsest
+/// level compares are compared without it ([`Solver::plain_energy`]). (With the relief
+/// from the start, a crop that covers one side of a face drifted, and a start a quarter
+/// too small — `the_wide_metric_grows_a_shrunken_start_into_place` — was not grown into
+/// place.) Measured in BENCHMARKS.md ("Matching": "The position term's relief"): FLAME
+/// identity without input 68.9 → 74.1 % within 0.02, the ICT tracks within a few tenths.
+/// Opt-in until it has been measured as the default; σ was chosen from 0.05 / 0.1 / 0.2
+/// on the FLAME pairs.
 pub const POSITION_RELIEF: f64 = 0.1;
 
 /// Ridge of [`PositionMap::AffineNearSimilarity`].
@@ -1334,9 +1335,21 @@ impl Solver<'_> {
                 settings.max_iterations / 2,
                 budget.saturating_sub(first.evaluations),
                 local.as_ref(),
-                true,
+                false,
             );
-            first.then(second)
+            if self.options.position_relief > 0.0 {
+                // With the relief, a third phase in the local metric: only once φ is
+                // placed without it ([`POSITION_RELIEF`]).
+                let third = run(
+                    settings.max_iterations / 2,
+                    budget.div_ceil(2),
+                    local.as_ref(),
+                    true,
+                );
+                first.then(second).then(third)
+            } else {
+                first.then(second)
+            }
         } else {
             run(settings.max_iterations, budget, local.as_ref(), !coarsest)
         };
