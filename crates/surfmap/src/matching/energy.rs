@@ -315,8 +315,8 @@ pub(crate) struct LevelEnergy {
     /// part of the term's residual ([`super::solve::relief_offsets`]), held fixed like
     /// `T` and refitted with it.
     pub position_offset: Vec<[f64; 3]>,
-    /// Whether the refits set `position_offset` (off for the coarsest level's wide
-    /// phase; [`super::solve::POSITION_RELIEF`]).
+    /// Whether the refits set `position_offset` (off until the coarsest level has
+    /// placed φ; [`super::solve::POSITION_RELIEF`]).
     pub relief: bool,
     /// Cut-off width of `χ_B` in the position term (at least ε).
     pub position_band: f64,

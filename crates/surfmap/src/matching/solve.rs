@@ -362,8 +362,9 @@ pub enum PositionMap {
 /// deformation as free. But it takes the smooth part of *any* residual as given, a
 /// start's error too, so the coarsest level first places φ without it (the wide, then
 /// the local metric, as by default) and only then goes on with it, in a third phase in
-/// the local metric; the finer levels use it throughout, and the starts the coarsest
-/// level compares are compared without it ([`Solver::plain_energy`]). (With the relief
+/// the local metric (a coarsest level without the wide phase goes without it); the finer
+/// levels use it throughout, and the starts the coarsest level compares are compared
+/// without it ([`Solver::plain_energy`]). (With the relief
 /// from the start, a crop that covers one side of a face drifted, and a start a quarter
 /// too small — `the_wide_metric_grows_a_shrunken_start_into_place` — was not grown into
 /// place.) Measured in BENCHMARKS.md ("Matching": "The position term's relief"): FLAME
@@ -1406,6 +1407,7 @@ fn fit_position_map(
 pub(crate) fn relief_offsets(e: &LevelEnergy, phi: &Deformation, width: f64) -> Vec<[f64; 3]> {
     let n = e.size();
     let data: Vec<[f64; 4]> = (0..n * n)
+        .into_par_iter()
         .map(|k| {
             let wa = e.a.weight[k] * e.a.chi[k];
             if wa == 0.0 {
