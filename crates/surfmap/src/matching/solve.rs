@@ -1172,15 +1172,11 @@ impl Solver<'_> {
         let plausible = |r: Option<f64>| r.is_some_and(plausible_area_ratio);
         found.implausible_size =
             plausible(found.area_ratio_alignment) && !plausible(found.area_ratio_search);
-        let lower = match (
-            self.plain_energy(k0, phi, *similarity),
-            self.plain_energy(k0, &other, searched_similarity),
-        ) {
-            (Some(a), Some(o)) => o < a,
-            _ => from_search.end.total < from_alignment.end.total,
-        };
-        found.kept = lower
-            && matched_area(&level, &other) >= matched_area(&level, phi)
+        found.kept = self.second_ends_lower(
+            k0,
+            (phi, *similarity, from_alignment.end.total),
+            (&other, searched_similarity, from_search.end.total),
+        ) && matched_area(&level, &other) >= matched_area(&level, phi)
             && !found.implausible_size;
         if found.kept {
             *phi = other;
@@ -1209,14 +1205,11 @@ impl Solver<'_> {
         let (from_features, from_space) =
             self.level_from_both(k0, (phi, similarity), (&mut other, &mut other_similarity));
         let level = self.energy(k0, *similarity);
-        let lower = match (
-            self.plain_energy(k0, phi, *similarity),
-            self.plain_energy(k0, &other, other_similarity),
-        ) {
-            (Some(f), Some(o)) => o < f,
-            _ => from_space.end.total < from_features.end.total,
-        };
-        let kept = lower && matched_area(&level, &other) >= matched_area(&level, phi);
+        let kept = self.second_ends_lower(
+            k0,
+            (phi, *similarity, from_features.end.total),
+            (&other, other_similarity, from_space.end.total),
+        ) && matched_area(&level, &other) >= matched_area(&level, phi);
         let energies = (from_features.end.total, from_space.end.total, kept);
         if kept {
             *phi = other;
@@ -1249,6 +1242,24 @@ impl Solver<'_> {
         let (log, cost) = self.level_charged(k, phi, similarity, self.spent());
         self.charge(cost);
         log
+    }
+
+    /// Whether the second of two solves of level `k` (each: its φ, its position map and
+    /// the energy its solve ended with) ends lower: by [`Solver::plain_energy`] when the
+    /// relief is on, else by the solves' own final energies.
+    fn second_ends_lower(
+        &self,
+        k: usize,
+        first: (&Deformation, Similarity3, f64),
+        second: (&Deformation, Similarity3, f64),
+    ) -> bool {
+        match (
+            self.plain_energy(k, first.0, first.1),
+            self.plain_energy(k, second.0, second.1),
+        ) {
+            (Some(f), Some(s)) => s < f,
+            _ => second.2 < first.2,
+        }
     }
 
     /// The energy of level `k` at `phi` with the position term's map refitted and no
