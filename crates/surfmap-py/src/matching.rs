@@ -100,7 +100,7 @@ fn landmarks(d: &Bound<'_, PyDict>) -> PyResult<Landmarks> {
 /// unmatched may fall and the vertex still be matched to the rim (``--rim-tolerance``;
 /// more matches more of A along a tight crop of B, and more vertices without a
 /// counterpart). ``relief``: the position term compares the surfaces after their smooth
-/// difference in shape, smoothed this wide (``--relief``; 0.1 measured, 0: off).
+/// difference in shape, smoothed this wide (``--relief``; default 0.1, 0: off).
 /// ``scale_b``: ``None`` takes B as given unless the two sizes (√area) differ by more
 /// than 5 times, then as in other units (B multiplied by the nearest power of ten for the
 /// match; the report's ``scale_b``); a number multiplies B by it (1.0: as given).
@@ -128,7 +128,7 @@ fn landmarks(d: &Bound<'_, PyDict>) -> PyResult<Landmarks> {
 /// >>> report["alignment"]["method"], report["options"]["betas"]["features"]
 /// ('features', 10.0)
 #[pyfunction]
-#[pyo3(name = "match", signature = (VA, FA, VB, FB, *, landmarks=None, features_a=None, features_b=None, size=257, align="auto", features_start="both", keep_folds=false, rim_fit_rings=8, complete_rings=4, pin_landmarks=true, scale_b=None, budget=40, hole_features="auto", whole_hole_rims=false, fill_holes=true, beta=None, position_weight=None, similarity_search="shape", search_candidates=None, search_level=4, rim_tolerance=0.5, relief=0.0))]
+#[pyo3(name = "match", signature = (VA, FA, VB, FB, *, landmarks=None, features_a=None, features_b=None, size=257, align="auto", features_start="both", keep_folds=false, rim_fit_rings=8, complete_rings=4, pin_landmarks=true, scale_b=None, budget=40, hole_features="auto", whole_hole_rims=false, fill_holes=true, beta=None, position_weight=None, similarity_search="shape", search_candidates=None, search_level=4, rim_tolerance=0.5, relief=0.1))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub fn match_meshes<'py>(
     py: Python<'py>,

@@ -245,9 +245,9 @@ OPTIONS = {
         lambda r: r["options"]["complete_tolerance"]["elsewhere"] == 3.0,
     ),
     "relief": (
-        {"relief": 0.1},
-        ["--relief", "0.1"],
-        lambda r: r["options"]["position_relief"] == 0.1,
+        {"relief": 0.0},
+        ["--relief", "0"],
+        lambda r: r["options"]["position_relief"] == 0.0,
     ),
     "whole_hole_rims": (
         {"whole_hole_rims": True},

@@ -146,11 +146,11 @@ pub struct Args {
     pub rim_tolerance: f64,
     /// Compare the surfaces in space after their smooth difference in shape: the position
     /// term's residual smoothed by a Gaussian this wide (a fraction of the parameter
-    /// square; 0.1 measured) becomes part of its target, so only the detail pulls; the
+    /// square) becomes part of its target, so only the detail pulls; the
     /// coarsest level places the match without it first. For faces of different people
     /// it matches more of the face closely (FLAME identity pairs: 69 → 74 % within 0.02;
-    /// BENCHMARKS.md, "The position term's relief"). 0: off.
-    #[arg(long, value_name = "WIDTH", default_value_t = 0.0)]
+    /// BENCHMARKS.md, "The position term's relief"). 0: off (the fitted map alone).
+    #[arg(long, value_name = "WIDTH", default_value_t = surfmap::matching::POSITION_RELIEF)]
     pub relief: f64,
     /// Rings of A's vertices around each hole rim that follow it when the rim is carried
     /// exactly onto B's paired rim (holes match holes: eyes to eyes, mouth to mouth);

@@ -145,5 +145,5 @@ def match(
     search_candidates: Optional[Sequence[float]] = None,
     search_level: int = 4,
     rim_tolerance: float = 0.5,
-    relief: float = 0.0,
+    relief: float = 0.1,
 ) -> Tuple[FloatArray, Report]: ...

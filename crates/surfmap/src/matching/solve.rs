@@ -349,9 +349,8 @@ pub enum PositionMap {
     AffineNearSimilarity { ridge: f64 },
 }
 
-/// The width σ (ω units) of the position term's relief ([`relief_offsets`]) that
-/// BENCHMARKS.md measured; opt-in (`MatchOptions::position_relief`, default 0, `surfmap
-/// match --relief`).
+/// The width σ (ω units) of the position term's relief ([`relief_offsets`]): the
+/// default (`MatchOptions::position_relief`, `surfmap match --relief`; 0 turns it off).
 ///
 /// The fitted map `T` of ℝ³ explains the two faces' difference in pose and proportions
 /// but not in shape — a higher forehead, a longer nose — and where the shapes differ the
@@ -369,8 +368,8 @@ pub enum PositionMap {
 /// too small — `the_wide_metric_grows_a_shrunken_start_into_place` — was not grown into
 /// place.) Measured in BENCHMARKS.md ("Matching": "The position term's relief"): FLAME
 /// identity without input 68.9 → 74.1 % within 0.02, the ICT tracks within a few tenths.
-/// Opt-in until it has been measured as the default; σ was chosen from 0.05 / 0.1 / 0.2
-/// on the FLAME pairs.
+/// The default since it was measured as one (BENCHMARKS.md, "The relief as the default");
+/// σ was chosen from 0.05 / 0.1 / 0.2 on the FLAME pairs.
 pub const POSITION_RELIEF: f64 = 0.1;
 
 /// Ridge of [`PositionMap::AffineNearSimilarity`].
@@ -432,7 +431,7 @@ impl Default for MatchOptions {
             curvature_sigma: 0.0,
             snap_cells: SNAP_CELLS,
             position_scale: 0.0,
-            position_relief: 0.0,
+            position_relief: POSITION_RELIEF,
             drop_folds: true,
             rim_fit_rings: super::rim_fit::RIM_FIT_RINGS,
             complete_rings: super::complete::COMPLETE_RINGS,
