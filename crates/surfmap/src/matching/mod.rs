@@ -38,8 +38,9 @@ pub use similarity_search::{SearchWhen, SimilaritySearch, SimilaritySearchLog};
 pub use solve::{
     Align, AlignmentReport, COARSEST_SOBOLEV_WIDTH, FeatureStarts, Guidance, HoleFeatures,
     Landmarks, MatchOptions, POSITION_AFFINE_RIDGE, POSITION_KAPPA, POSITION_RELIEF,
-    POSITION_RESIDUAL_CAP, POSITION_RESIDUAL_FLOOR, PositionMap, PositionWeight, ScaleB,
-    SurfaceMatch, UNIT_MISMATCH, match_surfaces,
+    POSITION_RESIDUAL_CAP, POSITION_RESIDUAL_FLOOR, PositionMap, PositionWeight,
+    RELIEF_MIDDLE_BUDGET, RELIEF_PHASE_FRACTION, ScaleB, SurfaceMatch, UNIT_MISMATCH,
+    match_surfaces,
 };
 pub use surface::MatchSurface;
 

@@ -372,6 +372,23 @@ pub enum PositionMap {
 /// σ was chosen from 0.05 / 0.1 / 0.2 on the FLAME pairs.
 pub const POSITION_RELIEF: f64 = 0.1;
 
+/// With the relief ([`POSITION_RELIEF`]), the coarsest level's third phase (the one with
+/// it) gets this fraction of the level's iterations and evaluation budget, and every level
+/// between the coarsest and the finest [`RELIEF_MIDDLE_BUDGET`] of its budget. With the
+/// relief the middle level (129²) no longer converges but descends slowly until its
+/// budget (160 evaluations against 63 without, on an ICT identity pair) — work the finest
+/// level largely redoes — and the third phase at half the iterations was the other half
+/// of the relief's cost (+15 % of the solve, median over the 18 ICT pairs). At a quarter
+/// and 0.6 the solve costs what it did without the relief (interleaved median ratios 0.90
+/// against a half and the whole budget, 1.015 against no relief), and the three-run
+/// accuracy is within 0.15 points of the longer schedule's (BENCHMARKS.md, "A cheaper
+/// schedule for the relief").
+pub const RELIEF_PHASE_FRACTION: f64 = 0.25;
+
+/// The fraction of their evaluation budget that levels between the coarsest and the
+/// finest get with the relief on ([`RELIEF_PHASE_FRACTION`]).
+pub const RELIEF_MIDDLE_BUDGET: f64 = 0.6;
+
 /// Ridge of [`PositionMap::AffineNearSimilarity`].
 pub const POSITION_AFFINE_RIDGE: f64 = 1.0;
 
@@ -1317,6 +1334,10 @@ impl Solver<'_> {
         let finest = self.a.level_size(self.a.num_levels() - 1);
         let cost = ((n - 1) as f64 / (finest - 1) as f64).powi(2);
         let mut budget = settings.level_evaluations(n, finest);
+        let relief = self.options.position_relief > 0.0;
+        if relief && !coarsest && n < finest && budget != usize::MAX {
+            budget = (budget as f64 * RELIEF_MIDDLE_BUDGET).ceil() as usize;
+        }
         if settings.total_evaluations > 0 {
             let left = (settings.total_evaluations as f64 - spent).max(0.0);
             budget = budget.min((left / cost) as usize);
@@ -1348,12 +1369,14 @@ impl Solver<'_> {
                 local.as_ref(),
                 false,
             );
-            if self.options.position_relief > 0.0 {
+            if relief {
                 // With the relief, a third phase in the local metric: only once φ is
-                // placed without it ([`POSITION_RELIEF`]).
+                // placed without it ([`POSITION_RELIEF`]), and shorter
+                // ([`RELIEF_PHASE_FRACTION`]).
+                let share = |count: usize| (count as f64 * RELIEF_PHASE_FRACTION).ceil() as usize;
                 let third = run(
-                    settings.max_iterations / 2,
-                    budget.div_ceil(2),
+                    share(settings.max_iterations),
+                    share(budget),
                     local.as_ref(),
                     true,
                 );
