@@ -124,7 +124,9 @@ pub struct Args {
     /// has not stopped decreasing first (relative decrease 10⁻⁶, 10⁻⁵ on the finest
     /// level, or 300 iterations), and the whole solve after 220. 0 lifts both caps:
     /// every level runs to its stopping rule (the thesis's). Default 40: more changed no
-    /// accuracy measure on 28 face pairs and costs time (BENCHMARKS.md).
+    /// accuracy measure on 28 face pairs and costs time (BENCHMARKS.md). With the relief
+    /// (--relief) the levels between the coarsest and the finest get 0.6 of theirs, and
+    /// the coarsest level's phase with the relief a quarter of its own on top.
     #[arg(long, value_name = "N", default_value_t = surfmap::matching::NcgSettings::default().max_evaluations)]
     pub budget: usize,
     /// Keep the vertices of image triangles that turn over or collapse in space

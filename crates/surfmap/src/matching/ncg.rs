@@ -59,7 +59,9 @@ pub struct NcgSettings {
     /// a level `2^j` times coarser may use `4^j` times as many, the same cost
     /// ([`NcgSettings::level_evaluations`]). The level then stops with
     /// [`StopReason::Budget`]. Default 40 (640 at 65², 160 at 129²; with the position
-    /// term's relief 96 at 129², `super::solve::RELIEF_MIDDLE_BUDGET`): measured over the
+    /// term's relief 96 at 129², `super::solve::RELIEF_MIDDLE_BUDGET`, and the coarsest
+    /// level's relief phase a quarter of its budget on top,
+    /// `super::solve::RELIEF_PHASE_FRACTION`): measured over the
     /// referee's 18 ICT pairs and the 10 FLAME pairs, the evaluations beyond it on the
     /// two finest levels (120 before) changed no track's fraction within 0.01, 0.02 or
     /// 0.05 nor its mean error beyond the run-to-run noise, and took a quarter of the
