@@ -62,6 +62,18 @@ fn matching_two_registered_faces_finds_the_registration() {
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("match.json")).unwrap()).unwrap();
     assert_eq!(report["matched_vertices_a"], matched);
+    // Vertices reported unmatched for folds are among the unmatched rows (completion
+    // matches some dropped ones again; those are not counted), and the summary line
+    // gives the same count.
+    let dropped = report["dropped_vertices"].as_u64().unwrap() as usize;
+    assert!(
+        dropped <= 9409 - matched,
+        "{dropped} dropped, {matched} matched"
+    );
+    assert!(
+        stdout.contains(&format!(" {dropped} vertices unmatched for folds")),
+        "{stdout}"
+    );
     assert!(report["min_det"].as_f64().unwrap() > 0.0);
     assert_eq!(report["holes_filled_a"], 3);
     // Eyes and mouth carried onto B's: A's hole rims matched (at most 1% of their

@@ -288,7 +288,8 @@ pub struct MatchReport {
     /// Image triangles that turned over or collapsed in space, before dropping.
     pub flipped_triangles: usize,
     pub collapsed_triangles: usize,
-    /// Vertices reported unmatched because a triangle around them folded.
+    /// Vertices unmatched in the output because a triangle around them folded (dropped
+    /// by the fold check and not matched again by rim completion).
     pub dropped_vertices: usize,
     /// Holes of A whose rims were carried onto B's paired rims, and the vertices of A
     /// so moved ([`super::rim_fit`]).
@@ -353,8 +354,9 @@ pub struct CheckedCorrespondence {
     /// Folded image triangles of φ's own correspondence, before anything was dropped;
     /// when folds are kept (`drop` false), those of the output itself.
     pub folds: FoldCheck,
-    /// Vertices reported unmatched because a triangle around them folded (φ's folds and
-    /// any that completion made).
+    /// Vertices unmatched in `points` because a triangle around them folded (φ's folds
+    /// and any that pinning or completion made); a dropped vertex that completion
+    /// matched again is not counted.
     pub dropped: usize,
     /// What fitting the hole rims did ([`super::rim_fit`]).
     pub rim_fit: RimFit,
@@ -382,19 +384,24 @@ impl SurfaceMatch {
         let (mut points, rim_fit) = self.fitted_correspondence()?;
         let folds = check_folds(mesh_a, mesh_b, &points);
         let pinned: Vec<u32> = self.pinned_landmarks.iter().map(|p| p.0).collect();
-        let mut dropped = if drop {
-            drop_folds(mesh_a, &folds, &mut points, &[])
-        } else {
-            0
-        };
+        // Every vertex a fold check unmatched; completion may match some of them again.
+        let mut dropped_ever = vec![false; points.len()];
+        let mut drop_and_mark =
+            |points: &mut Vec<Option<SurfacePoint>>, folds: &FoldCheck, keep: &[u32]| {
+                let before: Vec<bool> = points.iter().map(Option::is_some).collect();
+                drop_folds(mesh_a, folds, points, keep);
+                for (v, was) in before.into_iter().enumerate() {
+                    dropped_ever[v] |= was && points[v].is_none();
+                }
+            };
+        if drop {
+            // φ's own folds: no landmark is pinned yet, so none is kept.
+            drop_and_mark(&mut points, &folds, &[]);
+        }
         let pinning = pin_landmarks(mesh_a, mesh_b, &mut points, &self.pinned_landmarks);
         if drop && pinning.landmarks > 0 {
-            dropped += drop_folds(
-                mesh_a,
-                &check_folds(mesh_a, mesh_b, &points),
-                &mut points,
-                &pinned,
-            );
+            let folds = check_folds(mesh_a, mesh_b, &points);
+            drop_and_mark(&mut points, &folds, &pinned);
         }
         let completion = complete_correspondence(
             mesh_a,
@@ -406,13 +413,12 @@ impl SurfaceMatch {
             &pinned,
         );
         if drop && completion.completed > 0 {
-            dropped += drop_folds(
-                mesh_a,
-                &check_folds(mesh_a, mesh_b, &points),
-                &mut points,
-                &pinned,
-            );
+            let folds = check_folds(mesh_a, mesh_b, &points);
+            drop_and_mark(&mut points, &folds, &pinned);
         }
+        let dropped = (0..points.len())
+            .filter(|&v| dropped_ever[v] && points[v].is_none())
+            .count();
         // Kept folds are reported as they are in the output (pinning may have added some
         // around a landmark).
         let folds = if drop {
