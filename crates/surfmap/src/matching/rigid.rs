@@ -47,7 +47,7 @@ const COARSE_PROBE: usize = 21;
 /// still go on. Measured on the 28 ICT and FLAME pairs (BENCHMARKS.md, "A cheaper rigid
 /// alignment"): the start that ends best was at most 2.32 times the lowest after 21
 /// steps (1.64 on the synthetic whole-onto-part test below, where it ranked only 18th
-/// of 28 — a cut by rank would lose it); 4 times stops 23–42 of the ICT pairs' 48–52
+/// of 28 — a cut by rank would lose it); 4 times stops 9–42 of the ICT pairs' 48–52
 /// starts, few of the coarser FLAME pairs'.
 const COARSE_CUT: f64 = 4.0;
 
