@@ -9,7 +9,8 @@ use image::RgbImage;
 use super::texture::Texture;
 use crate::render::{View, contact_sheet, rgb, surface_render};
 
-/// The stills' camera tilt (40°): oblique, so that shapes show in the outline.
+/// The stills' camera tilt (40°): oblique from above ([`View::framing_tilted`]), so that
+/// shapes show in the outline.
 pub const STILLS_TILT: f64 = 40.0 * std::f64::consts::PI / 180.0;
 
 /// How a frame is coloured at a point with texture coordinate `uv`.

@@ -138,8 +138,9 @@ impl View {
     }
 
     /// [`Self::framing`] with the camera tilted by `tilt` radians about its `right`
-    /// axis (towards the bottom of the picture: the surface is seen obliquely from
-    /// above, so heights show in the outline and shading).
+    /// axis, rising towards the picture's top: the surface is seen obliquely from
+    /// above, so heights show in the outline and shading — an upright head (its top
+    /// along the view's `up`) from above the forehead, not from under the chin.
     pub fn framing_tilted(
         frames: &[&[[f64; 3]]],
         triangles: &[[u32; 3]],
@@ -149,8 +150,8 @@ impl View {
         let (s, c) = tilt.sin_cos();
         let axes = [
             right,
-            [0, 1, 2].map(|k| c * up[k] + s * d[k]),
-            [0, 1, 2].map(|k| c * d[k] - s * up[k]),
+            [0, 1, 2].map(|k| c * up[k] - s * d[k]),
+            [0, 1, 2].map(|k| c * d[k] + s * up[k]),
         ];
         let mut lo = [f64::INFINITY; 2];
         let mut hi = [f64::NEG_INFINITY; 2];
@@ -381,6 +382,20 @@ mod tests {
         // Right-handed: r × u = d.
         let c = cross3(r, u);
         assert!((dot3(c, d) - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_tilted_view_looks_down_from_above_the_picture() {
+        let (pos, tris, _) = disc_map(6);
+        let [_, u, d] = automatic_view(&pos, &tris);
+        let tilt = 0.5f64;
+        let view = View::framing_tilted(&[&pos], &tris, tilt).unwrap();
+        let [_, up, towards_viewer] = view.axes;
+        // The viewer rises along the untilted `up`, and the picture's `up` leans away.
+        assert!((dot3(towards_viewer, u) - tilt.sin()).abs() < 1e-12);
+        assert!((dot3(towards_viewer, d) - tilt.cos()).abs() < 1e-12);
+        assert!((dot3(up, d) + tilt.sin()).abs() < 1e-12);
+        assert!(dot3(up, towards_viewer).abs() < 1e-12);
     }
 
     #[test]
