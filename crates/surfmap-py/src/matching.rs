@@ -7,10 +7,14 @@ use numpy::ndarray::Array2;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use surfmap::TriMesh;
+use surfmap::matching::overlap::{crops_for_match, cut, drop_folds_as_given};
 use surfmap::matching::{
-    Align, Guidance, HoleFeatures, Landmarks, MatchError, MatchOptions, ScaleB, SearchWhen,
-    match_surfaces, output,
+    Align, Guidance, HoleFeatures, InputNumbering, Landmarks, MatchError, MatchOptions, ScaleB,
+    SearchWhen, match_surfaces, output,
 };
+use surfmap::mesh::repair::FaceOrigins;
+use surfmap::raster::FeatureFile;
 
 use crate::advice::match_defect_message;
 use crate::arrays;
@@ -101,6 +105,11 @@ fn landmarks(d: &Bound<'_, PyDict>) -> PyResult<Landmarks> {
 /// more matches more of A along a tight crop of B, and more vertices without a
 /// counterpart). ``relief``: the position term compares the surfaces after their smooth
 /// difference in shape, smoothed this wide (``--relief``; default 0.1, 0: off).
+/// ``crop_overlap``: ``"auto"`` cuts each surface down to the part it shares with the
+/// other first when its large far pieces make up 35 % of its area or more (a whole head
+/// against a face crop; ``--crop-overlap``, the report's ``overlap_crop``), the rows
+/// still one per vertex of A as given (the cut ones unmatched); ``"off"`` matches them whole
+/// (as does ``hole_features="on"``, whose rims are paired as given).
 /// ``scale_b``: ``None`` takes B as given unless the two sizes (√area) differ by more
 /// than 5 times, then as in other units (B multiplied by the nearest power of ten for the
 /// match; the report's ``scale_b``); a number multiplies B by it (1.0: as given).
@@ -128,7 +137,7 @@ fn landmarks(d: &Bound<'_, PyDict>) -> PyResult<Landmarks> {
 /// >>> report["alignment"]["method"], report["options"]["betas"]["features"]
 /// ('features', 10.0)
 #[pyfunction]
-#[pyo3(name = "match", signature = (VA, FA, VB, FB, *, landmarks=None, features_a=None, features_b=None, size=257, align="auto", features_start="both", keep_folds=false, rim_fit_rings=8, complete_rings=4, pin_landmarks=true, scale_b=None, budget=40, hole_features="auto", whole_hole_rims=false, fill_holes=true, beta=None, position_weight=None, similarity_search="shape", search_candidates=None, search_level=4, rim_tolerance=0.5, relief=0.1))]
+#[pyo3(name = "match", signature = (VA, FA, VB, FB, *, landmarks=None, features_a=None, features_b=None, size=257, align="auto", features_start="both", keep_folds=false, rim_fit_rings=8, complete_rings=4, pin_landmarks=true, scale_b=None, budget=40, hole_features="auto", whole_hole_rims=false, fill_holes=true, beta=None, position_weight=None, similarity_search="shape", search_candidates=None, search_level=4, rim_tolerance=0.5, relief=0.1, crop_overlap="auto"))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub fn match_meshes<'py>(
     py: Python<'py>,
@@ -158,6 +167,7 @@ pub fn match_meshes<'py>(
     search_level: usize,
     rim_tolerance: f64,
     relief: f64,
+    crop_overlap: &str,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>)> {
     // As the command line's `--features-a` and `--features-b` (each requires the other).
     match (features_a.is_some(), features_b.is_some()) {
@@ -273,12 +283,73 @@ pub fn match_meshes<'py>(
             .map(|f| arrays::feature_file(f, "features_b", b.num_vertices()))
             .transpose()?,
     };
+    let crop = match crop_overlap {
+        "auto" => true,
+        "off" => false,
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "crop_overlap must be 'auto' or 'off', got '{other}'"
+            )));
+        }
+    };
     let (corr, report) = py
         .detach(|| -> Result<_, MatchError> {
-            let m = match_surfaces(&a, &b, &guidance, &options)?;
-            let checked = m.checked_correspondence(&a, &b, options.drop_folds)?;
-            let report = m.report(&checked, &options);
-            Ok((checked.points, report))
+            // As `surfmap match --crop-overlap`: cut both down to the part they share,
+            // match, and number the rows as the meshes were given.
+            let crops = if crop && options.hole_features != HoleFeatures::On {
+                crops_for_match(&a, &b, &guidance, options.scale_b)
+            } else {
+                None
+            };
+            let Some(crops) = crops else {
+                let m = match_surfaces(&a, &b, &guidance, &options)?;
+                let checked = m.checked_correspondence(&a, &b, options.drop_folds)?;
+                let report = m.report(&checked, &options);
+                return Ok((checked.points, report));
+            };
+            let (cut_a, origins_a) = cut(a.clone(), None, crops.a.as_ref());
+            let (cut_b, origins_b) = cut(b.clone(), None, crops.b.as_ref());
+            let copies = |input: &TriMesh, kept: &TriMesh, o: &Option<FaceOrigins>| match o {
+                Some(o) => o.vertex_copies(input, kept),
+                None => (0..input.num_vertices() as u32).map(Some).collect(),
+            };
+            let copies_a = copies(&a, &cut_a, &origins_a);
+            let copies_b = copies(&b, &cut_b, &origins_b);
+            let renumber = |f: &Option<FeatureFile>, c: &[Option<u32>]| {
+                f.as_ref()
+                    .map(|f| f.renumbered(c))
+                    .transpose()
+                    .map_err(|e| MatchError::Guidance(e.to_string()))
+            };
+            let on_cut = Guidance {
+                landmarks: guidance
+                    .landmarks
+                    .as_ref()
+                    .map(|lm| lm.renumbered(&copies_a, &copies_b))
+                    .transpose()?,
+                features_a: renumber(&guidance.features_a, &copies_a)?,
+                features_b: renumber(&guidance.features_b, &copies_b)?,
+            };
+            let m = match_surfaces(&cut_a, &cut_b, &on_cut, &options)?;
+            let checked = m.checked_correspondence(&cut_a, &cut_b, options.drop_folds)?;
+            let mut report = m.report(&checked, &options);
+            report.input_numbering = Some(InputNumbering {
+                vertices_a: a.num_vertices(),
+                vertices_b: b.num_vertices(),
+                triangles_b: b.triangles.len(),
+                removed_vertices_a: copies_a.iter().filter(|c| c.is_none()).count(),
+            });
+            report.overlap_crop = Some(crops);
+            let mut rows =
+                output::numbered_as_given(&checked.points, &copies_a, origins_b.as_ref());
+            if options.drop_folds {
+                let pinned = match &guidance.landmarks {
+                    Some(lm) if options.pin_landmarks => lm.a.clone(),
+                    _ => vec![],
+                };
+                report.count_dropped(drop_folds_as_given(&a, &b, &mut rows, &pinned));
+            }
+            Ok((rows, report))
         })
         .map_err(match_error)?;
     // The report's doubts (`report["warnings"]`) also as Python warnings.

@@ -36,6 +36,29 @@ def test_match_equals_the_command_line(cli, data, tmp_path):
     assert not np.array_equal(C0, C)
 
 
+def test_a_whole_head_is_cut_down_as_on_the_command_line(cli, data, tmp_path):
+    """libigl's whole head onto the ICT face crop: the head is cut down to the part near
+    the crop first (`crop_overlap="auto"`, `--crop-overlap auto`), the rows stay one per
+    vertex of the head as given, the cut ones unmatched; the same table as the command
+    line's, and a different one from the match of the whole head."""
+    a, b = data / "faces" / "face_igl.obj", data / "faces" / "ict" / "ict_neutral.obj"
+    run_cli(cli, "match", a, b, "-o", tmp_path, "--size", "129", "--quiet")
+    VA, FA = surfmap.read_mesh(a)
+    C, report = surfmap.match(VA, FA, *surfmap.read_mesh(b), size=129)
+    assert C.shape == (len(VA), 4)
+    assert np.array_equal(C, np.load(tmp_path / "correspondence.npy"))
+    cli_report = json.loads((tmp_path / "match.json").read_text())
+    assert report["overlap_crop"] == cli_report["overlap_crop"]
+    assert report["overlap_crop"]["b"] is None and report["overlap_crop"]["a"]["removed_area"] > 0.35
+    removed = report["input_numbering"]["removed_vertices_a"]
+    assert removed == cli_report["input_numbering"]["removed_vertices_a"] > 0
+    assert (C[:, 0] < 0).sum() >= removed
+    whole, _ = surfmap.match(VA, FA, *surfmap.read_mesh(b), size=129, crop_overlap="off")
+    assert whole.shape == C.shape and not np.array_equal(whole, C)
+    with pytest.raises(ValueError, match="crop_overlap must be 'auto' or 'off'"):
+        surfmap.match(VA, FA, *surfmap.read_mesh(b), size=65, crop_overlap="yes")
+
+
 def test_match_of_a_moved_copy_recovers_the_motion():
     # A disc cut from a 41 × 41 grid over [-1, 1]² (a bump and a saddle), and a moved copy.
     n = 41

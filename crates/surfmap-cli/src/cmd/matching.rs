@@ -7,14 +7,15 @@ use std::path::PathBuf;
 
 use super::advice::{match_defect_message, worded_flatten_error};
 use anyhow::{Context, bail};
+use surfmap::TriMesh;
+use surfmap::matching::overlap::{SurfaceCrop, crops_for_match, cut, drop_folds_as_given};
 use surfmap::matching::{
     Align, Guidance, HoleFeatures, InputNumbering, Landmarks, MatchError, MatchOptions, ScaleB,
     SearchWhen, match_surfaces, output, pictures, write_match_folder,
 };
 use surfmap::mesh::repair::FaceOrigins;
-use surfmap::raster::FeatureFile;
+use surfmap::raster::{FeatureCurve, FeatureFile};
 use surfmap::render::save_png;
-use surfmap::{SurfacePoint, TriMesh};
 
 use super::{RepairArgs, load_mesh};
 
@@ -48,6 +49,14 @@ pub enum FeaturesStartArg {
     Both,
     /// The features' similarity of the planes only.
     Plane,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum CropArg {
+    /// Crop a surface whose far pieces make up at least 35 % of its area.
+    Auto,
+    /// Match the surfaces whole.
+    Off,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -87,6 +96,15 @@ pub struct Args {
     /// Refuse surfaces with holes instead of filling them for the solve.
     #[arg(long)]
     pub no_fill_holes: bool,
+    /// Cut each surface down to the part it shares with the other before matching
+    /// (`auto`): aligned in space, a surface's large pieces far from the other — the back
+    /// of a whole head against a face crop, shoulders — are cut off when they are at
+    /// least 35 % of its area, so that both flattenings spend their square on what can
+    /// match. Their vertices are reported unmatched; the outputs keep the files'
+    /// numbering. `off` matches the surfaces whole (as does `--hole-features on`, whose
+    /// rims are paired as given).
+    #[arg(long, value_enum, default_value = "auto")]
+    pub crop_overlap: CropArg,
     /// Finest grid, 2^k + 1 nodes per side.
     #[arg(long, default_value_t = 257)]
     pub size: usize,
@@ -196,7 +214,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let input_b = load_mesh(&args.b)?.mesh;
     let (mesh_a, origins_a) = args.repair.apply_tracked(&input_a, args.quiet)?;
     let (mesh_b, origins_b) = args.repair.apply_tracked(&input_b, args.quiet)?;
-    let renumber = origins_a.is_some() || origins_b.is_some();
     let copies = |input: &TriMesh, repaired: &TriMesh, origins: &Option<FaceOrigins>| match origins
     {
         Some(o) => o.vertex_copies(input, repaired),
@@ -264,7 +281,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         },
     };
     surfmap::grid::grid_level(args.size).context("--size")?;
-    let landmarks = match &args.landmarks {
+    // The guidance as the files number it.
+    let raw_landmarks = match &args.landmarks {
         Some(p) => {
             let json = std::fs::read_to_string(p)
                 .with_context(|| format!("cannot read landmarks file {}", p.display()))?;
@@ -274,17 +292,68 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                     p.display()
                 )
             })?;
-            Some(if renumber {
-                lm.renumbered(&copies_a, &copies_b)
-                    .with_context(|| format!("landmarks file {}", p.display()))?
-            } else {
-                lm
-            })
+            Some((p, lm))
         }
         None => None,
     };
-    let features = |path: &Option<PathBuf>, copies: &[Option<u32>]| -> anyhow::Result<_> {
-        let Some(file) = read_features(path, copies.len())? else {
+    let raw_landmark_ids_a: Vec<u32> = raw_landmarks
+        .as_ref()
+        .map_or(vec![], |(_, lm)| lm.a.clone());
+    let raw_features_a = read_features(&args.features_a, input_a.num_vertices())?;
+    let raw_features_b = read_features(&args.features_b, input_b.num_vertices())?;
+    // The crop to the part the surfaces share, sparing every vertex the guidance names
+    // (in the repaired meshes' numbering).
+    // (Not with `--hole-features on`: a cut could take holes the user pairs away.)
+    let crops = if args.crop_overlap == CropArg::Auto && options.hole_features != HoleFeatures::On {
+        let on_repaired = |ids: Vec<u32>, copies: &[Option<u32>]| -> Vec<u32> {
+            ids.into_iter()
+                .filter_map(|v| copies.get(v as usize).copied().flatten())
+                .collect()
+        };
+        let on_repaired_file = |f: &Option<FeatureFile>, copies: &[Option<u32>]| {
+            f.as_ref().map(|f| FeatureFile {
+                features: f
+                    .features
+                    .iter()
+                    .map(|c| FeatureCurve {
+                        vertices: on_repaired(c.vertices.clone(), copies),
+                        ..c.clone()
+                    })
+                    .collect(),
+            })
+        };
+        let guide = Guidance {
+            landmarks: raw_landmarks.as_ref().map(|(_, lm)| Landmarks {
+                a: on_repaired(lm.a.clone(), &copies_a),
+                b: on_repaired(lm.b.clone(), &copies_b),
+                ..lm.clone()
+            }),
+            features_a: on_repaired_file(&raw_features_a, &copies_a),
+            features_b: on_repaired_file(&raw_features_b, &copies_b),
+        };
+        crops_for_match(&mesh_a, &mesh_b, &guide, options.scale_b)
+    } else {
+        None
+    };
+    let (mesh_a, origins_a) = cut(mesh_a, origins_a, crops.as_ref().and_then(|c| c.a.as_ref()));
+    let (mesh_b, origins_b) = cut(mesh_b, origins_b, crops.as_ref().and_then(|c| c.b.as_ref()));
+    let renumber = origins_a.is_some() || origins_b.is_some();
+    let copies_a = copies(&input_a, &mesh_a, &origins_a);
+    let copies_b = copies(&input_b, &mesh_b, &origins_b);
+    let landmarks = match raw_landmarks {
+        Some((p, lm)) => Some(if renumber {
+            lm.renumbered(&copies_a, &copies_b)
+                .with_context(|| format!("landmarks file {}", p.display()))?
+        } else {
+            lm
+        }),
+        None => None,
+    };
+    let features = |file: Option<FeatureFile>,
+                    path: &Option<PathBuf>,
+                    copies: &[Option<u32>]|
+     -> anyhow::Result<_> {
+        let Some(file) = file else {
             return Ok(None);
         };
         Ok(Some(if renumber {
@@ -301,8 +370,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let guidance = Guidance {
         landmarks,
-        features_a: features(&args.features_a, &copies_a)?,
-        features_b: features(&args.features_b, &copies_b)?,
+        features_a: features(raw_features_a, &args.features_a, &copies_a)?,
+        features_b: features(raw_features_b, &args.features_b, &copies_b)?,
     };
     let matched = match_surfaces(&mesh_a, &mesh_b, &guidance, &options)
         .map_err(|e| match &e {
@@ -333,13 +402,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // The files' numbering: each input vertex of A takes its copy's counterpart, each
     // point of B goes back to the input face it lies on.
     let numbered = renumber.then(|| {
-        let points: Vec<Option<SurfacePoint>> = copies_a
-            .iter()
-            .map(|c| {
-                let p = c.and_then(|v| corr[v as usize])?;
-                Some(origins_b.as_ref().map_or(p, |o| o.point(p)))
-            })
-            .collect();
+        let mut points = output::numbered_as_given(&corr, &copies_a, origins_b.as_ref());
+        if crops.is_some() && options.drop_folds {
+            let pinned = if options.pin_landmarks {
+                raw_landmark_ids_a.clone()
+            } else {
+                vec![]
+            };
+            let n = drop_folds_as_given(&input_a, &input_b, &mut points, &pinned);
+            report.count_dropped(n);
+        }
         // A's faces as matched (the repaired ones, consistently oriented), on the input's
         // vertex numbers; where a repair split a vertex into copies, its row is one
         // copy's, and the faces around the others are left out (their corner's place on
@@ -360,6 +432,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             None => input_a.clone(),
         };
         let placed = output::a_on_b(&faces_a, &input_b, &matched, &points);
+        report.overlap_crop = crops.clone();
         report.input_numbering = Some(InputNumbering {
             vertices_a: input_a.num_vertices(),
             vertices_b: input_b.num_vertices(),
@@ -466,6 +539,25 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 names.join(", ")
             ),
         };
+        let crop_note = |side: char, other: char, c: &Option<SurfaceCrop>| {
+            c.as_ref().map(|c| {
+                format!(
+                    "{side} cut to the part near {other} ({:.0}% of its area far from {other} left out)",
+                    100.0 * c.removed_area
+                )
+            })
+        };
+        let crop = match &crops {
+            Some(c) => format!(
+                "{}; --crop-overlap off to match whole, ",
+                [crop_note('A', 'B', &c.a), crop_note('B', 'A', &c.b)]
+                    .into_iter()
+                    .flatten()
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+            None => String::new(),
+        };
         let scaled = if report.scale_b == 1.0 {
             String::new()
         } else {
@@ -482,7 +574,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             )
         };
         outln!(
-            "match: {scaled}{} levels up to {n}², {} iterations, energy {:.4e}, min det Dφ {:.3}, matched {:.1}% of A ({} of {}, {} completed at rims){rims}, {:.1}% of B covered{filled}, {} vertices unmatched for folds ({} flipped, {} collapsed){pinned}, alignment {}{left_out}{in_space}{searched}{position}, {:.2} s",
+            "match: {crop}{scaled}{} levels up to {n}², {} iterations, energy {:.4e}, min det Dφ {:.3}, matched {:.1}% of A ({} of {}, {} completed at rims){rims}, {:.1}% of B covered{filled}, {} vertices unmatched for folds ({} flipped, {} collapsed){pinned}, alignment {}{left_out}{in_space}{searched}{position}, {:.2} s",
             report.levels.len(),
             report.iterations,
             report.energy,
@@ -506,7 +598,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 n.triangles_b,
                 match n.removed_vertices_a {
                     0 => String::new(),
-                    r => format!("; {r} vertices of A removed by the repairs are unmatched"),
+                    r => format!(
+                        "; {r} vertices of A removed by the {} are unmatched",
+                        match (
+                            args.repair.asked(),
+                            crops.as_ref().is_some_and(|c| c.a.is_some())
+                        ) {
+                            (true, true) => "repairs and the crop",
+                            (false, true) => "crop",
+                            _ => "repairs",
+                        }
+                    ),
                 }
             );
         }

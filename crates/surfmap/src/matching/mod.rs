@@ -17,6 +17,7 @@ pub mod holes;
 pub mod ncg;
 mod options;
 pub mod output;
+pub mod overlap;
 pub mod pictures;
 pub mod pin;
 pub mod precondition;

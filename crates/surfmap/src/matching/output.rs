@@ -326,11 +326,17 @@ pub struct MatchReport {
     pub seconds_images: f64,
     pub seconds_solve: f64,
     pub options: MatchOptions,
-    /// Set when the surfaces were repaired before the match (the CLI's `--repair` and
-    /// the like): the counts above are of the repaired meshes, while the outputs
-    /// (`correspondence.npy`, `A_on_B.obj`) are numbered as the meshes were given.
+    /// Set when the surfaces were repaired or cropped before the match (the CLI's
+    /// `--repair` and the like, `--crop-overlap`): the counts above are of the matched
+    /// meshes, while the outputs (`correspondence.npy`, `A_on_B.obj`) are numbered as
+    /// the meshes were given.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub input_numbering: Option<InputNumbering>,
+    /// Set when the surfaces were cut down to the part they share before the match
+    /// (the CLI's `--crop-overlap`, [`super::overlap`]); the cut vertices of A are
+    /// unmatched in the outputs.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub overlap_crop: Option<super::overlap::OverlapCrops>,
 }
 
 /// The meshes as given, when the outputs were numbered back to them from repaired ones
@@ -342,7 +348,8 @@ pub struct InputNumbering {
     /// Vertices and faces of B as given: the triangles the rows point into.
     pub vertices_b: usize,
     pub triangles_b: usize,
-    /// Vertices of A as given that the repairs removed (their rows are unmatched).
+    /// Vertices of A as given that the repairs or the crop to the shared part removed
+    /// (their rows are unmatched).
     pub removed_vertices_a: usize,
 }
 
@@ -494,6 +501,7 @@ impl SurfaceMatch {
             seconds_solve: self.seconds_solve,
             options: options.clone(),
             input_numbering: None,
+            overlap_crop: None,
         }
     }
 }
@@ -533,6 +541,34 @@ pub fn match_warnings(area_ratio: Option<f64>) -> Vec<String> {
         ));
     }
     warnings
+}
+
+impl MatchReport {
+    /// Counts `n` more vertices of A unmatched for folds (a fold check after the
+    /// report was made: [`super::overlap::drop_folds_as_given`]).
+    pub fn count_dropped(&mut self, n: usize) {
+        self.dropped_vertices += n;
+        self.matched_vertices_a -= n.min(self.matched_vertices_a);
+        self.matched_fraction_a = self.matched_vertices_a as f64 / self.vertices_a.max(1) as f64;
+    }
+}
+
+/// A correspondence found on repaired or cropped meshes, numbered as the meshes were
+/// given: input vertex `v` of A takes the counterpart of its copy `copies_a[v]` (`None`:
+/// removed, unmatched), and each point goes back to the input face of B it lies on
+/// (`origins_b`, when B's faces changed).
+pub fn numbered_as_given(
+    correspondence: &[Option<SurfacePoint>],
+    copies_a: &[Option<u32>],
+    origins_b: Option<&crate::mesh::repair::FaceOrigins>,
+) -> Vec<Option<SurfacePoint>> {
+    copies_a
+        .iter()
+        .map(|c| {
+            let p = c.and_then(|v| correspondence[v as usize])?;
+            Some(origins_b.map_or(p, |o| o.point(p)))
+        })
+        .collect()
 }
 
 /// File names inside a match folder (read back by [`crate::apps::match_folder`]).

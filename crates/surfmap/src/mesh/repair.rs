@@ -54,6 +54,13 @@ fn retain_faces(mesh: &TriMesh, keep: impl Fn(usize) -> bool) -> TriMesh {
     }
 }
 
+/// Keeps the faces where `keep[t]` and drops the vertices no face uses then: the kept
+/// faces stay in their order and keep their UV corners (so [`FaceOrigins`] tags
+/// survive).
+pub fn keep_faces(mesh: &TriMesh, keep: &[bool]) -> TriMesh {
+    drop_unreferenced(&retain_faces(mesh, |t| keep[t])).0
+}
+
 /// Removes vertices used by no face. Returns the mesh and how many were removed.
 pub fn drop_unreferenced(mesh: &TriMesh) -> (TriMesh, usize) {
     let mut used = vec![false; mesh.positions.len()];
@@ -496,6 +503,28 @@ pub struct FaceOrigins {
 }
 
 impl FaceOrigins {
+    /// The origins of a mesh's faces as they are (face `t` is input face `t`).
+    pub fn identity(faces: usize) -> Self {
+        Self {
+            face: (0..faces as u32).collect(),
+            corner: vec![[0, 1, 2]; faces],
+        }
+    }
+
+    /// These origins followed by `later`, the origins of a mesh made from the one these
+    /// describe: each face of that mesh traced back through both to the input.
+    pub fn then(&self, later: &FaceOrigins) -> Self {
+        Self {
+            face: later.face.iter().map(|&f| self.face[f as usize]).collect(),
+            corner: later
+                .face
+                .iter()
+                .zip(&later.corner)
+                .map(|(&f, c)| c.map(|k| self.corner[f as usize][k as usize]))
+                .collect(),
+        }
+    }
+
     /// `mesh` with its UVs replaced by the per-corner tags `(face, corner)`.
     pub fn tag(mesh: &TriMesh) -> TriMesh {
         let n = mesh.triangles.len();
@@ -596,6 +625,47 @@ impl FaceOrigins {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Faces cut with [`keep_faces`] keep their order and UV corners, so the tags of
+    /// [`FaceOrigins::tag`] survive; origins of a cut after a repair (a reorientation)
+    /// compose with [`FaceOrigins::then`] into the input's faces and corners.
+    #[test]
+    fn kept_faces_keep_their_origins() {
+        let mesh = crate::mesh::generate::grid_disc(6);
+        let keep: Vec<bool> = (0..mesh.triangles.len()).map(|t| t % 3 != 1).collect();
+        let kept_ids: Vec<u32> = (0..mesh.triangles.len() as u32)
+            .filter(|&t| keep[t as usize])
+            .collect();
+        let cut = keep_faces(&FaceOrigins::tag(&mesh), &keep);
+        assert_eq!(FaceOrigins::read(&cut).unwrap().face, kept_ids);
+        // A repair turns face 0 over; the cut then keeps every face but 1, 4, 7, ….
+        let mut flipped = mesh.clone();
+        flipped.triangles[0].swap(1, 2);
+        let repair = FaceOrigins {
+            face: (0..mesh.triangles.len() as u32).collect(),
+            corner: (0..mesh.triangles.len())
+                .map(|t| if t == 0 { [0, 2, 1] } else { [0, 1, 2] })
+                .collect(),
+        };
+        let later = FaceOrigins::read(&keep_faces(&FaceOrigins::tag(&flipped), &keep)).unwrap();
+        let composed = repair.then(&later);
+        assert_eq!(composed.face, kept_ids);
+        assert_eq!(composed.corner[0], [0, 2, 1]);
+        for (t, &f) in composed.face.iter().enumerate() {
+            let input = mesh.triangles[f as usize];
+            let corners = composed.corner[t].map(|k| input[k as usize]);
+            assert_eq!(corners, flipped.triangles[f as usize], "face {f}");
+        }
+        // Vertices no kept face uses are gone; the rest keep their order.
+        let used: std::collections::BTreeSet<u32> = mesh
+            .triangles
+            .iter()
+            .zip(&keep)
+            .filter(|(_, k)| **k)
+            .flat_map(|(t, _)| t.iter().copied())
+            .collect();
+        assert_eq!(cut.positions.len(), used.len());
+    }
 
     use crate::mesh::generate::unit_square as square;
 
