@@ -396,9 +396,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         })?;
     let checked = matched.checked_correspondence(&mesh_a, &mesh_b, options.drop_folds)?;
     let mut report = matched.report(&checked, &options);
-    let corr = checked.points;
-    // Pictures are drawn before anything is written: an error leaves no partial folder.
-    let placed = output::a_on_b(&mesh_a, &mesh_b, &matched, &corr);
+    let mut corr = checked.points;
     // The files' numbering: each input vertex of A takes its copy's counterpart, each
     // point of B goes back to the input face it lies on.
     let numbered = renumber.then(|| {
@@ -441,6 +439,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         });
         (points, placed)
     });
+    // The fold check on the given meshes (after a cut) may have unmatched more vertices:
+    // the pictures show them unmatched too.
+    if let Some((points, _)) = &numbered {
+        for (v, c) in copies_a.iter().enumerate() {
+            if let Some(c) = c
+                && points[v].is_none()
+            {
+                corr[*c as usize] = None;
+            }
+        }
+    }
+    // Pictures are drawn before anything is written: an error leaves no partial folder.
+    let placed = output::a_on_b(&mesh_a, &mesh_b, &matched, &corr);
     let drawn = if args.pictures {
         vec![
             (
