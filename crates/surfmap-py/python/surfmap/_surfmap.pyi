@@ -146,4 +146,5 @@ def match(
     search_level: int = 4,
     rim_tolerance: float = 0.5,
     relief: float = 0.1,
+    crop_overlap: Literal["auto", "off"] = "auto",
 ) -> Tuple[FloatArray, Report]: ...
