@@ -441,6 +441,68 @@ mod tests {
         assert_eq!(crops.far_area_a, 0.0);
     }
 
+    /// A cut that leaves the kept faces meeting at a single vertex (two of the six faces
+    /// around an inner vertex of a disc removed, opposite each other; the rest of the
+    /// disc still joins the two fans) gives a disc again: the vertex is split into one
+    /// copy per fan, every kept face traced back to its face of the mesh, corner by
+    /// corner.
+    #[test]
+    fn a_cut_that_pinches_a_vertex_splits_it() {
+        let mesh = bumpy_disc(6, 0.2);
+        let centre = 0u32;
+        let around: Vec<usize> = (0..mesh.triangles.len())
+            .filter(|&t| mesh.triangles[t].contains(&centre))
+            .collect();
+        assert_eq!(around.len(), 6);
+        // Two faces of the centre's fan that share no edge (not neighbours around it).
+        let shares_edge = |s: usize, t: usize| {
+            mesh.triangles[s]
+                .iter()
+                .filter(|v| mesh.triangles[t].contains(v))
+                .count()
+                == 2
+        };
+        let first = around[0];
+        let second = *around[1..]
+            .iter()
+            .find(|&&t| {
+                !shares_edge(first, t)
+                    && around
+                        .iter()
+                        .filter(|&&u| shares_edge(t, u) && shares_edge(first, u))
+                        .count()
+                        == 0
+            })
+            .unwrap();
+        let keep: Vec<bool> = (0..mesh.triangles.len())
+            .map(|t| t != first && t != second)
+            .collect();
+        let crop = SurfaceCrop {
+            keep: keep.clone(),
+            removed_area: 0.0,
+            kept_faces: keep.iter().filter(|&&k| k).count(),
+            faces: keep.len(),
+        };
+        let plain = keep_faces(&mesh, &keep);
+        assert!(
+            !crate::mesh::Topology::new(&plain)
+                .non_manifold_vertices
+                .is_empty()
+        );
+        let (cut_mesh, origins) = cut(mesh.clone(), None, Some(&crop));
+        let topo = crate::mesh::Topology::new(&cut_mesh);
+        assert!(topo.is_manifold(), "{:?}", topo.non_manifold_vertices);
+        assert_eq!(cut_mesh.positions.len(), plain.positions.len() + 1);
+        let origins = origins.unwrap();
+        assert_eq!(origins.face.len(), crop.kept_faces);
+        for (t, &f) in origins.face.iter().enumerate() {
+            let given = mesh.triangles[f as usize].map(|v| mesh.positions[v as usize]);
+            let corners = origins.corner[t].map(|k| given[k as usize]);
+            let here = cut_mesh.triangles[t].map(|v| cut_mesh.positions[v as usize]);
+            assert_eq!(corners, here, "face {t} (given face {f})");
+        }
+    }
+
     /// A landmark on the far part spares the piece it is on: nothing is cut then (the
     /// far part is one piece), and a landmark on the shared part changes nothing.
     #[test]
