@@ -314,6 +314,24 @@ fn nose_tip(mesh: &surfmap::TriMesh) -> [f64; 3] {
         .unwrap()
 }
 
+/// The point of B (positions, triangles) a `correspondence.npy` row names
+/// (`[triangle, b0, b1, b2]`), or `None` for an unmatched row.
+fn row_point(positions: &[[f64; 3]], triangles: &[[u32; 3]], row: &[f64]) -> Option<[f64; 3]> {
+    (row[0] >= 0.0).then(|| {
+        let t = triangles[row[0] as usize];
+        [0, 1, 2].map(|i| {
+            (0..3)
+                .map(|k| row[1 + k] * positions[t[k] as usize][i])
+                .sum()
+        })
+    })
+}
+
+/// Euclidean distance.
+fn distance(p: [f64; 3], q: [f64; 3]) -> f64 {
+    (0..3).map(|k| (p[k] - q[k]).powi(2)).sum::<f64>().sqrt()
+}
+
 /// Where the nose tip (the point farthest forward, [`nose_tip`]) of the file `a` lands
 /// on `b` by a match folder's rows: its distance to `b`'s own nose tip.
 fn nose_tip_miss(a: &Path, b: &Path, dir: &Path) -> f64 {
@@ -327,19 +345,9 @@ fn nose_tip_miss(a: &Path, b: &Path, dir: &Path) -> f64 {
         vec![a.num_vertices(), 4],
         "rows not numbered as the file"
     );
-    let row = &rows[4 * v..4 * v + 4];
-    assert!(row[0] >= 0.0, "the nose tip is unmatched");
-    let t = b.triangles[row[0] as usize];
-    let tip_b = nose_tip(&b);
-    (0..3)
-        .map(|k| {
-            let landed: f64 = (0..3)
-                .map(|c| row[1 + c] * b.positions[t[c] as usize][k])
-                .sum();
-            (landed - tip_b[k]).powi(2)
-        })
-        .sum::<f64>()
-        .sqrt()
+    let landed = row_point(&b.positions, &b.triangles, &rows[4 * v..4 * v + 4])
+        .expect("the nose tip is unmatched");
+    distance(landed, nose_tip(&b))
 }
 
 /// Surfaces of different extent are cut down to the part they share before the match
@@ -487,20 +495,9 @@ fn a_raw_head_scan_cropped_to_the_face_matches_the_template_face() {
     let b = surfmap::read_mesh(&scan_face).unwrap().mesh;
     let tip_a = a.positions.iter().position(|p| *p == template_tip).unwrap();
     let (_, rows) = read_npy(&out.join("correspondence.npy"));
-    let row = &rows[4 * tip_a..4 * tip_a + 4];
-    assert!(row[0] >= 0.0, "the template's nose tip is unmatched");
-    let t = b.triangles[row[0] as usize];
-    let landed: Vec<f64> = (0..3)
-        .map(|k| {
-            (0..3)
-                .map(|c| row[1 + c] * b.positions[t[c] as usize][k])
-                .sum()
-        })
-        .collect();
-    let miss = (0..3)
-        .map(|k| (landed[k] - scan_tip[k]).powi(2))
-        .sum::<f64>()
-        .sqrt();
+    let landed = row_point(&b.positions, &b.triangles, &rows[4 * tip_a..4 * tip_a + 4])
+        .expect("the template's nose tip is unmatched");
+    let miss = distance(landed, scan_tip);
     assert!(miss < 0.005, "nose tip {:.1} mm off", 1000.0 * miss);
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -808,20 +805,8 @@ fn registration_errors(dir: &Path, mesh_b: &surfmap::TriMesh) -> Vec<Option<f64>
     rows.chunks_exact(4)
         .enumerate()
         .map(|(v, r)| {
-            (r[0] >= 0.0).then(|| {
-                let t = mesh_b.triangles[r[0] as usize];
-                let q = mesh_b.positions[v];
-                (0..3)
-                    .map(|c| {
-                        let p: f64 = (0..3)
-                            .map(|k| r[1 + k] * mesh_b.positions[t[k] as usize][c])
-                            .sum();
-                        (p - q[c]).powi(2)
-                    })
-                    .sum::<f64>()
-                    .sqrt()
-                    / unit
-            })
+            row_point(&mesh_b.positions, &mesh_b.triangles, r)
+                .map(|p| distance(p, mesh_b.positions[v]) / unit)
         })
         .collect()
 }
@@ -1097,10 +1082,7 @@ fn a_repaired_pair_is_written_in_the_files_numbering() {
     );
     let (shape, rows) = read_npy(&dir.join("correspondence.npy"));
     assert_eq!(shape, vec![pos_a.len(), 4]);
-    let point = |r: &[f64]| -> [f64; 3] {
-        let f = faces_b[r[0] as usize];
-        [0, 1, 2].map(|i| (0..3).map(|k| r[1 + k] * pos_b[f[k] as usize][i]).sum())
-    };
+    let point = |r: &[f64]| row_point(&pos_b, &faces_b, r).expect("a matched row");
     let mut errors = vec![];
     for (row, r) in rows.chunks_exact(4).enumerate() {
         let on_surface = (1..=n).contains(&row);
@@ -1111,9 +1093,7 @@ fn a_repaired_pair_is_written_in_the_files_numbering() {
         if r[0] < 0.0 {
             continue;
         }
-        let p = point(r);
-        let truth = moved[row - 1];
-        errors.push(((0..3).map(|i| (p[i] - truth[i]).powi(2)).sum::<f64>()).sqrt() / area.sqrt());
+        errors.push(distance(point(r), moved[row - 1]) / area.sqrt());
     }
     assert!(
         errors.len() as f64 >= 0.99 * n as f64,
@@ -1129,9 +1109,7 @@ fn a_repaired_pair_is_written_in_the_files_numbering() {
     );
     // The landmarks are pinned onto their B vertices (the files' ids read right).
     for &v in &marks {
-        let p = point(&rows[4 * (v + 1)..4 * (v + 2)]);
-        let q = moved[v];
-        let d = ((0..3).map(|i| (p[i] - q[i]).powi(2)).sum::<f64>()).sqrt();
+        let d = distance(point(&rows[4 * (v + 1)..4 * (v + 2)]), moved[v]);
         assert!(
             d < 1e-9 * area.sqrt().max(1.0),
             "landmark at A {} off by {d}",

@@ -297,7 +297,8 @@ pub fn match_meshes<'py>(
             // As `surfmap match --crop-overlap`: cut both down to the part they share,
             // match, and number the rows as the meshes were given.
             let crops = if crop && options.hole_features != HoleFeatures::On {
-                crops_for_match(&a, &b, &guidance, options.scale_b)
+                let (guide_a, guide_b) = guidance.vertices();
+                crops_for_match(&a, &b, &guide_a, &guide_b, options.scale_b)
             } else {
                 None
             };

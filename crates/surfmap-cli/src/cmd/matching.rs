@@ -14,7 +14,7 @@ use surfmap::matching::{
     SearchWhen, match_surfaces, output, pictures, write_match_folder,
 };
 use surfmap::mesh::repair::FaceOrigins;
-use surfmap::raster::{FeatureCurve, FeatureFile};
+use surfmap::raster::FeatureFile;
 use surfmap::render::save_png;
 
 use super::{RepairArgs, load_mesh};
@@ -282,56 +282,40 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     surfmap::grid::grid_level(args.size).context("--size")?;
     // The guidance as the files number it.
-    let raw_landmarks = match &args.landmarks {
-        Some(p) => {
-            let json = std::fs::read_to_string(p)
-                .with_context(|| format!("cannot read landmarks file {}", p.display()))?;
-            let lm: Landmarks = serde_json::from_str(&json).with_context(|| {
-                format!(
-                    "invalid landmarks file {}: expected {{\"names\": [...], \"A\": [vertex ids], \"B\": [vertex ids]}}",
-                    p.display()
-                )
-            })?;
-            Some((p, lm))
-        }
-        None => None,
+    let raw = Guidance {
+        landmarks: match &args.landmarks {
+            Some(p) => {
+                let json = std::fs::read_to_string(p)
+                    .with_context(|| format!("cannot read landmarks file {}", p.display()))?;
+                Some(serde_json::from_str::<Landmarks>(&json).with_context(|| {
+                    format!(
+                        "invalid landmarks file {}: expected {{\"names\": [...], \"A\": [vertex ids], \"B\": [vertex ids]}}",
+                        p.display()
+                    )
+                })?)
+            }
+            None => None,
+        },
+        features_a: read_features(&args.features_a, input_a.num_vertices())?,
+        features_b: read_features(&args.features_b, input_b.num_vertices())?,
     };
-    let raw_landmark_ids_a: Vec<u32> = raw_landmarks
-        .as_ref()
-        .map_or(vec![], |(_, lm)| lm.a.clone());
-    let raw_features_a = read_features(&args.features_a, input_a.num_vertices())?;
-    let raw_features_b = read_features(&args.features_b, input_b.num_vertices())?;
     // The crop to the part the surfaces share, sparing every vertex the guidance names
-    // (in the repaired meshes' numbering).
-    // (Not with `--hole-features on`: a cut could take holes the user pairs away.)
+    // (in the repaired meshes' numbering). Not with `--hole-features on`: a cut could
+    // take away holes the user pairs.
     let crops = if args.crop_overlap == CropArg::Auto && options.hole_features != HoleFeatures::On {
+        let (ids_a, ids_b) = raw.vertices();
         let on_repaired = |ids: Vec<u32>, copies: &[Option<u32>]| -> Vec<u32> {
             ids.into_iter()
                 .filter_map(|v| copies.get(v as usize).copied().flatten())
                 .collect()
         };
-        let on_repaired_file = |f: &Option<FeatureFile>, copies: &[Option<u32>]| {
-            f.as_ref().map(|f| FeatureFile {
-                features: f
-                    .features
-                    .iter()
-                    .map(|c| FeatureCurve {
-                        vertices: on_repaired(c.vertices.clone(), copies),
-                        ..c.clone()
-                    })
-                    .collect(),
-            })
-        };
-        let guide = Guidance {
-            landmarks: raw_landmarks.as_ref().map(|(_, lm)| Landmarks {
-                a: on_repaired(lm.a.clone(), &copies_a),
-                b: on_repaired(lm.b.clone(), &copies_b),
-                ..lm.clone()
-            }),
-            features_a: on_repaired_file(&raw_features_a, &copies_a),
-            features_b: on_repaired_file(&raw_features_b, &copies_b),
-        };
-        crops_for_match(&mesh_a, &mesh_b, &guide, options.scale_b)
+        crops_for_match(
+            &mesh_a,
+            &mesh_b,
+            &on_repaired(ids_a, &copies_a),
+            &on_repaired(ids_b, &copies_b),
+            options.scale_b,
+        )
     } else {
         None
     };
@@ -340,38 +324,35 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let renumber = origins_a.is_some() || origins_b.is_some();
     let copies_a = copies(&input_a, &mesh_a, &origins_a);
     let copies_b = copies(&input_b, &mesh_b, &origins_b);
-    let landmarks = match raw_landmarks {
-        Some((p, lm)) => Some(if renumber {
-            lm.renumbered(&copies_a, &copies_b)
-                .with_context(|| format!("landmarks file {}", p.display()))?
-        } else {
-            lm
-        }),
-        None => None,
+    // Landmarks of A in the files' numbering: spared by the fold check on the given meshes.
+    let landmarks_a: Vec<u32> = raw.landmarks.as_ref().map_or(vec![], |lm| lm.a.clone());
+    let named = |path: &Option<PathBuf>| {
+        path.as_ref()
+            .map_or(String::new(), |p| p.display().to_string())
     };
-    let features = |file: Option<FeatureFile>,
-                    path: &Option<PathBuf>,
-                    copies: &[Option<u32>]|
-     -> anyhow::Result<_> {
-        let Some(file) = file else {
-            return Ok(None);
-        };
-        Ok(Some(if renumber {
-            file.renumbered(copies).with_context(|| {
-                format!(
-                    "features file {}",
-                    path.as_ref()
-                        .map_or(String::new(), |p| p.display().to_string())
-                )
-            })?
-        } else {
-            file
-        }))
-    };
-    let guidance = Guidance {
-        landmarks,
-        features_a: features(raw_features_a, &args.features_a, &copies_a)?,
-        features_b: features(raw_features_b, &args.features_b, &copies_b)?,
+    let guidance = if renumber {
+        Guidance {
+            landmarks: raw
+                .landmarks
+                .as_ref()
+                .map(|lm| lm.renumbered(&copies_a, &copies_b))
+                .transpose()
+                .with_context(|| format!("landmarks file {}", named(&args.landmarks)))?,
+            features_a: raw
+                .features_a
+                .as_ref()
+                .map(|f| f.renumbered(&copies_a))
+                .transpose()
+                .with_context(|| format!("features file {}", named(&args.features_a)))?,
+            features_b: raw
+                .features_b
+                .as_ref()
+                .map(|f| f.renumbered(&copies_b))
+                .transpose()
+                .with_context(|| format!("features file {}", named(&args.features_b)))?,
+        }
+    } else {
+        raw
     };
     let matched = match_surfaces(&mesh_a, &mesh_b, &guidance, &options)
         .map_err(|e| match &e {
@@ -403,7 +384,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let mut points = output::numbered_as_given(&corr, &copies_a, origins_b.as_ref());
         if crops.is_some() && options.drop_folds {
             let pinned = if options.pin_landmarks {
-                raw_landmark_ids_a.clone()
+                landmarks_a.clone()
             } else {
                 vec![]
             };

@@ -24,10 +24,9 @@
 
 use super::output::{check_folds, drop_folds};
 use super::rigid::{ClosestPoints, RigidAlignment, align_surfaces};
-use super::solve::{Guidance, ScaleB};
+use super::solve::ScaleB;
 use crate::mesh::repair::{FaceOrigins, fix_non_manifold, keep_faces};
 use crate::mesh::{SurfacePoint, TriMesh};
-use crate::raster::FeatureFile;
 use crate::vec3::{norm3 as norm, sub3 as sub};
 use serde::Serialize;
 
@@ -95,11 +94,13 @@ pub fn overlap_crops(
 }
 
 /// [`overlap_crops`] with B at the size the match gives it ([`ScaleB`]), sparing the
-/// vertices `guidance` names (numbered as `a` and `b`); `None` when nothing is cut.
+/// vertices `guide_a` and `guide_b` (what the guidance names: [`super::solve::Guidance::vertices`]);
+/// `None` when nothing is cut.
 pub fn crops_for_match(
     a: &TriMesh,
     b: &TriMesh,
-    guidance: &Guidance,
+    guide_a: &[u32],
+    guide_b: &[u32],
     scale_b: ScaleB,
 ) -> Option<OverlapCrops> {
     let factor = scale_b.factor(a.area(), b.area());
@@ -107,18 +108,7 @@ pub fn crops_for_match(
     for p in &mut scaled.positions {
         *p = p.map(|c| c * factor);
     }
-    let curves = |f: &Option<FeatureFile>| -> Vec<u32> {
-        f.iter()
-            .flat_map(|f| f.features.iter().flat_map(|c| c.vertices.iter().copied()))
-            .collect()
-    };
-    let mut guide_a = curves(&guidance.features_a);
-    let mut guide_b = curves(&guidance.features_b);
-    if let Some(lm) = &guidance.landmarks {
-        guide_a.extend(&lm.a);
-        guide_b.extend(&lm.b);
-    }
-    overlap_crops(a, &scaled, &guide_a, &guide_b).filter(OverlapCrops::any)
+    overlap_crops(a, &scaled, guide_a, guide_b).filter(OverlapCrops::any)
 }
 
 /// `mesh` cut as `crop` says (as it is for `None`), with the origins of its faces

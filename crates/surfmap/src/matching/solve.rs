@@ -115,6 +115,24 @@ pub struct Guidance {
     pub features_b: Option<FeatureFile>,
 }
 
+impl Guidance {
+    /// Every vertex of A and of B the guidance names (feature curves' vertices, then
+    /// landmarks), repeats included.
+    pub fn vertices(&self) -> (Vec<u32>, Vec<u32>) {
+        let curves = |f: &Option<FeatureFile>| -> Vec<u32> {
+            f.iter()
+                .flat_map(|f| f.features.iter().flat_map(|c| c.vertices.iter().copied()))
+                .collect()
+        };
+        let (mut a, mut b) = (curves(&self.features_a), curves(&self.features_b));
+        if let Some(lm) = &self.landmarks {
+            a.extend(&lm.a);
+            b.extend(&lm.b);
+        }
+        (a, b)
+    }
+}
+
 /// Options of [`match_surfaces`].
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct MatchOptions {
