@@ -3,8 +3,9 @@
 //! measured along B's normals, Chen & Medioni 1991, so that a surface slides onto the
 //! other instead of snapping vertex to vertex), started from the 24
 //! rotations of the cube's symmetry group about the centroids (every rotation is within
-//! 62.8° of one of them), from the four rotations that align the principal axes, and
-//! from the caller's candidates.
+//! 62.8° of one of them), from the four rotations that align the principal axes, from
+//! those 28 again shifted across B's extent ([`SHIFT`]: crops that overlap in part have
+//! centroids that do not correspond), and from the caller's candidates.
 //!
 //! Used by the matcher's automatic alignment ([`super::solve`]): the rigid motion
 //! pairs A's vertices with their closest vertices of B, which gives the similarity of
@@ -12,9 +13,10 @@
 //! overlap align without its unmatched rim dragging it. Cost: `O(starts · iterations ·
 //! samples · log n_B)` with a k-d tree over B's vertices (`kiddo`); the many rough
 //! starts pair with at most [`COARSE_TARGETS`] of B's vertices, so that their cost does
-//! not grow with B's resolution, those far behind the best after [`COARSE_PROBE`]
-//! steps stop there ([`COARSE_CUT`]), and only the best pose is refined against all of
-//! B.
+//! not grow with B's resolution, the shifted starts far behind the best after
+//! [`SCREEN_STEPS`] stop there ([`SCREEN_CUT`]), any start far behind the best after
+//! [`COARSE_PROBE`] steps stops there ([`COARSE_CUT`]), and only the best pose is
+//! refined against all of B.
 
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
@@ -50,6 +52,27 @@ const COARSE_PROBE: usize = 21;
 /// of 28 — a cut by rank would lose it); 4 times stops 9–42 of the ICT pairs' 48–52
 /// starts, few of the coarser FLAME pairs'.
 const COARSE_CUT: f64 = 4.0;
+
+/// How far the shifted starts of [`align_rigidly`] move A from the centroid-to-centroid
+/// starts: this fraction of B's extent, either way along each of B's two longest
+/// principal axes (4 shifts of each cube and principal-axes start). Crops of a face on
+/// opposite sides (a quarter of each without a counterpart) have centroids that do not
+/// correspond, and from the centroids no start may reach the true pose: on two ICT pairs
+/// of seed 8 the best pose found laid the face upside down (trimmed rms 0.27 cm) while
+/// the true one fits at 0.11–0.13 cm; with the shifted starts both find it
+/// (BENCHMARKS.md, "Shifted starts").
+pub const SHIFT: f64 = 0.1;
+
+/// Steps after which the shifted starts whose trimmed rms is more than [`SCREEN_CUT`]
+/// times the lowest of all starts stop: running all 112 shifted starts the
+/// [`COARSE_PROBE`] steps made the alignment about three times as slow (a seed-8 ICT
+/// pair: 0.18 → 0.54 s).
+const SCREEN_STEPS: usize = 5;
+
+/// How far above the lowest rms after [`SCREEN_STEPS`] steps a shifted start may be and
+/// still go on. The shifted starts that end best on the seed-8 pairs that needed them
+/// were at 1.00–1.25 times the lowest then (BENCHMARKS.md, "Shifted starts").
+const SCREEN_CUT: f64 = 1.5;
 
 /// The best rigid motion found and its trimmed root-mean-square distances.
 #[derive(Clone, Copy, Debug)]
@@ -134,18 +157,7 @@ fn principal_axes_starts(
     ca: [f64; 3],
     cb: [f64; 3],
 ) -> Vec<Similarity3> {
-    let axes = |p: &[[f64; 3]], c: [f64; 3]| {
-        let mut m = [[0.0; 3]; 3];
-        for x in p {
-            for i in 0..3 {
-                for j in 0..3 {
-                    m[i][j] += (x[i] - c[i]) * (x[j] - c[j]);
-                }
-            }
-        }
-        symmetric_eigen(&m).map(|(_, v)| v)
-    };
-    let (Some(ea), Some(eb)) = (axes(a, ca), axes(b, cb)) else {
+    let (Some(ea), Some(eb)) = (principal_axes(a, ca), principal_axes(b, cb)) else {
         return vec![];
     };
     let mut out = vec![];
@@ -182,6 +194,51 @@ fn principal_axes_starts(
         });
     }
     out
+}
+
+/// The principal axes of `points` about their centroid `c`: the eigenvectors of the
+/// point covariance, by increasing variance (for a face, the last two span its width
+/// and height, the first is its depth).
+fn principal_axes(points: &[[f64; 3]], c: [f64; 3]) -> Option<[[f64; 3]; 3]> {
+    let mut m = [[0.0; 3]; 3];
+    for x in points {
+        for i in 0..3 {
+            for j in 0..3 {
+                m[i][j] += (x[i] - c[i]) * (x[j] - c[j]);
+            }
+        }
+    }
+    symmetric_eigen(&m).map(|(_, v)| v)
+}
+
+/// Every start of `starts` moved by `±SHIFT` times B's extent along each of B's two
+/// longest principal axes (`b` the points, `cb` their centroid): 4 starts per start,
+/// start by start.
+fn shifted_starts(starts: &[Similarity3], b: &[[f64; 3]], cb: [f64; 3]) -> Vec<Similarity3> {
+    let Some(axes) = principal_axes(b, cb) else {
+        return vec![];
+    };
+    let mut shifts = vec![];
+    for axis in [axes[2], axes[1]] {
+        let (low, high) = b
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &p| {
+                let t = dot(sub(p, cb), axis);
+                (l.min(t), h.max(t))
+            });
+        for sign in [1.0, -1.0] {
+            shifts.push(axis.map(|c| sign * SHIFT * (high - low) * c));
+        }
+    }
+    starts
+        .iter()
+        .flat_map(|start| {
+            shifts.iter().map(|d| Similarity3 {
+                matrix: start.matrix,
+                translation: std::array::from_fn(|i| start.translation[i] + d[i]),
+            })
+        })
+        .collect()
 }
 
 /// `count` points of `points`, evenly spread over the index range (deterministic).
@@ -418,25 +475,28 @@ impl IcpRun {
 }
 
 /// The rigid motion of ℝ³ that best puts surface A (points `a`) onto surface B
-/// (points `b`): trimmed ICP on a subsample from 24 rotations about the centroids and
-/// from the caller's `starts`; the best is refined on more points.
+/// (points `b`): trimmed ICP on a subsample from 24 rotations about the centroids, the
+/// four principal-axes poses, those 28 shifted ([`shifted_starts`]) and the caller's
+/// `starts`; the best is refined on more points.
 pub fn align_rigidly(
     a: &[[f64; 3]],
     b: &[[f64; 3]],
     normals: &[[f64; 3]],
     starts: &[Similarity3],
 ) -> Option<RigidAlignment> {
-    align_rigidly_with(a, b, normals, starts, COARSE_TARGETS)
+    align_rigidly_with(a, b, normals, starts, COARSE_TARGETS, true)
 }
 
 /// [`align_rigidly`] with the coarse starts paired with at most `coarse_targets` of B's
-/// vertices (an even subsample of them, with their normals, when B has more).
+/// vertices (an even subsample of them, with their normals, when B has more), with or
+/// without the `shifted` starts.
 fn align_rigidly_with(
     a: &[[f64; 3]],
     b: &[[f64; 3]],
     normals: &[[f64; 3]],
     starts: &[Similarity3],
     coarse_targets: usize,
+    shifted: bool,
 ) -> Option<RigidAlignment> {
     if a.len() < 3 || b.len() < 3 {
         return None;
@@ -467,6 +527,11 @@ fn align_rigidly_with(
         })
         .collect();
     all.extend(principal_axes_starts(a, b, ca, cb));
+    let shifted = if shifted {
+        shifted_starts(&all, b, cb)
+    } else {
+        vec![]
+    };
     // The caller's starts can repeat (the plane search's refinements of neighbouring
     // rotations may end on one similarity: 0–5 of the 52 starts on the 28 ICT and FLAME
     // pairs); a repeat would only redo the same ICP bit for bit, so the first is kept.
@@ -475,40 +540,40 @@ fn align_rigidly_with(
             all.push(*start);
         }
     }
-    // Every start for the first COARSE_PROBE steps; only those within COARSE_CUT of
-    // the lowest rms go on to the full COARSE_STEPS.
-    let mut runs: Vec<IcpRun> = all
-        .into_par_iter()
-        .map(|start| {
-            let mut run = IcpRun::new(start);
-            run.advance(
-                &coarse,
-                coarse_b,
-                coarse_normals,
-                coarse_closest,
-                COARSE_PROBE,
-            );
-            run
-        })
-        .collect();
-    let lowest = runs
-        .iter()
-        .map(|run| run.alignment.rms)
-        .fold(f64::INFINITY, f64::min);
-    // In the starts' own order, so that ties resolve as without the cut.
-    runs.retain(|run| run.alignment.rms <= COARSE_CUT * lowest);
-    let best = runs
-        .into_par_iter()
-        .map(|mut run| {
-            run.advance(
-                &coarse,
-                coarse_b,
-                coarse_normals,
-                coarse_closest,
-                COARSE_STEPS - COARSE_PROBE,
-            );
-            run.alignment
-        })
+    let unshifted = all.len();
+    all.extend(shifted);
+    // Every start for SCREEN_STEPS steps; the shifted ones go on only within
+    // SCREEN_CUT of the lowest rms. Then every start left to COARSE_PROBE steps; only
+    // those within COARSE_CUT of the lowest go on to the full COARSE_STEPS. (Runs
+    // resume bit for bit, so the unshifted starts end as if run straight through.)
+    let advance = |runs: Vec<IcpRun>, steps: usize| -> Vec<IcpRun> {
+        runs.into_par_iter()
+            .map(|mut run| {
+                run.advance(&coarse, coarse_b, coarse_normals, coarse_closest, steps);
+                run
+            })
+            .collect()
+    };
+    let lowest = |runs: &[IcpRun]| {
+        runs.iter()
+            .map(|run| run.alignment.rms)
+            .fold(f64::INFINITY, f64::min)
+    };
+    let mut runs = advance(all.into_iter().map(IcpRun::new).collect(), SCREEN_STEPS);
+    let screen = SCREEN_CUT * lowest(&runs);
+    // In the starts' own order (unshifted first), so that ties resolve as without the
+    // shifted starts and the cuts.
+    let mut index = 0;
+    runs.retain(|run| {
+        index += 1;
+        index <= unshifted || run.alignment.rms <= screen
+    });
+    let mut runs = advance(runs, COARSE_PROBE - SCREEN_STEPS);
+    let cut = COARSE_CUT * lowest(&runs);
+    runs.retain(|run| run.alignment.rms <= cut);
+    let best = advance(runs, COARSE_STEPS - COARSE_PROBE)
+        .into_iter()
+        .map(|run| run.alignment)
         .min_by(|x, y| x.rms.total_cmp(&y.rms))?;
     let fine = subsample(a, 3000);
     Some(icp(&fine, b, normals, &closest, best.motion, 100))
@@ -737,6 +802,54 @@ mod tests {
         check(&a, &b, &triangles, &truth, 1e-5);
     }
 
+    /// On a flat ellipse of points (4 wide, 2 high, in a tilted plane), each start gets
+    /// four copies moved by ±0.4 along the width and ±0.2 along the height (a tenth of
+    /// the extents), never across the plane, with the rotation kept.
+    #[test]
+    fn shifted_starts_move_across_the_long_axes_of_b() {
+        let tilt = rotation([0.4, 1.0, -0.3], 0.7);
+        let centre = [1.0, -2.0, 3.0];
+        let mut b = vec![];
+        for i in 0..40 {
+            for r in 1..=5 {
+                let (t, r) = (i as f64 * std::f64::consts::TAU / 40.0, r as f64 / 5.0);
+                let local = [2.0 * r * t.cos(), r * t.sin(), 0.0];
+                b.push(std::array::from_fn(|k| centre[k] + dot(tilt[k], local)));
+            }
+        }
+        let column = |k: usize| -> [f64; 3] { std::array::from_fn(|i| tilt[i][k]) };
+        let (width, height, across) = (column(0), column(1), column(2));
+        let starts = [
+            Similarity3 {
+                matrix: rotation([0.0, 0.0, 1.0], 0.3),
+                translation: [0.5, 0.0, -1.0],
+            },
+            Similarity3 {
+                matrix: rotation([1.0, 1.0, 0.0], 2.0),
+                translation: [0.0, 2.0, 0.0],
+            },
+        ];
+        let shifted = shifted_starts(&starts, &b, centroid(&b));
+        assert_eq!(shifted.len(), 8);
+        for (k, start) in starts.iter().enumerate() {
+            let mut along = vec![];
+            for s in &shifted[4 * k..4 * k + 4] {
+                assert_eq!(s.matrix, start.matrix);
+                let d = sub(s.translation, start.translation);
+                assert!(dot(d, across).abs() < 1e-12);
+                along.push([dot(d, width), dot(d, height)]);
+            }
+            along.sort_by(|x, y| x[0].total_cmp(&y[0]).then(x[1].total_cmp(&y[1])));
+            let expected = [[-0.4, 0.0], [0.0, -0.2], [0.0, 0.2], [0.4, 0.0]];
+            for (got, want) in along.iter().zip(expected) {
+                assert!(
+                    (got[0] - want[0]).abs() < 1e-9 && (got[1] - want[1]).abs() < 1e-9,
+                    "{got:?} vs {want:?}"
+                );
+            }
+        }
+    }
+
     #[test]
     fn recovers_the_pose_of_a_partial_copy() {
         let (a, b, triangles, truth) = partial_copy();
@@ -751,7 +864,7 @@ mod tests {
         let targets = b.len() / 5;
         assert!(targets < 400 && targets < a.len());
         let normals = vertex_normals(&b, &triangles);
-        let found = align_rigidly_with(&a, &b, &normals, &[], targets).unwrap();
+        let found = align_rigidly_with(&a, &b, &normals, &[], targets, true).unwrap();
         assert!(found.rms < 1e-6, "rms {}", found.rms);
         assert_same_pose(&a, &found.motion, &truth, 1e-5);
     }
