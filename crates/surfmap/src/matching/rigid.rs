@@ -873,6 +873,26 @@ mod tests {
         }
     }
 
+    /// Where the centroid starts already find the pose, the shifted starts leave it as
+    /// it is, bit for bit: a partial copy, and a copy shrunk to 0.8 of its size. (The
+    /// margin itself is what the matching test
+    /// `the_wide_metric_grows_a_shrunken_start_into_place` needs: without it a shifted
+    /// start lays that test's shrunk copy off-centre.)
+    #[test]
+    fn shifted_starts_keep_a_pose_the_centroid_starts_find() {
+        let (a, b, triangles, _) = partial_copy();
+        let (whole, _) = surface();
+        let shrunk: Vec<[f64; 3]> = whole.iter().map(|p| p.map(|c| 0.8 * c)).collect();
+        for (a, b) in [(&a, &b), (&whole, &shrunk)] {
+            let normals = vertex_normals(b, &triangles);
+            let [with, without] = [true, false].map(|shifted| {
+                align_rigidly_with(a, b, &normals, &[], COARSE_TARGETS, shifted).unwrap()
+            });
+            assert_eq!(with.motion, without.motion);
+            assert_eq!(with.rms.to_bits(), without.rms.to_bits());
+        }
+    }
+
     #[test]
     fn recovers_the_pose_of_a_partial_copy() {
         let (a, b, triangles, truth) = partial_copy();
