@@ -331,6 +331,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .map_or(String::new(), |p| p.display().to_string())
     };
     let guidance = if renumber {
+        let features = |file: &Option<FeatureFile>, copies: &[Option<u32>], path| {
+            file.as_ref()
+                .map(|f| f.renumbered(copies))
+                .transpose()
+                .with_context(|| format!("features file {}", named(path)))
+        };
         Guidance {
             landmarks: raw
                 .landmarks
@@ -338,18 +344,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 .map(|lm| lm.renumbered(&copies_a, &copies_b))
                 .transpose()
                 .with_context(|| format!("landmarks file {}", named(&args.landmarks)))?,
-            features_a: raw
-                .features_a
-                .as_ref()
-                .map(|f| f.renumbered(&copies_a))
-                .transpose()
-                .with_context(|| format!("features file {}", named(&args.features_a)))?,
-            features_b: raw
-                .features_b
-                .as_ref()
-                .map(|f| f.renumbered(&copies_b))
-                .transpose()
-                .with_context(|| format!("features file {}", named(&args.features_b)))?,
+            features_a: features(&raw.features_a, &copies_a, &args.features_a)?,
+            features_b: features(&raw.features_b, &copies_b, &args.features_b)?,
         }
     } else {
         raw
