@@ -680,6 +680,22 @@ fn bad_guidance_is_refused_by_name_and_nothing_is_written() {
         err.contains("--scale-b takes `auto` or a positive factor"),
         "{err}"
     );
+    // Surfaces without an area, named with the defect and its flag.
+    let empty = write("empty.obj", "");
+    let err = fails(&[s, &empty], &out);
+    assert!(
+        err.contains("surface B") && err.contains("no faces"),
+        "{err}"
+    );
+    let line = write(
+        "line.obj",
+        "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 3 0 0\nf 1 2 3\nf 2 3 4\n",
+    );
+    let err = fails(&[&line, s], &out);
+    assert!(
+        err.contains("surface A") && err.contains("--drop-degenerate"),
+        "{err}"
+    );
     let _ = std::fs::remove_dir_all(&base);
 }
 

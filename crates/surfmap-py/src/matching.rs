@@ -28,9 +28,10 @@ fn match_error(e: MatchError) -> PyErr {
             &surface.map_or(String::new(), |s| format!("surface {s}: ")),
             match_defect_message,
         ),
-        MatchError::Guidance(_) | MatchError::Option(_) | MatchError::Grid(_) => {
-            PyValueError::new_err(e.to_string())
-        }
+        MatchError::Guidance(_)
+        | MatchError::Input(_)
+        | MatchError::Option(_)
+        | MatchError::Grid(_) => PyValueError::new_err(e.to_string()),
         _ => SolverError::new_err(e.to_string()),
     }
 }

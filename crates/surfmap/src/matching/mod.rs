@@ -60,6 +60,9 @@ pub enum MatchError {
     Grid(#[from] crate::grid::GridError),
     #[error("{0}")]
     Guidance(String),
+    /// An input surface that cannot be used as given (beyond the flattening's defects).
+    #[error("{0}")]
+    Input(String),
     #[error("invalid option: {0}")]
     Option(String),
     #[error("{0}")]

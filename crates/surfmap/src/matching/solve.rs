@@ -40,7 +40,8 @@ use super::similarity_search::{
 use super::surface::MatchSurface;
 use crate::grid::Grid;
 use crate::grid::pyramid::gaussian_filter_restricted;
-use crate::mesh::{SurfacePoint, TriMesh};
+use crate::mesh::validate::{Defect, DefectKind, validate};
+use crate::mesh::{SurfacePoint, Topology, TriMesh};
 use crate::raster::{FeatureCurve, FeatureFile};
 
 /// How the initial similarity between ω_A and ω_B is found.
@@ -704,6 +705,8 @@ pub fn match_surfaces(
     guidance: &Guidance,
     options: &MatchOptions,
 ) -> Result<SurfaceMatch, MatchError> {
+    check_measurable(mesh_a, 'A')?;
+    check_measurable(mesh_b, 'B')?;
     let scale_b = options.scale_b.factor(mesh_a.area(), mesh_b.area());
     if !(scale_b.is_finite() && scale_b > 0.0) {
         return Err(MatchError::Option(format!(
@@ -759,6 +762,44 @@ pub fn match_surfaces(
     let mut matched = solve(sa, sb, fa.as_ref(), fb.as_ref(), options)?;
     matched.scale_b = scale_b;
     Ok(matched)
+}
+
+/// Refuses a surface whose area is zero or not finite (no faces, NaN coordinates, only
+/// degenerate faces, coordinates so large that the area overflows) before anything is
+/// computed: by the defects the flattening would name, with their remedies
+/// ([`validate`]), else by its size.
+fn check_measurable(mesh: &TriMesh, which: char) -> Result<(), MatchError> {
+    let area = mesh.area();
+    if area.is_finite() && area > 0.0 {
+        return Ok(());
+    }
+    let defects: Vec<Defect> = validate(mesh, &Topology::new(mesh))
+        .into_iter()
+        .filter(|d| {
+            matches!(
+                d.kind,
+                DefectKind::NonFiniteCoordinates
+                    | DefectKind::NoFaces
+                    | DefectKind::RepeatedIndexFaces
+                    | DefectKind::ZeroAreaFaces
+            )
+        })
+        .collect();
+    if defects.is_empty() {
+        let largest = mesh
+            .positions
+            .iter()
+            .flatten()
+            .fold(0.0f64, |m, c| m.max(c.abs()));
+        return Err(MatchError::Input(format!(
+            "surface {which}'s area is {area} (coordinates up to {largest:e} in size): it cannot \
+             be measured in floating point; scale the surface to a smaller unit first"
+        )));
+    }
+    Err(MatchError::Flatten {
+        surface: Some(which),
+        source: crate::param::flatten::FlattenError::NotADisc(defects),
+    })
 }
 
 /// The landmark pairs among the paired features (point features named `landmark:NAME`,

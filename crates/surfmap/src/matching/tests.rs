@@ -395,6 +395,46 @@ fn a_closed_surface_is_refused_not_cut() {
     assert!(message.contains("closed"), "{message}");
 }
 
+/// A surface without a size (no faces, a NaN coordinate, only collinear faces) is refused
+/// before anything is computed, naming the surface and the defect the flattening would name.
+#[test]
+fn a_surface_without_area_is_refused_by_its_defect() {
+    let disc = surface(6, |p| p);
+    let empty = TriMesh::new(vec![], vec![]);
+    let mut nan = disc.clone();
+    nan.positions[3][1] = f64::NAN;
+    let line = TriMesh::new(
+        (0..4).map(|i| [i as f64, 0.0, 0.0]).collect(),
+        vec![[0, 1, 2], [1, 2, 3]],
+    );
+    for (bad, defect) in [
+        (&empty, "no faces"),
+        (&nan, "NaN or infinite coordinates (first: 3)"),
+        (&line, "2 faces have zero area"),
+    ] {
+        for (a, b, which) in [(bad, &disc, "surface A"), (&disc, bad, "surface B")] {
+            let err = match_surfaces(a, b, &Guidance::default(), &options()).unwrap_err();
+            let message = err.to_string();
+            assert!(
+                matches!(err, MatchError::Flatten { .. }) && message.contains(which),
+                "{message}"
+            );
+            assert!(message.contains(defect), "{message}");
+        }
+    }
+    // Finite coordinates whose area overflows: refused by size.
+    let huge = TriMesh::new(
+        vec![[0.0; 3], [1e200, 0.0, 0.0], [0.0, 1e200, 0.0]],
+        vec![[0, 1, 2]],
+    );
+    let err = match_surfaces(&disc, &huge, &Guidance::default(), &options()).unwrap_err();
+    let message = err.to_string();
+    assert!(
+        matches!(err, MatchError::Input(_)) && message.contains("surface B's area is inf"),
+        "{message}"
+    );
+}
+
 #[test]
 fn the_evaluation_cap_scales_with_the_level_cost() {
     let mut s = NcgSettings {
