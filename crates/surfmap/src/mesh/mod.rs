@@ -128,9 +128,11 @@ impl TriMesh {
 
     /// Total 3D surface area.
     pub fn area(&self) -> f64 {
+        // `+ 0.0`: an empty sum of f64 is −0.0, which prints as "-0.000000".
         (0..self.triangles.len())
             .map(|t| self.triangle_area(t))
-            .sum()
+            .sum::<f64>()
+            + 0.0
     }
 
     /// The positions divided by `s = √area`, so the surface has unit area, and `s`
@@ -174,5 +176,22 @@ impl TriMesh {
             Some(Uvs::PerCorner { coords, indices }) if indices == &self.triangles => Some(coords),
             _ => None,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::TriMesh;
+
+    /// Reports print the area: an empty mesh's is +0, not the −0.0 of an empty f64 sum.
+    #[test]
+    fn an_empty_mesh_has_area_plus_zero() {
+        let area = TriMesh::new(vec![], vec![]).area();
+        assert!(area == 0.0 && area.is_sign_positive(), "{area}");
+        let one = TriMesh::new(
+            vec![[0.0; 3], [2.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            vec![[0, 1, 2]],
+        );
+        assert_eq!(one.area(), 1.0);
     }
 }
