@@ -340,6 +340,18 @@ def test_a_closed_surface_is_refused_with_the_crop_that_opens_it(cli, holey, tmp
     assert not (tmp_path / "out").exists()
 
 
+def test_a_surface_without_an_area_is_refused_by_name():
+    # Collinear faces: the flattening's defect, named for surface A; an area that
+    # overflows in floating point: the size, named for surface B.
+    V, F = wavy_grid(6)
+    line = np.array([[i, 0.0, 0.0] for i in range(4)])
+    with pytest.raises(surfmap.MeshError, match="(?s)surface A: .*2 faces have zero area"):
+        surfmap.match(line, np.array([[0, 1, 2], [1, 2, 3]]), V, F, size=65)
+    huge = np.array([[0.0, 0.0, 0.0], [1e200, 0.0, 0.0], [0.0, 1e200, 0.0]])
+    with pytest.raises(ValueError, match="surface B's area is inf"):
+        surfmap.match(V, F, huge, np.array([[0, 1, 2]]), size=65)
+
+
 def test_features_as_a_list_with_numpy_ids_are_the_same_features(holey):
     arrays, _, _ = holey
     VA = arrays[0]
