@@ -705,9 +705,9 @@ pub fn match_surfaces(
     guidance: &Guidance,
     options: &MatchOptions,
 ) -> Result<SurfaceMatch, MatchError> {
-    check_measurable(mesh_a, 'A')?;
-    check_measurable(mesh_b, 'B')?;
-    let scale_b = options.scale_b.factor(mesh_a.area(), mesh_b.area());
+    let area_a = measurable_area(mesh_a, 'A')?;
+    let area_b = measurable_area(mesh_b, 'B')?;
+    let scale_b = options.scale_b.factor(area_a, area_b);
     if !(scale_b.is_finite() && scale_b > 0.0) {
         return Err(MatchError::Option(format!(
             "B's scale factor must be finite and positive, got {scale_b}"
@@ -729,9 +729,10 @@ pub fn match_surfaces(
     // does not depend on the units, and the surfaces' relative size is kept.
     let unit = (mesh_a.area() * mesh_b.area()).sqrt().sqrt();
     if !(unit.is_finite() && unit > 0.0) {
-        return Err(MatchError::Option(
-            "a surface has zero or non-finite area".into(),
-        ));
+        // Both areas were checked above: only B's scaling can get here.
+        return Err(MatchError::Option(format!(
+            "B scaled by {scale_b:e} has no finite area; give B a smaller scale"
+        )));
     }
     let (sa, sb) = rayon::join(
         || {
@@ -767,11 +768,11 @@ pub fn match_surfaces(
 /// Refuses a surface whose area is zero or not finite (no faces, NaN coordinates, only
 /// degenerate faces, coordinates so large that the area overflows) before anything is
 /// computed: by the defects the flattening would name, with their remedies
-/// ([`validate`]), else by its size.
-fn check_measurable(mesh: &TriMesh, which: char) -> Result<(), MatchError> {
+/// ([`validate`]), else by its size. Returns the area.
+fn measurable_area(mesh: &TriMesh, which: char) -> Result<f64, MatchError> {
     let area = mesh.area();
     if area.is_finite() && area > 0.0 {
-        return Ok(());
+        return Ok(area);
     }
     let defects: Vec<Defect> = validate(mesh, &Topology::new(mesh))
         .into_iter()
