@@ -133,7 +133,32 @@ fn matching_two_registered_faces_finds_the_registration() {
     );
     assert!((0.8..1.25).contains(&ratio), "area ratio {ratio}");
     assert_eq!(report["warnings"], serde_json::json!([]));
-    for name in ["checker_carried.png", "deformed_grid.png", "energy.png"] {
+    // The hole rims paired as features (the eyes, and the mouth, whole or split in two
+    // arcs) are reported with their fit before and after the solve, in B's units (cm):
+    // no vertex of A's rims carried by φ ends 2 cm or more from B's rim.
+    let fits = report["feature_fit"].as_array().unwrap();
+    let names: Vec<&str> = fits.iter().map(|f| f["name"].as_str().unwrap()).collect();
+    assert!(
+        names.len() >= 3 && names.iter().all(|n| n.starts_with("hole:")),
+        "{names:?}"
+    );
+    for f in fits {
+        let (before, after, max) = (
+            f["before"].as_f64().unwrap(),
+            f["after"].as_f64().unwrap(),
+            f["after_max"].as_f64().unwrap(),
+        );
+        assert!(
+            before >= 0.0 && (0.0..=max).contains(&after) && max < 2.0,
+            "{f}"
+        );
+    }
+    for name in [
+        "checker_carried.png",
+        "deformed_grid.png",
+        "energy.png",
+        "features.png",
+    ] {
         let png = std::fs::read(dir.join(name)).unwrap();
         assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n", "{name}");
         let width = u32::from_be_bytes(png[16..20].try_into().unwrap());

@@ -118,7 +118,9 @@ fn landmarks(d: &Bound<'_, PyDict>) -> PyResult<Landmarks> {
 /// Returns ``(correspondence, report)``: an (n_A, 4) float64 array of rows ``[triangle
 /// of B, b0, b1, b2]`` (triangle −1 where A's vertex has no counterpart) — the command
 /// line's ``correspondence.npy`` — and the dictionary of its ``match.json`` (the options
-/// used under ``report["options"]``). Doubts about the result (``report["warnings"]``,
+/// used under ``report["options"]``; with features or landmarks, how far each paired
+/// feature of A lies from B's before and after the solve under ``report["feature_fit"]``).
+/// Doubts about the result (``report["warnings"]``,
 /// e.g. A squeezed into a small part of B) are also raised as ``RuntimeWarning``. A value
 /// the command line would refuse raises ``ValueError`` naming the argument.
 ///

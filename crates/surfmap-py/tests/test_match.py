@@ -184,6 +184,14 @@ def test_feature_curves_match_as_on_the_command_line(cli, data, tmp_path):
             assert report[key] == cli_report[key], (start, key)
         # The alignment from the features: they reached the solve.
         assert report["alignment"]["method"] == cli_report["alignment"]["method"] == "features"
+        # Each paired curve's fit is reported (the hole rims paired after them), as on
+        # the command line; the nose tip, which did not move with the jaw, ends nearer
+        # B's than the start left it (measured: 0.56 → 0.29 cm from both starts, 0.46 →
+        # 0.25 from the plane; the chin, which moved, does not: 3.6 → 3.4 and 0.40 → 0.80).
+        fits = {f["name"]: f for f in report["feature_fit"]}
+        assert fits.keys() == {f["name"] for f in cli_report["feature_fit"]}
+        assert {f["name"] for f in features["features"]} <= fits.keys()
+        assert fits["nose"]["after"] < 0.75 * fits["nose"]["before"], fits["nose"]
         reports[start] = report
     both, plane = reports["both"], reports["plane"]
     # The features' alignment refined in space was tried (and, the chin having moved,

@@ -430,7 +430,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // Pictures are drawn before anything is written: an error leaves no partial folder.
     let placed = output::a_on_b(&mesh_a, &mesh_b, &matched, &corr);
     let drawn = if args.pictures {
-        vec![
+        let mut drawn = vec![
             (
                 "checker_carried.png",
                 pictures::checker_carried(&mesh_a, &placed, &matched, &corr, 700),
@@ -440,7 +440,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 "energy.png",
                 pictures::energy_staircase(&matched, (900, 500)),
             ),
-        ]
+        ];
+        if let Some(img) = pictures::features_carried(&matched, 700) {
+            drawn.push(("features.png", img));
+        }
+        drawn
     } else {
         vec![]
     };

@@ -13,6 +13,7 @@ pub mod align;
 pub mod complete;
 pub mod deformation;
 pub mod energy;
+pub mod feature_fit;
 pub mod holes;
 pub mod ncg;
 mod options;
@@ -30,6 +31,7 @@ pub mod surface;
 
 pub use deformation::Deformation;
 pub use energy::{Betas, EnergyTerms, Similarity3};
+pub use feature_fit::FeatureFit;
 pub use ncg::{LevelLog, NcgSettings, StopReason};
 pub use output::{
     FoldCheck, InputNumbering, MatchReport, PointMap, check_folds, write_match_folder,

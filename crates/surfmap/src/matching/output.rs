@@ -305,6 +305,10 @@ pub struct MatchReport {
     pub pinned_landmarks: usize,
     pub largest_landmark_miss: f64,
     pub alignment: super::AlignmentReport,
+    /// Every paired feature (curves, landmarks, hole rims paired automatically): the
+    /// mean distance (B's units) from A's curve, carried into ω_B, to B's, at the start
+    /// of the solve and after it ([`super::feature_fit`]); empty without features.
+    pub feature_fit: Vec<super::FeatureFit>,
     /// The position term's map of ℝ³ at the end (a similarity, or an affine map near
     /// one: [`super::PositionMap`]), A's length units to B's (both in the shared unit ℓ).
     pub similarity: super::Similarity3,
@@ -487,6 +491,7 @@ impl SurfaceMatch {
             pinned_landmarks: checked.pinning.landmarks,
             largest_landmark_miss: checked.pinning.largest_miss,
             alignment: self.alignment.clone(),
+            feature_fit: self.feature_fits(),
             similarity: self.similarity,
             position_weight: self.position_weight,
             shape_residual: self.shape_residual,

@@ -1,9 +1,10 @@
 //! Pictures of a match: A's checkerboard carried onto B (thesis fig. 4.9), the
-//! deformed grid over B's curvature image, and the energy staircase over all levels
-//! (fig. 4.7).
+//! deformed grid over B's curvature image, the energy staircase over all levels
+//! (fig. 4.7), and the paired features before and after the solve.
 
 use image::RgbImage;
 
+use super::feature_fit::CarriedFeature;
 use super::solve::SurfaceMatch;
 use crate::mesh::{SurfacePoint, TriMesh};
 use crate::render::canvas::{Canvas, rgb, to_rgb8};
@@ -45,9 +46,54 @@ pub fn checker_carried(
     )
 }
 
-/// φ's grid lines (every `n/32`-th node line, where A's surface is) drawn in ω_B over
-/// B's mean-curvature image (grey outside B's surface). Row 0 of the picture is y = 0.
-pub fn deformed_grid(matched: &SurfaceMatch, pixels: u32) -> RgbImage {
+/// A square part of ω shown on a picture: lower-left corner `origin`, side `size`; y up,
+/// as in every grid picture ([`crate::render::grid_image`]: grid row 0 at the bottom).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct View {
+    origin: [f64; 2],
+    size: f64,
+}
+
+impl View {
+    /// All of ω.
+    const WHOLE: View = View {
+        origin: [0.0, 0.0],
+        size: 1.0,
+    };
+
+    /// The square around `points` with a margin of a sixth of their extent on every
+    /// side (at least 0.04 of ω across, so that a single landmark is not blown up).
+    fn around(points: impl Iterator<Item = [f64; 2]>) -> View {
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for p in points.filter(|p| p[0].is_finite() && p[1].is_finite()) {
+            for c in 0..2 {
+                lo[c] = lo[c].min(p[c]);
+                hi[c] = hi[c].max(p[c]);
+            }
+        }
+        if !(lo[0] <= hi[0] && lo[1] <= hi[1]) {
+            return View::WHOLE;
+        }
+        let size = ((hi[0] - lo[0]).max(hi[1] - lo[1]) * (1.0 + 2.0 / 6.0)).max(0.04);
+        let centre = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])];
+        View {
+            origin: [centre[0] - 0.5 * size, centre[1] - 0.5 * size],
+            size,
+        }
+    }
+
+    /// The pixel of the point `p` of ω on a canvas `w` pixels wide showing this view.
+    fn pixel(&self, p: [f64; 2], w: f64) -> [f64; 2] {
+        [
+            (p[0] - self.origin[0]) / self.size * w,
+            (1.0 - (p[1] - self.origin[1]) / self.size) * w,
+        ]
+    }
+}
+
+/// B's mean-curvature image (grey outside B's surface) on a `pixels`-wide square
+/// canvas showing `view` of ω; returns the canvas and its width.
+fn curvature_canvas(matched: &SurfaceMatch, pixels: u32, view: View) -> (Canvas, f64) {
     let b = &matched.b.images;
     let n = b.size;
     let h = b.mean_curvature_extended.as_slice();
@@ -63,9 +109,25 @@ pub fn deformed_grid(matched: &SurfaceMatch, pixels: u32) -> RgbImage {
             [200, 200, 200]
         }
     });
-    let w = pixels.max(64) as f64;
-    let mut canvas = Canvas::new(pixels.max(64), pixels.max(64), 2, [1.0; 3]);
-    canvas.draw_image(0.0, 0.0, w, w, &background);
+    let pixels = pixels.max(64);
+    let w = pixels as f64;
+    let mut canvas = Canvas::new(pixels, pixels, 2, [0.78; 3]);
+    // The image's top-left corner is the point (0, 1) of ω.
+    let corner = view.pixel([0.0, 1.0], w);
+    canvas.draw_image(
+        corner[0],
+        corner[1],
+        w / view.size,
+        w / view.size,
+        &background,
+    );
+    (canvas, w)
+}
+
+/// φ's grid lines (every `n/32`-th node line, where A's surface is) drawn in ω_B over
+/// B's mean-curvature image (grey outside B's surface), y up.
+pub fn deformed_grid(matched: &SurfaceMatch, pixels: u32) -> RgbImage {
+    let (mut canvas, w) = curvature_canvas(matched, pixels, View::WHOLE);
     let phi = &matched.deformation;
     let m = phi.size;
     let step = ((m - 1) / 32).max(1);
@@ -75,7 +137,7 @@ pub fn deformed_grid(matched: &SurfaceMatch, pixels: u32) -> RgbImage {
         let (ia, ja) = (i * (na - 1) / (m - 1), j * (na - 1) / (m - 1));
         matched.a.images.raster.is_inside(ja * na + ia)
     };
-    let to_px = |p: [f64; 2]| [p[0] * w, p[1] * w];
+    let to_px = |p: [f64; 2]| View::WHOLE.pixel(p, w);
     let line = rgb(20, 20, 20);
     for fixed in (0..m).step_by(step) {
         for along in 0..m - 1 {
@@ -92,6 +154,82 @@ pub fn deformed_grid(matched: &SurfaceMatch, pixels: u32) -> RgbImage {
         }
     }
     canvas.into_image()
+}
+
+/// Colours of the paired features, in turn (dark and saturated: they must stand out on
+/// the red–white–blue curvature image).
+const FEATURE_COLORS: [[u8; 3]; 12] = [
+    [0, 150, 40],
+    [20, 20, 20],
+    [240, 130, 0],
+    [130, 0, 170],
+    [0, 170, 190],
+    [200, 180, 0],
+    [120, 70, 20],
+    [220, 0, 200],
+    [0, 100, 100],
+    [150, 220, 0],
+    [20, 30, 120],
+    [255, 120, 180],
+];
+
+/// The paired features before and after the solve, side by side over B's
+/// mean-curvature image in ω_B: B's curves thick and pale, A's carried into ω_B thin
+/// and full in the same colour — on the left by the plane similarity φ started from
+/// ([`super::AlignmentReport::start`]), on the right by φ. Landmarks (one-vertex
+/// features) are squares. Where the solve did its work, the thin curves lie on the
+/// thick ones on the right ([`SurfaceMatch::feature_fits`] gives the distances).
+/// `None` without features.
+pub fn features_carried(matched: &SurfaceMatch, tile: u32) -> Option<RgbImage> {
+    if matched.a.feature_curves.is_empty() {
+        return None;
+    }
+    let start = matched.alignment.start();
+    let before = matched.carried_features(|xi| start.apply(xi));
+    let after = matched.carried_features(|xi| matched.map_domain(xi));
+    // Both panels show the same part of ω: around every curve, in both placements.
+    let view = View::around(
+        before
+            .iter()
+            .chain(&after)
+            .flat_map(|f| f.a.iter().chain(&f.b).copied()),
+    );
+    let panel = |features: &[CarriedFeature]| {
+        let (mut canvas, w) = curvature_canvas(matched, tile, view);
+        let px = |p: [f64; 2]| view.pixel(p, w);
+        let pale = |c: [u8; 3]| {
+            let [r, g, b] = c.map(|x| (x as u16 + 2 * 255) / 3);
+            rgb(r as u8, g as u8, b as u8)
+        };
+        for (pass, (thick, mark)) in [(4.5, 7.0), (1.6, 3.5)].into_iter().enumerate() {
+            for (f, feature) in features.iter().enumerate() {
+                let c = FEATURE_COLORS[f % FEATURE_COLORS.len()];
+                let (points, color) = if pass == 0 {
+                    (&feature.b, pale(c))
+                } else {
+                    (&feature.a, rgb(c[0], c[1], c[2]))
+                };
+                let mut line: Vec<[f64; 2]> = points.iter().map(|&p| px(p)).collect();
+                if line.len() == 1 {
+                    canvas.marker(line[0], mark, color);
+                    continue;
+                }
+                if feature.closed {
+                    line.push(line[0]);
+                }
+                canvas.polyline(&line, thick, color);
+            }
+        }
+        canvas.into_image()
+    };
+    Some(contact_sheet(
+        &[
+            ("FEATURES AT THE START".to_string(), panel(&before)),
+            ("AFTER THE SOLVE".to_string(), panel(&after)),
+        ],
+        2,
+        tile,
+    ))
 }
 
 /// Total energy after every iteration of every level, one curve, log axis; the first
@@ -115,4 +253,45 @@ pub fn energy_staircase(matched: &SurfaceMatch, size: (u32, u32)) -> RgbImage {
         }],
         size,
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::View;
+
+    /// A point of ω drawn on a canvas lands on the pixel that shows its grid node in the
+    /// background, whose grid row 0 is at the bottom ([`crate::render::grid_image`]). The
+    /// deformed grid was drawn upside down against B's image before this was checked.
+    #[test]
+    fn a_point_of_omega_lands_on_its_node_in_the_background() {
+        let n = 9;
+        for (row, column) in [(0, 0), (2, 7), (8, 3), (5, 5)] {
+            let image = crate::render::grid_image(n, n, |k| {
+                if k == row * n + column {
+                    [255, 0, 0]
+                } else {
+                    [0, 0, 0]
+                }
+            });
+            let h = 1.0 / (n - 1) as f64;
+            let p = View::WHOLE.pixel([column as f64 * h, row as f64 * h], n as f64);
+            let at = p.map(|c| (c.floor() as u32).min(n as u32 - 1));
+            assert_eq!(
+                image.get_pixel(at[0], at[1]).0,
+                [255, 0, 0],
+                "node ({row}, {column}) drawn at {p:?}"
+            );
+        }
+        // A zoomed view: its lower-left corner at the bottom-left pixel, the upper-right
+        // at the top-right, with a margin of a sixth of the points' extent.
+        let view = View::around([[0.2, 0.3], [0.5, 0.4]].into_iter());
+        let w = 600.0;
+        let lo = view.pixel([0.2, 0.3], w);
+        let hi = view.pixel([0.5, 0.4], w);
+        assert!((lo[0] - w / 8.0).abs() < 1e-9 && (hi[0] - 7.0 * w / 8.0).abs() < 1e-9);
+        assert!(
+            lo[1] > hi[1] && (lo[1] + hi[1] - w).abs() < 1e-9,
+            "{lo:?} {hi:?}"
+        );
+    }
 }

@@ -10,7 +10,7 @@ use crate::grid::{Grid, Pyramid, harmonic_extension};
 use crate::mesh::TriMesh;
 use crate::param::flatten::{Cut, FlattenOptions, flatten};
 use crate::raster::{
-    FeatureFile, FeatureSource, GeometryImages, GeometryImagesOptions, SurfaceScale,
+    FeatureCurve, FeatureFile, FeatureSource, GeometryImages, GeometryImagesOptions, SurfaceScale,
 };
 
 /// Channels of the smoothed pyramid: mean curvature, metric, position (ℓ units).
@@ -35,6 +35,9 @@ pub struct MatchSurface {
     pub images: GeometryImages,
     /// Names of the features, in the order of the distance maps.
     pub feature_names: Vec<String>,
+    /// The features' vertex curves on this surface, in the same order (feature `f` of
+    /// A is paired with feature `f` of B).
+    pub feature_curves: Vec<FeatureCurve>,
     /// The length unit ℓ (mesh units) of every quantity below: shared by both surfaces
     /// of a match, so that their sizes compare.
     pub length_unit: f64,
@@ -109,6 +112,7 @@ impl MatchSurface {
         })?;
         let smooth = Pyramid::new(finest);
         let feature_names = images.features.iter().map(|f| f.name.clone()).collect();
+        let feature_curves = features.map_or(vec![], |f| f.features.clone());
         let feature_distance = images
             .features
             .iter()
@@ -127,6 +131,7 @@ impl MatchSurface {
             flatten_time,
             images,
             feature_names,
+            feature_curves,
             length_unit,
             smooth,
             feature_distance,
@@ -146,7 +151,13 @@ impl MatchSurface {
                     .map(|&d| if d.is_finite() { d / unit } else { 1e3 }),
             );
         }
+        self.feature_curves.extend(file.features.iter().cloned());
         Ok(())
+    }
+
+    /// The distance map (finest grid, ℓ units) of feature `f` ([`Self::feature_names`]).
+    pub(crate) fn feature_distance(&self, f: usize) -> &Grid<f64> {
+        &self.feature_distance[f]
     }
 
     /// The rims of the holes filled for the flattening: every boundary loop but the

@@ -322,11 +322,32 @@ fn features_alone_pull_a_misaligned_start_into_place() {
         position: 0.0,
         uncovered: 0.0,
     };
-    let (_, corr) = run(&a, &b, &guidance, &o);
+    let (m, corr) = run(&a, &b, &guidance, &o);
     let (e, matched) = errors(&a, &b, &corr, |v| Some(turn(a.positions[v])));
     assert!(matched > 0.8, "matched {matched}");
     let median = quantile(&e, 0.5);
     assert!(median < 4.0 * CELL, "median {median}");
+    // The report's feature fits. The balanced flattening lays the turned copy out
+    // almost as A (measured: the landmarks start 0.6–1.1 cells from B's, not 25° off),
+    // and the solve brings every one closer (0.3–0.8 cells: B's landmark is B's vertex
+    // nearest the true point, so not closer than B's edges allow). The largest, read in
+    // B's distance maps, agrees with the largest miss the landmark pinning measures in
+    // space from φ's matched points (another path: B's position image, Euclidean).
+    let fits = m.feature_fits();
+    assert_eq!(fits.len(), spots.len(), "{fits:?}");
+    for f in &fits {
+        assert_eq!((f.vertices, f.after), (1, f.after_max), "{f:?}");
+        assert!(f.after < f.before && f.after < CELL, "{f:?}");
+    }
+    let largest = fits.iter().map(|f| f.after).fold(0.0, f64::max);
+    let pinning = m.checked_correspondence(&a, &b, true).unwrap().pinning;
+    assert!(
+        (largest - pinning.largest_miss).abs() < 0.5 * CELL,
+        "feature maps {largest}, pinning {}",
+        pinning.largest_miss
+    );
+    // Without alignment φ started from the identity of the planes.
+    assert_eq!(m.alignment.start(), Similarity2::identity());
 }
 
 #[test]
@@ -715,6 +736,14 @@ fn landmarks_that_moved_with_the_surface_start_from_space() {
         o.features_in_space = in_space;
         let (m, corr) = run(&a, &b, &guidance, &o);
         assert!(m.min_det > 0.0);
+        // The start the solve went on from is the kept one's.
+        if let Some(f) = m.alignment.features_in_space
+            && f.kept
+        {
+            assert_eq!(m.alignment.start(), f.similarity);
+        } else {
+            assert_eq!(m.alignment.start(), m.alignment.similarity);
+        }
         let (e, matched) = errors(&a, &b, &corr, truth);
         found.push((
             quantile(&e, 0.5) / CELL,

@@ -1,0 +1,128 @@
+//! How well the paired features agree, before and after the solve.
+//!
+//! For a feature `f` paired between A and B (a curve, a landmark — a one-vertex feature —
+//! or a hole rim paired automatically), each vertex `v` of A's curve is placed in ω_B
+//! twice: by the plane similarity φ started from on the coarsest level
+//! ([`AlignmentReport::start`]), and by φ itself. At each place B's distance map of the
+//! same feature `d_B^f` (the one the feature term (2.11) reads: the geodesic distance to
+//! B's curve in B's metric, extended past B's rim) is read bilinearly:
+//!
+//! `before_f = mean_v d_B^f(s(ξ_A(v)))`,   `after_f = mean_v d_B^f(φ(ξ_A(v)))`,
+//!
+//! in B's own length units. `after` near zero says φ lays A's curve onto B's; a large
+//! `after` on one feature when the others fit says that feature disagrees with the rest
+//! (a mislabelled curve, a landmark on the wrong vertex) — which the match cannot tell
+//! from the energy alone.
+
+use serde::Serialize;
+
+use super::AlignmentReport;
+use super::similarity::Similarity2;
+use super::solve::SurfaceMatch;
+
+/// One paired feature's distance from A's curve, carried into ω_B, to B's curve.
+#[derive(Clone, Debug, Serialize)]
+pub struct FeatureFit {
+    pub name: String,
+    /// Vertices of A's curve.
+    pub vertices: usize,
+    /// Mean distance (B's units) at the start of the solve.
+    pub before: f64,
+    /// Mean and largest distance (B's units) after it.
+    pub after: f64,
+    pub after_max: f64,
+}
+
+/// One paired feature in ω_B ([`SurfaceMatch::carried_features`]).
+#[derive(Clone, Debug)]
+pub struct CarriedFeature {
+    pub name: String,
+    /// A's curve, carried into ω_B.
+    pub a: Vec<[f64; 2]>,
+    /// B's curve.
+    pub b: Vec<[f64; 2]>,
+    pub closed: bool,
+}
+
+impl AlignmentReport {
+    /// The plane similarity φ started from on the coarsest level: the alignment's
+    /// (`similarity`), or the start the solve went on from instead — the similarity
+    /// search's (applied after it) or the features' alignment refined in space — when
+    /// that one was kept.
+    pub fn start(&self) -> Similarity2 {
+        if let Some(f) = &self.features_in_space
+            && f.kept
+        {
+            return f.similarity;
+        }
+        if let Some(s) = &self.search
+            && s.kept
+        {
+            return s.similarity.after(&self.similarity);
+        }
+        self.similarity
+    }
+}
+
+impl SurfaceMatch {
+    /// The features' domain positions on A and B, paired: for every feature of A (in
+    /// order), A's curve carried into ω_B by `place`, and B's curve in ω_B.
+    pub fn carried_features(&self, place: impl Fn([f64; 2]) -> [f64; 2]) -> Vec<CarriedFeature> {
+        self.a
+            .feature_curves
+            .iter()
+            .zip(&self.b.feature_curves)
+            .map(|(fa, fb)| {
+                let a = fa
+                    .vertices
+                    .iter()
+                    .map(|&v| place(self.a.vertex_domain_position(v as usize)))
+                    .collect();
+                let b = fb
+                    .vertices
+                    .iter()
+                    .map(|&v| self.b.vertex_domain_position(v as usize))
+                    .collect();
+                CarriedFeature {
+                    name: fa.name.clone(),
+                    a,
+                    b,
+                    closed: fa.closed,
+                }
+            })
+            .collect()
+    }
+
+    /// Every paired feature's fit before and after the solve (module docs); empty
+    /// without features.
+    pub fn feature_fits(&self) -> Vec<FeatureFit> {
+        let start = self.alignment.start();
+        // ℓ units → B's own units (B was scaled by `scale_b` for the match).
+        let unit = self.a.length_unit / self.scale_b;
+        let n = self.a.feature_curves.len().min(self.b.feature_curves.len());
+        (0..n)
+            .map(|f| {
+                let curve = &self.a.feature_curves[f];
+                let distance = self.b.feature_distance(f);
+                let mut before = 0.0;
+                let mut after = 0.0;
+                let mut after_max = 0.0f64;
+                for &v in &curve.vertices {
+                    let xi = self.a.vertex_domain_position(v as usize);
+                    before += distance.sample(start.apply(xi));
+                    let d = distance.sample(self.map_domain(xi));
+                    after += d;
+                    after_max = after_max.max(d);
+                }
+                let count = curve.vertices.len().max(1) as f64;
+                FeatureFit {
+                    name: curve.name.clone(),
+                    vertices: curve.vertices.len(),
+                    before: before / count * unit,
+                    after: after / count * unit,
+                    after_max: after_max * unit,
+                }
+            })
+            .collect()
+    }
+}
