@@ -279,7 +279,7 @@ pub struct MatchReport {
     /// of B. `null` when nothing matched.
     pub area_ratio: Option<f64>,
     /// Doubts about the result, worded for the user (empty when none): see
-    /// [`match_warnings`].
+    /// [`match_warnings`] and [`super::feature_fit::feature_warnings`].
     pub warnings: Vec<String>,
     pub holes_filled_a: usize,
     pub holes_filled_b: usize,
@@ -470,6 +470,9 @@ impl SurfaceMatch {
             }
         }
         let area_ratio = (matched_area_a > 0.0).then(|| covered / matched_area_a);
+        let feature_fit = self.feature_fits();
+        let mut warnings = match_warnings(area_ratio);
+        warnings.extend(super::feature_fit::feature_warnings(&feature_fit));
         let levels: Vec<LevelSummary> = self.levels.iter().map(LevelSummary::from).collect();
         MatchReport {
             vertices_a: correspondence.len(),
@@ -478,7 +481,7 @@ impl SurfaceMatch {
             matched_fraction_a: matched as f64 / correspondence.len().max(1) as f64,
             covered_fraction_b: (covered / area_b.max(f64::MIN_POSITIVE)).min(1.0),
             area_ratio,
-            warnings: match_warnings(area_ratio),
+            warnings,
             holes_filled_a: self.a.filled_holes,
             holes_filled_b: self.b.filled_holes,
             min_det: self.min_det,
@@ -491,7 +494,7 @@ impl SurfaceMatch {
             pinned_landmarks: checked.pinning.landmarks,
             largest_landmark_miss: checked.pinning.largest_miss,
             alignment: self.alignment.clone(),
-            feature_fit: self.feature_fits(),
+            feature_fit,
             similarity: self.similarity,
             position_weight: self.position_weight,
             shape_residual: self.shape_residual,
@@ -528,10 +531,12 @@ pub fn plausible_area_ratio(r: f64) -> bool {
     (1.0 / AREA_RATIO_DOUBT..=AREA_RATIO_DOUBT).contains(&r)
 }
 
-/// What a match report should warn about. Today one check: the matched part of A lands
-/// on B at less than 1/[`AREA_RATIO_DOUBT`] or more than [`AREA_RATIO_DOUBT`] times its
-/// own area — the surfaces were matched in a way no pair of like surfaces is (a whole
-/// head squeezed into the face of another, a face spread over a head).
+/// What a match report should warn about, from the matched area: the matched part of A
+/// lands on B at less than 1/[`AREA_RATIO_DOUBT`] or more than [`AREA_RATIO_DOUBT`]
+/// times its own area — the surfaces were matched in a way no pair of like surfaces is
+/// (a whole head squeezed into the face of another, a face spread over a head). The
+/// report adds a warning per feature φ left beyond the feature term's reach
+/// ([`super::feature_fit::feature_warnings`]).
 pub fn match_warnings(area_ratio: Option<f64>) -> Vec<String> {
     let mut warnings = Vec::new();
     if let Some(r) = area_ratio

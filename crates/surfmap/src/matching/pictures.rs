@@ -111,7 +111,8 @@ fn curvature_canvas(matched: &SurfaceMatch, pixels: u32, view: View) -> (Canvas,
     });
     let pixels = pixels.max(64);
     let w = pixels as f64;
-    let mut canvas = Canvas::new(pixels, pixels, 2, [0.78; 3]);
+    // Past ω the same grey as outside B's surface.
+    let mut canvas = Canvas::new(pixels, pixels, 2, rgb(200, 200, 200));
     // The image's top-left corner is the point (0, 1) of ω.
     let corner = view.pixel([0.0, 1.0], w);
     canvas.draw_image(

@@ -154,6 +154,61 @@ fn a_retriangulated_moved_copy_matches_by_the_identity() {
     );
 }
 
+/// A landmark put on the wrong vertex of B (the user's mistake): four right ones hold φ
+/// to the identity, the wrong one ends far from B's vertex — beyond the feature term's
+/// reach — and the report names it, and only it, in its warnings.
+#[test]
+fn a_landmark_on_the_wrong_vertex_is_named_in_the_warnings() {
+    let a = surface(18, |p| p);
+    let motion = moved_copy_motion();
+    let b = surface(23, &motion);
+    let spots = [
+        [0.5, 0.0],
+        [-0.3, 0.45],
+        [-0.2, -0.5],
+        [0.2, -0.1],
+        [0.45, 0.4],
+    ];
+    let mut guidance = landmarks_at(&a, &b, &spots, &motion);
+    // p4's vertex of B: where (−0.55, −0.2) of A went, not (0.45, 0.4).
+    let wrong = nearest_vertex(&b, motion([-0.55, -0.2, height(-0.55, -0.2)]));
+    let lm = guidance.landmarks.as_mut().unwrap();
+    lm.b[4] = wrong;
+    let right_a = lm.a[4];
+    let (m, corr) = run(&a, &b, &guidance, &options());
+    let (e, _) = errors(&a, &b, &corr, |v| Some(motion(a.positions[v])));
+    assert!(quantile(&e, 0.5) < CELL, "median {}", quantile(&e, 0.5));
+    let checked = m.checked_correspondence(&a, &b, true).unwrap();
+    let report = m.report(&checked, &options());
+    let fits: Vec<(&str, f64, f64)> = report
+        .feature_fit
+        .iter()
+        .map(|f| (f.name.as_str(), f.after, f.reach))
+        .collect();
+    let beyond: Vec<&str> = fits.iter().filter(|f| f.1 > f.2).map(|f| f.0).collect();
+    assert_eq!(beyond, ["landmark:p4"], "{fits:?}");
+    assert_eq!(report.warnings.len(), 1, "{:?}", report.warnings);
+    assert!(
+        report.warnings[0].contains("\"landmark:p4\""),
+        "{:?}",
+        report.warnings
+    );
+    // The wrong pair is about as far apart as the two places are on the surface
+    // (measured: 1.19 from B's vertex, 1.17 apart; the right ones 0.017–0.029, the
+    // reach 0.245; the match's median error 0.34 cells).
+    let apart = (0..3)
+        .map(|c| {
+            (b.positions[wrong as usize][c] - motion(a.positions[right_a as usize])[c]).powi(2)
+        })
+        .sum::<f64>()
+        .sqrt();
+    let p4 = &report.feature_fit[4];
+    assert!(
+        (p4.after / apart - 1.0).abs() < 0.3,
+        "{p4:?}, {apart} apart"
+    );
+}
+
 #[test]
 fn a_copy_in_other_units_matches_by_the_identity() {
     // B is the moved, re-triangulated copy in units 100 times smaller (metres → cm):
