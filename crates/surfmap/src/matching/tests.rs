@@ -353,6 +353,25 @@ fn other_proportions_match_closer_with_the_affine_position_map() {
     assert!(medians[1] < 0.9 * medians[0], "medians {medians:?}");
 }
 
+/// Options for a match driven by the features alone (weight `features`) and the metric
+/// term: no alignment (φ starts as the identity of the planes), no bending, no positions,
+/// no hole features; from level 3.
+fn features_alone(features: f64) -> MatchOptions {
+    MatchOptions {
+        align: Align::None,
+        coarsest_level: 3,
+        hole_features: HoleFeatures::Off,
+        betas: Betas {
+            bend: 0.0,
+            reg: 0.01,
+            features,
+            position: 0.0,
+            uncovered: 0.0,
+        },
+        ..options()
+    }
+}
+
 #[test]
 fn a_turned_copy_guided_by_features_alone_stays_in_place() {
     let a = surface(18, |p| p);
@@ -367,18 +386,7 @@ fn a_turned_copy_guided_by_features_alone_stays_in_place() {
     let spots = [[0.5, 0.0], [-0.3, 0.45], [-0.2, -0.5], [0.2, -0.1]];
     let guidance = landmarks_at(&a, &b, &spots, &turn);
     // No alignment and no data but the features: the feature term alone must turn φ.
-    let mut o = options();
-    o.align = Align::None;
-    o.coarsest_level = 3;
-    o.hole_features = HoleFeatures::Off;
-    o.betas = Betas {
-        bend: 0.0,
-        reg: 0.01,
-        features: 5.0,
-        position: 0.0,
-        uncovered: 0.0,
-    };
-    let (m, corr) = run(&a, &b, &guidance, &o);
+    let (m, corr) = run(&a, &b, &guidance, &features_alone(5.0));
     let (e, matched) = errors(&a, &b, &corr, |v| Some(turn(a.positions[v])));
     assert!(matched > 0.8, "matched {matched}");
     let median = quantile(&e, 0.5);
@@ -428,18 +436,7 @@ fn features_alone_pull_a_misaligned_start_into_place() {
     let guidance = landmarks_at(&a, &b, &spots, &warp);
     let mut ends = vec![];
     for features in [5.0, 0.0] {
-        let mut o = options();
-        o.align = Align::None;
-        o.coarsest_level = 3;
-        o.hole_features = HoleFeatures::Off;
-        o.betas = Betas {
-            bend: 0.0,
-            reg: 0.01,
-            features,
-            position: 0.0,
-            uncovered: 0.0,
-        };
-        let (m, corr) = run(&a, &b, &guidance, &o);
+        let (m, corr) = run(&a, &b, &guidance, &features_alone(features));
         let (_, matched) = errors(&a, &b, &corr, |v| Some(warp(a.positions[v])));
         assert!(matched > 0.9, "matched {matched}");
         let fits = m.feature_fits();
