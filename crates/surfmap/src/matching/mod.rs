@@ -7,7 +7,8 @@
 //! terms and their gradients are in [`energy`]; [`ncg`] minimizes one level;
 //! [`solve`] runs the multiscale schedule with the initial alignment
 //! ([`similarity`], [`rigid`], [`align`]); [`output`] checks the result for folds in
-//! space, maps points and writes the match folder; [`pictures`] draws it.
+//! space, maps points and writes the match folder; [`feature_fit`] measures how far φ
+//! leaves each paired feature from B's; [`pictures`] draws it.
 
 pub mod align;
 pub mod complete;

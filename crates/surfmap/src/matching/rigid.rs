@@ -14,8 +14,8 @@
 //! samples · log n_B)` with a k-d tree over B's vertices (`kiddo`); the many rough
 //! starts pair with at most [`COARSE_TARGETS`] of B's vertices, so that their cost does
 //! not grow with B's resolution, the shifted starts far behind the best after
-//! [`SCREEN_STEPS`] stop there ([`SCREEN_CUT`]), any start far behind the best after
-//! [`COARSE_PROBE`] steps stops there ([`COARSE_CUT`]), and only the best pose is
+//! `SCREEN_STEPS` stop there (`SCREEN_CUT`), any start far behind the best after
+//! `COARSE_PROBE` steps stops there (`COARSE_CUT`), and only the best pose is
 //! refined against all of B.
 
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
@@ -485,7 +485,7 @@ impl IcpRun {
 
 /// The rigid motion of ℝ³ that best puts surface A (points `a`) onto surface B
 /// (points `b`): trimmed ICP on a subsample from 24 rotations about the centroids, the
-/// four principal-axes poses, those 28 shifted ([`shifted_starts`]) and the caller's
+/// four principal-axes poses, those 28 shifted (`shifted_starts`) and the caller's
 /// `starts`; the best is refined on more points.
 pub fn align_rigidly(
     a: &[[f64; 3]],

@@ -31,7 +31,7 @@
 //!    Then the band's vertices not on a boundary of A are placed by the mean-value map
 //!    (Floater 2003) with everything else as boundary values (the rim at its targets,
 //!    φ's images beyond the band): `p(v) = Σ_u λ_vu p(u)`, `λ_vu` the mean-value weights
-//!    of A's own UV, solved exactly ([`crate::param::tutte::mean_value_with_fixed`]). The weights reproduce affine maps, so
+//!    of A's own UV, solved exactly (`crate::param::tutte::mean_value_with_fixed`). The weights reproduce affine maps, so
 //!    where φ is affine on A's UV at the scale of a few edges the band stays where φ put
 //!    it; where φ's images crowd against the rim or fold (a closed lower lip squeezed
 //!    into an open mouth), they are straightened — the displacement alone moves the band

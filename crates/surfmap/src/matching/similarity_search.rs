@@ -64,7 +64,7 @@
 //! alignment's and the searched one — and goes on from the searched one only when it
 //! *dominates*: its solve ends with a lower energy and at least the same matched area
 //! `M` — and, when the alignment's solve matches A at a plausible size (its matched part
-//! covers 1/3–3 times its own area on B, [`matched_area_ratio`]), only if the searched
+//! covers 1/3–3 times its own area on B, `matched_area_ratio`), only if the searched
 //! one does too: the ICT face crop matched to a whole head (same units) was squeezed by
 //! the search's start to 0.11 of its area on B, against 0.65 from the alignment's, and
 //! ended lower in energy and matching more (BENCHMARKS.md, "A squeezed start"). With
@@ -174,7 +174,7 @@ pub struct SimilaritySearchLog {
     /// start, and not at an implausible size (module docs).
     pub kept: bool,
     /// The area A's matched part covers on B over its own area after the coarsest level
-    /// solved from the alignment's start and from the search's ([`matched_area_ratio`];
+    /// solved from the alignment's start and from the search's (`matched_area_ratio`;
     /// `None` when nothing matched).
     pub area_ratio_alignment: Option<f64>,
     pub area_ratio_search: Option<f64>,

@@ -186,7 +186,7 @@ pub struct MatchOptions {
     /// stop pulling (0: plain squares).
     pub position_scale: f64,
     /// Width σ (ω units) of the Gaussian that smooths the position term's residual
-    /// into its target ([`relief_offsets`], [`POSITION_RELIEF`]); 0: none (the
+    /// into its target (`relief_offsets`, [`POSITION_RELIEF`]); 0: none (the
     /// surfaces compared after the fitted map alone).
     pub position_relief: f64,
     /// Sobolev preconditioner width in grid cells of each level (`λ = (w·h_k)²`);
@@ -368,7 +368,7 @@ pub enum PositionMap {
     AffineNearSimilarity { ridge: f64 },
 }
 
-/// The width σ (ω units) of the position term's relief ([`relief_offsets`]): the
+/// The width σ (ω units) of the position term's relief (`relief_offsets`): the
 /// default (`MatchOptions::position_relief`, `surfmap match --relief`; 0 turns it off).
 ///
 /// The fitted map `T` of ℝ³ explains the two faces' difference in pose and proportions
@@ -382,7 +382,7 @@ pub enum PositionMap {
 /// the local metric, as by default) and only then goes on with it, in a third phase in
 /// the local metric (a coarsest level without the wide phase goes without it); the finer
 /// levels use it throughout, and the starts the coarsest level compares are compared
-/// without it ([`Solver::plain_energy`]). (With the relief
+/// without it (`Solver::plain_energy`). (With the relief
 /// from the start, a crop that covers one side of a face drifted, and a start a quarter
 /// too small — `the_wide_metric_grows_a_shrunken_start_into_place` — was not grown into
 /// place.) Measured in BENCHMARKS.md ("Matching": "The position term's relief"): FLAME

@@ -233,7 +233,7 @@ pub struct NonManifoldFix {
 ///
 /// 1. **Edges shared by more than two faces** (fins, internal walls, two sheets touching
 ///    along an edge) are cut apart into sheets: the faces on such an edge are paired
-///    greedily, best pair first ([`ranked_pairs`]), and only paired faces stay joined
+///    greedily, best pair first (`ranked_pairs`), and only paired faces stay joined
 ///    across it; an odd face out (a fin) is joined to nothing there.
 /// 2. **Vertices whose faces form separate fans** — bow-ties, two sheets touching at a
 ///    point, and the ends of the cuts of step 1 — get one copy per fan after the first
@@ -487,7 +487,7 @@ pub fn hole_loops(topo: &Topology) -> Vec<&[u32]> {
 ///
 /// **How it is tracked.** [`FaceOrigins::tag`] replaces the mesh's UVs by per-corner
 /// tags: corner `k` of face `t` gets the UV `(t, k)`. Every repair here carries
-/// per-corner UVs along with the faces it keeps — [`retain_faces`] filters them,
+/// per-corner UVs along with the faces it keeps — `retain_faces` filters them,
 /// [`reorient`] swaps them with the corners, [`weld`], [`fix_non_manifold`] and
 /// [`drop_unreferenced`] renumber vertices and leave each face's corners as they were —
 /// so after any sequence of them [`FaceOrigins::read`] finds, for each face, the input
