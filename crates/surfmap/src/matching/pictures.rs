@@ -175,8 +175,8 @@ const FEATURE_COLORS: [[u8; 3]; 12] = [
 ];
 
 /// The paired features before and after the solve, side by side over B's
-/// mean-curvature image in ω_B: B's curves thick and pale, A's carried into ω_B thin
-/// and full in the same colour — on the left by the plane similarity φ started from
+/// mean-curvature image in ω_B: B's curves thick and pale (on a white halo), A's carried
+/// into ω_B thin and full in the same colour — on the left by the plane similarity φ started from
 /// ([`super::AlignmentReport::start`]), on the right by φ. Landmarks (one-vertex
 /// features) are squares. Where the solve did its work, the thin curves lie on the
 /// thick ones on the right ([`SurfaceMatch::feature_fits`] gives the distances).
@@ -211,12 +211,21 @@ pub fn features_carried(matched: &SurfaceMatch, tile: u32) -> Option<RgbImage> {
                     (&feature.a, rgb(c[0], c[1], c[2]))
                 };
                 let mut line: Vec<[f64; 2]> = points.iter().map(|&p| px(p)).collect();
+                // B's pale curves on a white halo, so that they stand apart from the
+                // grey outside B's surface and from the curvature's colours.
+                let halo = (pass == 0).then_some(2.5);
                 if line.len() == 1 {
+                    if let Some(h) = halo {
+                        canvas.marker(line[0], mark + 0.5 * h, rgb(255, 255, 255));
+                    }
                     canvas.marker(line[0], mark, color);
                     continue;
                 }
                 if feature.closed {
                     line.push(line[0]);
+                }
+                if let Some(h) = halo {
+                    canvas.polyline(&line, thick + h, rgb(255, 255, 255));
                 }
                 canvas.polyline(&line, thick, color);
             }
