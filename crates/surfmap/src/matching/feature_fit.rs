@@ -131,28 +131,22 @@ impl SurfaceMatch {
         // ℓ units → B's own units (B was scaled by `scale_b` for the match).
         let unit = self.a.length_unit / self.scale_b;
         let reach = self.levels.last().map_or(f64::NAN, |l| l.epsilon.sqrt()) * unit;
-        let n = self.a.feature_curves.len().min(self.b.feature_curves.len());
-        (0..n)
-            .map(|f| {
-                let curve = &self.a.feature_curves[f];
+        let before = self.carried_features(|xi| start.apply(xi));
+        let after = self.carried_features(|xi| self.map_domain(xi));
+        before
+            .iter()
+            .zip(&after)
+            .enumerate()
+            .map(|(f, (before, after))| {
                 let distance = self.b.feature_distance(f);
-                let mut before = 0.0;
-                let mut after = 0.0;
-                let mut after_max = 0.0f64;
-                for &v in &curve.vertices {
-                    let xi = self.a.vertex_domain_position(v as usize);
-                    before += distance.sample(start.apply(xi));
-                    let d = distance.sample(self.map_domain(xi));
-                    after += d;
-                    after_max = after_max.max(d);
-                }
-                let count = curve.vertices.len().max(1) as f64;
+                let at = |p: &[f64; 2]| distance.sample(*p) * unit;
+                let count = before.a.len().max(1) as f64;
                 FeatureFit {
-                    name: curve.name.clone(),
-                    vertices: curve.vertices.len(),
-                    before: before / count * unit,
-                    after: after / count * unit,
-                    after_max: after_max * unit,
+                    name: before.name.clone(),
+                    vertices: before.a.len(),
+                    before: before.a.iter().map(at).sum::<f64>() / count,
+                    after: after.a.iter().map(at).sum::<f64>() / count,
+                    after_max: after.a.iter().map(at).fold(0.0, f64::max),
                     reach,
                 }
             })

@@ -727,7 +727,7 @@ pub fn match_surfaces(
     let (fa, fb) = paired_features(mesh_a, mesh_b, guidance)?;
     // One length unit for both: the geometric mean of √area, so the energy's balance
     // does not depend on the units, and the surfaces' relative size is kept.
-    let unit = (mesh_a.area() * mesh_b.area()).sqrt().sqrt();
+    let unit = (area_a * mesh_b.area()).sqrt().sqrt();
     if !(unit.is_finite() && unit > 0.0) {
         // Both areas were checked above: only B's scaling can get here.
         return Err(MatchError::Option(format!(
@@ -945,7 +945,7 @@ pub fn solve(
             options.split_hole_rims,
         )?;
     }
-    let features: Vec<usize> = (0..sa.feature_names.len()).collect();
+    let features: Vec<usize> = (0..sa.feature_curves.len()).collect();
     let solver = Solver {
         a: &sa,
         b: &sb,

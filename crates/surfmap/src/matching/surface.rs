@@ -33,10 +33,8 @@ pub struct MatchSurface {
     pub flatten_iterations: usize,
     pub flatten_time: f64,
     pub images: GeometryImages,
-    /// Names of the features, in the order of the distance maps.
-    pub feature_names: Vec<String>,
-    /// The features' vertex curves on this surface, in the same order (feature `f` of
-    /// A is paired with feature `f` of B).
+    /// The features' vertex curves on this surface (with their names), in the order of
+    /// the distance maps (feature `f` of A is paired with feature `f` of B).
     pub feature_curves: Vec<FeatureCurve>,
     /// The length unit ℓ (mesh units) of every quantity below: shared by both surfaces
     /// of a match, so that their sizes compare.
@@ -111,7 +109,6 @@ impl MatchSurface {
             ]
         })?;
         let smooth = Pyramid::new(finest);
-        let feature_names = images.features.iter().map(|f| f.name.clone()).collect();
         let feature_curves = features.map_or(vec![], |f| f.features.clone());
         let feature_distance = images
             .features
@@ -130,7 +127,6 @@ impl MatchSurface {
             flatten_iterations: flat.iterations,
             flatten_time,
             images,
-            feature_names,
             feature_curves,
             length_unit,
             smooth,
@@ -145,7 +141,6 @@ impl MatchSurface {
         let mesh = TriMesh::new(self.positions.clone(), self.triangles.clone());
         let unit = self.length_unit;
         for f in self.images.curve_distances(&mesh, &self.uvs, file)? {
-            self.feature_names.push(f.name);
             self.feature_distance.push(
                 f.distance
                     .map(|&d| if d.is_finite() { d / unit } else { 1e3 }),
@@ -155,7 +150,7 @@ impl MatchSurface {
         Ok(())
     }
 
-    /// The distance map (finest grid, ℓ units) of feature `f` ([`Self::feature_names`]).
+    /// The distance map (finest grid, ℓ units) of feature `f` ([`Self::feature_curves`]).
     pub(crate) fn feature_distance(&self, f: usize) -> &Grid<f64> {
         &self.feature_distance[f]
     }
@@ -201,7 +196,7 @@ impl MatchSurface {
     }
 
     /// A's data at level `k` with cut-off width `eps`; `features` selects and orders
-    /// the distance maps (indices into [`Self::feature_names`]).
+    /// the distance maps (indices into [`Self::feature_curves`]).
     pub(crate) fn level_a(&self, k: usize, eps: f64, features: &[usize]) -> LevelA {
         let s = self.smooth.level(k).as_slice();
         let m = self.level_size(k);
