@@ -1,9 +1,9 @@
 //! `surfmap` for Python: the library's one-call functions on numpy arrays, and batches of
 //! mesh files on a thread pool or a cluster. A thin layer with no algorithms: every
-//! function checks its arrays ([`arrays`]), releases the GIL for the library call, and
-//! returns numpy arrays and the library's reports as dictionaries ([`convert`]). Errors
+//! function checks its arrays (module `arrays`), releases the GIL for the library call, and
+//! returns numpy arrays and the library's reports as dictionaries (module `convert`). Errors
 //! become `ValueError`, `surfmap.MeshError`, `surfmap.SolverError` or `OSError`
-//! ([`errors`]).
+//! (module `errors`).
 //!
 //! Built by maturin as `surfmap._surfmap` (an abi3 wheel: one wheel for CPython ≥ 3.9);
 //! the Python package `python/surfmap` re-exports it and adds `flatten_many`'s progress

@@ -89,7 +89,7 @@ pub struct Args {
     pub jobs: usize,
     #[command(flatten)]
     pub solver: SolverArgs,
-    /// Scale and translate the UVs into [0,1]² (aspect ratio kept).
+    /// Scale and translate the UVs into `[0,1]²` (aspect ratio kept).
     #[arg(long)]
     pub normalize: bool,
     /// Write the flat mesh itself: positions (u, v, 0), for viewing the layout.

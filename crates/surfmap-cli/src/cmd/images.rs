@@ -1,5 +1,5 @@
 //! `surfmap images MESH -o DIR`: geometry images of a surface (thesis §3.2). The mesh is
-//! flattened with the balanced preset, placed in ω = [0,1]² and sampled on a
+//! flattened with the balanced preset, placed in ω = `[0,1]²` and sampled on a
 //! `size × size` grid; every image is written as a colour-mapped PNG and as raw `.npy`,
 //! with `images.json` describing the transform, the grid, the units and the files.
 

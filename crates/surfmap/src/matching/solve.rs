@@ -698,6 +698,14 @@ fn curve_means<const N: usize>(
         .collect()
 }
 
+/// The one length unit ℓ of both surfaces (mesh units): the geometric mean of their
+/// `√area`, `ℓ = (area_A · area_B)^¼`, so that the energy's balance (NOTES §2: curvature
+/// in `1/ℓ`, metric in `ℓ²`) does not depend on the units and the surfaces' relative size
+/// is kept.
+pub(crate) fn shared_length_unit(area_a: f64, area_b: f64) -> f64 {
+    (area_a * area_b).sqrt().sqrt()
+}
+
 /// Matches surface A onto surface B.
 pub fn match_surfaces(
     mesh_a: &TriMesh,
@@ -725,9 +733,7 @@ pub fn match_surfaces(
         &scaled_b
     };
     let (fa, fb) = paired_features(mesh_a, mesh_b, guidance)?;
-    // One length unit for both: the geometric mean of √area, so the energy's balance
-    // does not depend on the units, and the surfaces' relative size is kept.
-    let unit = (area_a * mesh_b.area()).sqrt().sqrt();
+    let unit = shared_length_unit(area_a, mesh_b.area());
     if !(unit.is_finite() && unit > 0.0) {
         // Both areas were checked above: only B's scaling can get here.
         return Err(MatchError::Option(format!(
@@ -1661,7 +1667,7 @@ mod tests {
     #[test]
     fn the_search_brings_a_turned_and_scaled_start_back() {
         let (mesh_a, mesh_b) = (bumpy_disc(18, 0.4), bumpy_disc(23, 0.4));
-        let unit = (mesh_a.area() * mesh_b.area()).sqrt().sqrt();
+        let unit = shared_length_unit(mesh_a.area(), mesh_b.area());
         let options = MatchOptions {
             size: 129,
             ..Default::default()

@@ -679,7 +679,7 @@ fn the_position_weight_falls_as_the_shapes_disagree() {
     let coarse = surface(11, &motion);
     let ripple = |p: [f64; 3]| 0.15 * (4.0 * p[0]).sin() * (3.0 * p[1]).cos();
     let rippled = surface(23, |p| motion([p[0], p[1], p[2] + ripple(p)]));
-    let unit = |b: &TriMesh| (a.area() * b.area()).sqrt().sqrt();
+    let unit = |b: &TriMesh| super::solve::shared_length_unit(a.area(), b.area());
     let rms =
         |values: Vec<f64>| (values.iter().map(|x| x * x).sum::<f64>() / values.len() as f64).sqrt();
     // RMS distance from A's vertices at the true motion to B's closest vertices.
