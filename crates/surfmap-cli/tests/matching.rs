@@ -671,6 +671,13 @@ fn bad_guidance_is_refused_by_name_and_nothing_is_written() {
         err.contains("'tip'") && err.contains("999999") && err.contains("vertices"),
         "{err}"
     );
+    // One landmark cannot turn the plane: aligning by it alone is refused.
+    let lm = write("one.json", r#"{"names": ["tip"], "A": [5], "B": [5]}"#);
+    let err = fails(&[s, s, "--landmarks", &lm, "--align", "features"], &out);
+    assert!(
+        err.contains("two or more features or landmarks") && err.contains("`auto`"),
+        "{err}"
+    );
     // Malformed landmarks.
     let lm = write("bad.json", r#"{"names": ["tip"], "A": [5]}"#);
     let err = fails(&[s, s, "--landmarks", &lm], &out);

@@ -76,8 +76,9 @@ fn landmarks(d: &Bound<'_, PyDict>) -> PyResult<Landmarks> {
 /// ≥ 0. ``position_weight``: a fixed weight ≥ 0 of the 3D position term (0: the thesis
 /// energy alone); ``None`` sets it from the surfaces' distance along B's normals after
 /// aligning them in space (``report["position_weight"]``, ``report["shape_residual"]``).
-/// ``align``: ``"auto"`` (features/landmarks when given, else the shapes in space),
-/// ``"features"``, ``"shape"`` or ``"none"``. ``features_start``: where φ starts with
+/// ``align``: ``"auto"`` (five or more features/landmarks when given, else the shapes in
+/// space; fewer still guide the solve), ``"features"`` (two or more), ``"shape"``
+/// or ``"none"``. ``features_start``: where φ starts with
 /// features or landmarks, ``"both"`` (their similarity of the planes and, with three or
 /// more, their alignment refined in space: the coarsest level is solved from both and the
 /// second kept when it ends lower without matching less;
@@ -136,7 +137,7 @@ fn landmarks(d: &Bound<'_, PyDict>) -> PyResult<Landmarks> {
 /// >>> C.shape, report["min_det"] > 0, report["matched_fraction_a"] > 0.9
 /// ((289, 4), True, True)
 /// >>> corners = {"features": [{"name": f"c{k}", "vertices": [v]} for k, v in enumerate([0, n - 1, n * n - 1])]}
-/// >>> C, report = surfmap.match(V, F, VB, F, size=65, features_a=corners, features_b=corners, beta=(1, 0.01, 10))
+/// >>> C, report = surfmap.match(V, F, VB, F, size=65, align="features", features_a=corners, features_b=corners, beta=(1, 0.01, 10))
 /// >>> report["alignment"]["method"], report["options"]["betas"]["features"]
 /// ('features', 10.0)
 #[pyfunction]

@@ -163,8 +163,9 @@ AGREED = ("matched_vertices_a", "min_det", "flipped_triangles", "collapsed_trian
 
 def test_feature_curves_match_as_on_the_command_line(cli, data, tmp_path):
     # Neutral against jaw open (registered: vertex i ↔ vertex i), guided by three feature
-    # curves; the chin moved with the jaw. From both starts (the default) and from the
-    # features' plane alone: each the command line's table and report.
+    # curves and aligned by them (`auto` would align the shapes: three are fewer than it
+    # aligns by); the chin moved with the jaw. From both starts (the default) and from
+    # the features' plane alone: each the command line's table and report.
     a, b = data / "faces" / "ict" / "ict_neutral.obj", data / "faces" / "ict" / "ict_jawopen.obj"
     VA, FA = surfmap.read_mesh(a)
     VB, FB = surfmap.read_mesh(b)
@@ -175,9 +176,11 @@ def test_feature_curves_match_as_on_the_command_line(cli, data, tmp_path):
     reports = {}
     for start, flags in (("both", []), ("plane", ["--features-start", "plane"])):
         out = tmp_path / start
-        run_cli(cli, "match", a, b, "-o", out, "--size", "65", "-q", "--features-a", fa, "--features-b", fb, *flags)
+        run_cli(cli, "match", a, b, "-o", out, "--size", "65", "-q", "--align", "features", "--features-a", fa, "--features-b", fb, *flags)
         kwargs = {"features_start": "plane"} if flags else {}
-        C, report = surfmap.match(VA, FA, VB, FB, size=65, features_a=features, features_b=features, **kwargs)
+        C, report = surfmap.match(
+            VA, FA, VB, FB, size=65, align="features", features_a=features, features_b=features, **kwargs
+        )
         assert np.array_equal(C, np.load(out / "correspondence.npy")), start
         cli_report = json.loads((out / "match.json").read_text())
         for key in AGREED:
@@ -366,8 +369,9 @@ def test_features_as_a_list_with_numpy_ids_are_the_same_features(holey):
     ids = [int(np.argmin(np.linalg.norm(VA[:, :2] - p, axis=1))) for p in ([-0.8, -0.8], [0.8, -0.8], [0.0, 0.8])]
     as_dict = {"features": [{"name": f"p{k}", "vertices": [v], "closed": False} for k, v in enumerate(ids)]}
     as_list = [{"name": f"p{k}", "vertices": np.array([v])} for k, v in enumerate(ids)]
-    C, report = surfmap.match(*arrays, size=65, features_a=as_dict, features_b=as_dict)
-    C2, report2 = surfmap.match(*arrays, size=65, features_a=as_list, features_b=as_list)
+    # Aligned by them (three are fewer than `auto` aligns by), so that they show.
+    C, report = surfmap.match(*arrays, size=65, align="features", features_a=as_dict, features_b=as_dict)
+    C2, report2 = surfmap.match(*arrays, size=65, align="features", features_a=as_list, features_b=as_list)
     assert report["alignment"]["method"] == "features" and np.array_equal(C, C2)
 
 

@@ -21,9 +21,9 @@ use super::{RepairArgs, load_mesh};
 
 #[derive(Clone, Copy, clap::ValueEnum)]
 pub enum AlignArg {
-    /// From features/landmarks when given, else from the shapes in space.
+    /// From features/landmarks when five or more are given, else from the shapes in space (fewer still guide the solve: a plane fitted to so few points cannot tell a misplaced one).
     Auto,
-    /// From the features/landmarks (an error without them).
+    /// From the features/landmarks (an error with fewer than two; two keep the size the meshes' units give).
     Features,
     /// From the shapes in space (trimmed point-to-plane ICP), even with features.
     Shape,
@@ -45,7 +45,8 @@ pub enum SearchArg {
 pub enum FeaturesStartArg {
     /// The features' similarity of the planes, and (with three or more) their rigid
     /// alignment refined in space: the coarsest level is solved from both and the
-    /// second kept when it ends lower without matching less.
+    /// second kept when it ends lower without matching less (with two, `--align features`,
+    /// the second is the shapes' own alignment in space).
     Both,
     /// The features' similarity of the planes only.
     Plane,

@@ -40,8 +40,8 @@ pub use output::{
 pub use similarity::Similarity2;
 pub use similarity_search::{SearchWhen, SimilaritySearch, SimilaritySearchLog};
 pub use solve::{
-    Align, AlignmentReport, COARSEST_SOBOLEV_WIDTH, FeatureStarts, Guidance, HoleFeatures,
-    Landmarks, MatchOptions, POSITION_AFFINE_RIDGE, POSITION_KAPPA, POSITION_RELIEF,
+    Align, AlignmentReport, COARSEST_SOBOLEV_WIDTH, FEATURES_TO_ALIGN, FeatureStarts, Guidance,
+    HoleFeatures, Landmarks, MatchOptions, POSITION_AFFINE_RIDGE, POSITION_KAPPA, POSITION_RELIEF,
     POSITION_RESIDUAL_CAP, POSITION_RESIDUAL_FLOOR, PositionMap, PositionWeight,
     RELIEF_MIDDLE_BUDGET, RELIEF_PHASE_FRACTION, ScaleB, SurfaceMatch, UNIT_MISMATCH,
     match_surfaces,

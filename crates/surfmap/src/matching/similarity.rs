@@ -98,6 +98,35 @@ pub fn fit_similarity_2d(p: &[[f64; 2]], q: &[[f64; 2]]) -> Option<Similarity2> 
     })
 }
 
+/// The rotation and translation, at the given `scale`, minimizing `Σ |S(pᵢ) − qᵢ|²` over
+/// similarities `S(x) = scale·R·x + t` (Procrustes at a fixed scale: in complex
+/// arithmetic, `z = scale · c/|c|` with `c = Σ conj(p̃ᵢ) q̃ᵢ` for centred points, and
+/// `t = q̄ − z p̄`). `None` with fewer than two pairs, or when `c` vanishes (the source
+/// points at one place, or no rotation preferred).
+pub fn fit_rotation_2d_at_scale(p: &[[f64; 2]], q: &[[f64; 2]], scale: f64) -> Option<Similarity2> {
+    let free = fit_similarity_2d(p, q)?;
+    let norm = free.z[0].hypot(free.z[1]);
+    if !(norm > 1e-300 && scale.is_finite() && scale > 0.0) {
+        return None;
+    }
+    // The free fit's z is c/Σ|p̃|², so it has c's direction.
+    let z = [scale * free.z[0] / norm, scale * free.z[1] / norm];
+    let n = p.len().min(q.len()) as f64;
+    let mean = |v: &[[f64; 2]]| {
+        let s = v
+            .iter()
+            .take(n as usize)
+            .fold([0.0; 2], |a, x| [a[0] + x[0], a[1] + x[1]]);
+        [s[0] / n, s[1] / n]
+    };
+    let (pm, qm) = (mean(p), mean(q));
+    let zp = mul(z, pm);
+    Some(Similarity2 {
+        z,
+        t: [qm[0] - zp[0], qm[1] - zp[1]],
+    })
+}
+
 /// A landmark is left out of [`fit_similarity_2d_robust`] when the fit of the others
 /// predicts it this many times farther off than their own RMS residual...
 pub const OUTLIER_RATIO: f64 = 5.0;
@@ -302,6 +331,28 @@ pub fn fit_affine_3d_near(
 mod tests {
     use super::*;
     use crate::testing::Rng;
+
+    /// Two points spread 30 % wider on B than the size asked for: the fit at that size
+    /// turns and moves A as the points say, centring them on each other, and the free
+    /// fit takes their spread as the size instead.
+    #[test]
+    fn a_fit_at_a_given_scale_keeps_it_and_finds_the_turn() {
+        let angle: f64 = 2.4;
+        let p = [[0.3, 0.4], [0.7, 0.45]];
+        let spread = Similarity2::about([0.5, 0.42], angle, 0.9 * 1.3, [0.55, 0.5]);
+        let q = p.map(|x| spread.apply(x));
+        let fit = fit_rotation_2d_at_scale(&p, &q, 0.9).unwrap();
+        assert!((fit.scale() - 0.9).abs() < 1e-12, "{fit:?}");
+        let turn = (fit.angle() - angle).rem_euclid(std::f64::consts::TAU);
+        assert!(turn.min(std::f64::consts::TAU - turn) < 1e-12, "{fit:?}");
+        let mid = |a: [f64; 2], b: [f64; 2]| [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0];
+        let (m, target) = (fit.apply(mid(p[0], p[1])), mid(q[0], q[1]));
+        assert!((m[0] - target[0]).hypot(m[1] - target[1]) < 1e-12);
+        let free = fit_similarity_2d(&p, &q).unwrap();
+        assert!((free.scale() - 0.9 * 1.3).abs() < 1e-12);
+        assert!(fit_rotation_2d_at_scale(&[p[0], p[0]], &q, 0.9).is_none());
+        assert!(fit_rotation_2d_at_scale(&p, &q, 0.0).is_none());
+    }
 
     #[test]
     fn robust_plane_fit_drops_one_disagreeing_pair_and_nothing_else() {

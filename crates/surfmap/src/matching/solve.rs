@@ -31,7 +31,8 @@ use super::output::plausible_area_ratio;
 use super::precondition::SobolevPreconditioner;
 use super::rigid::{ClosestPoints, align_surfaces};
 use super::similarity::{
-    Similarity2, fit_affine_3d_near, fit_similarity_2d, fit_similarity_2d_robust, fit_similarity_3d,
+    Similarity2, fit_affine_3d_near, fit_rotation_2d_at_scale, fit_similarity_2d,
+    fit_similarity_2d_robust, fit_similarity_3d,
 };
 use super::similarity_search::{
     SearchWhen, SimilaritySearch, SimilaritySearchLog, matched_area, matched_area_ratio,
@@ -44,15 +45,29 @@ use crate::mesh::validate::{Defect, DefectKind, validate};
 use crate::mesh::{SurfacePoint, Topology, TriMesh};
 use crate::raster::{FeatureCurve, FeatureFile};
 
+/// Fewest paired features or landmarks (a landmark, or one curve's centroid, each a point
+/// of the plane) from which [`Align::Auto`] aligns the planes by them; with fewer it
+/// aligns the shapes in space and the features only guide the solve. One point fixes no
+/// turn of the plane, two fix it poorly where the surfaces' flattenings differ around
+/// them, and a similarity (4 unknowns) fitted to three or four cannot tell a misplaced
+/// one from the others ([`fit_similarity_2d_robust`] drops one only from five on, keeping
+/// four). Measured on the FLAME and ICT pairs given subsets of their landmarks
+/// (BENCHMARKS.md, "Few landmarks"): from two mouth corners the features' start gave
+/// 4–42 % within 0.05 where the shapes' gave 82–93 %; from three (the nose tip too)
+/// 4–66 % where the shapes' gave 83–92 %; from four, 62 % on one pair against 84 %.
+pub const FEATURES_TO_ALIGN: usize = 5;
+
 /// How the initial similarity between ω_A and ω_B is found.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Align {
-    /// From the features/landmarks when given, else from the surfaces' shapes
-    /// ([`Align::Shape`]).
+    /// From the features/landmarks when [`FEATURES_TO_ALIGN`] or more are given, else
+    /// from the surfaces' shapes ([`Align::Shape`]; fewer features still guide the
+    /// solve).
     #[default]
     Auto,
-    /// From the features/landmarks (an error without them).
+    /// From the features/landmarks (an error with fewer than two: one point fixes no
+    /// turn of the plane); two keep the size the meshes' units give.
     Features,
     /// From the surfaces' 3D shapes even when features are given: a rigid alignment
     /// in space by trimmed ICP ([`super::rigid`]) pairs the vertices, and their domain
@@ -198,7 +213,9 @@ pub struct MatchOptions {
     pub coarsest_sobolev_width: f64,
     /// With three or more paired features or landmarks, also solve the coarsest level
     /// from the features' alignment refined in space, and go on from whichever start
-    /// ends lower without matching less ([`FeatureStarts`]); not when the similarity
+    /// ends lower without matching less ([`FeatureStarts`]; with two, which align the
+    /// planes only with [`Align::Features`], from the shapes' own alignment in space);
+    /// not when the similarity
     /// search runs after the features' alignment ([`SearchWhen::Always`]), which then
     /// takes the coarsest level.
     pub features_in_space: bool,
@@ -859,6 +876,10 @@ pub fn solve(
     // UVs are in mesh units and both meshes share ℓ: corresponding lengths match when
     // ω_A is scaled by the ratio of the domain transforms.
     let scale = sb.images.transform.scale / sa.images.transform.scale;
+    // With fewer than FEATURES_TO_ALIGN features, `auto` aligns the shapes and the
+    // features only guide.
+    let features_given = fa.map_or(0, |f| f.features.len());
+    let too_few_to_align = (1..FEATURES_TO_ALIGN).contains(&features_given);
     let use_features = match options.align {
         Align::Features => {
             if fa.is_none() {
@@ -866,28 +887,45 @@ pub fn solve(
                     "alignment from features needs features or landmarks".into(),
                 ));
             }
+            if features_given < 2 {
+                return Err(MatchError::Guidance(
+                    "alignment from features needs two or more features or landmarks: one \
+                     fixes where A goes but not how it turns; give another, or align with \
+                     `auto` (the shapes in space, the feature still guiding the solve)"
+                        .into(),
+                ));
+            }
             true
         }
-        Align::Auto => fa.is_some(),
+        Align::Auto => features_given >= FEATURES_TO_ALIGN,
         Align::Shape | Align::None => false,
     };
     // With features, the second start from their alignment refined in space
     // ([`FeatureStarts`]); its ICP also measures the position weight's residual.
+    // With two features (no rigid motion in space from their centroids) that second start
+    // is the shapes' own alignment.
     let in_space = match features_motion(&sa, &sb, fa, fb) {
-        Some(start) if use_features && options.features_in_space => {
-            shape_alignment(&sa, &sb, scale, 1, Some(start)).ok()
-        }
-        _ => None,
+        _ if !(use_features && options.features_in_space) => None,
+        Some(start) => shape_alignment(&sa, &sb, scale, 1, Some(start)).ok(),
+        None => shape_alignment(&sa, &sb, scale, options.align_rotations.max(1), None).ok(),
     };
     let (s, mut similarity, mut alignment, residual) = if use_features {
         let pa = feature_centroids(&sa, fa.unwrap());
         let pb = feature_centroids(&sb, fb.unwrap());
-        let (s, left_out) = if pa.len() >= 2 {
-            fit_similarity_2d_robust(&pa, &pb).ok_or_else(|| {
-                MatchError::Guidance("the features/landmarks of A all lie at one point".into())
-            })?
+        let at_one_point =
+            || MatchError::Guidance("the features/landmarks of A all lie at one point".into());
+        // Two points (`Align::Features` only) fix the size poorly: two mouth corners lie
+        // closer together on a closed mouth than on an open one (FLAME template →
+        // registered: ×1.26 where the shapes give ×1.07; 42 % within 0.05, 93 % at the
+        // size the meshes' units give), so two features keep that size (BENCHMARKS.md,
+        // "Few landmarks").
+        let (s, left_out) = if pa.len() >= 3 {
+            fit_similarity_2d_robust(&pa, &pb).ok_or_else(at_one_point)?
         } else {
-            (Similarity2::about(pa[0], 0.0, scale, pb[0]), vec![])
+            (
+                fit_rotation_2d_at_scale(&pa, &pb, scale).ok_or_else(at_one_point)?,
+                vec![],
+            )
         };
         let names = &fa.unwrap().features;
         let report = AlignmentReport {
@@ -924,8 +962,15 @@ pub fn solve(
         };
         (s, Similarity3::identity(), report, None)
     } else {
-        let (s, motion, report, residual) =
+        let (s, motion, mut report, residual) =
             shape_alignment(&sa, &sb, scale, options.align_rotations.max(1), None)?;
+        if too_few_to_align && options.align == Align::Auto {
+            report.method = format!(
+                "{} ({features_given} of the {FEATURES_TO_ALIGN} features or landmarks it \
+                 takes to align by them; they still guide the solve)",
+                report.method
+            );
+        }
         (s, motion, report, Some(residual))
     };
     // The position term's weight from the surfaces' disagreement in space

@@ -833,6 +833,8 @@ fn landmarks_that_moved_with_the_surface_start_from_space() {
     for in_space in [true, false] {
         let mut o = options();
         o.features_in_space = in_space;
+        // Four landmarks are fewer than `auto` aligns by ([`FEATURES_TO_ALIGN`]).
+        o.align = Align::Features;
         let (m, corr) = run(&a, &b, &guidance, &o);
         assert!(m.min_det > 0.0);
         // The start the solve went on from is the kept one's.
@@ -864,4 +866,62 @@ fn landmarks_that_moved_with_the_surface_start_from_space() {
         found[0].0 < 0.8 * found[1].0 && found[0].1 >= found[1].1,
         "(median cells, matched, starts): {found:?}"
     );
+}
+
+/// `auto` aligns the planes by the features only from [`FEATURES_TO_ALIGN`] of them on:
+/// with fewer it aligns the shapes in space (and says so), and the landmarks still guide
+/// the solve and come out on their counterparts; `Align::Features` refuses a single one
+/// (a point fixes no turn of the plane) with the reason.
+#[test]
+fn too_few_landmarks_align_by_the_shapes_and_still_guide() {
+    let motion = moved_copy_motion();
+    let a = surface(18, |p| p);
+    let b = surface(22, &motion);
+    let spots = [
+        [0.3, 0.35],
+        [-0.35, 0.3],
+        [0.4, -0.6],
+        [-0.3, -0.65],
+        [0.05, -0.1],
+    ];
+    for n in [1, 2, 4, FEATURES_TO_ALIGN] {
+        let guidance = landmarks_at(&a, &b, &spots[..n], &motion);
+        let (m, corr) = run(&a, &b, &guidance, &options());
+        let method = &m.alignment.method;
+        if n < FEATURES_TO_ALIGN {
+            assert!(
+                method.starts_with("shape")
+                    && method.contains(&format!("{n} of the {FEATURES_TO_ALIGN} features")),
+                "{n} landmarks: {method}"
+            );
+            assert!(m.alignment.features_in_space.is_none());
+        } else {
+            assert_eq!(method, "features", "{n} landmarks");
+        }
+        // Each landmark is a feature of the solve, and φ lays it on its counterpart.
+        let fits = m.feature_fits();
+        assert_eq!(fits.len(), n, "{n} landmarks: {fits:?}");
+        assert!(
+            fits.iter().all(|f| f.after < f.reach),
+            "{n} landmarks: {fits:?}"
+        );
+        let (e, matched) = errors(&a, &b, &corr, |v| Some(motion(a.positions[v])));
+        assert!(
+            matched > 0.97 && quantile(&e, 0.5) < 1.2 * CELL,
+            "{n} landmarks: matched {matched}, median {} cells",
+            quantile(&e, 0.5) / CELL
+        );
+    }
+    let one = landmarks_at(&a, &b, &spots[..1], &motion);
+    let o = MatchOptions {
+        align: Align::Features,
+        ..options()
+    };
+    match match_surfaces(&a, &b, &one, &o) {
+        Err(MatchError::Guidance(why)) => assert!(why.contains("two or more"), "{why}"),
+        other => panic!(
+            "one landmark aligned the planes by itself: {:?}",
+            other.err()
+        ),
+    }
 }
