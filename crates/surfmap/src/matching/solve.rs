@@ -215,9 +215,8 @@ pub struct MatchOptions {
     /// from the features' alignment refined in space, and go on from whichever start
     /// ends lower without matching less ([`FeatureStarts`]; with two, which align the
     /// planes only with [`Align::Features`], from the shapes' own alignment in space);
-    /// not when the similarity
-    /// search runs after the features' alignment ([`SearchWhen::Always`]), which then
-    /// takes the coarsest level.
+    /// not when the similarity search runs after the features' alignment
+    /// ([`SearchWhen::Always`]), which then takes the coarsest level.
     pub features_in_space: bool,
     /// Report the vertices of image triangles that turn over or collapse in space as
     /// unmatched rather than wrong ([`super::output::check_folds`]).
