@@ -67,6 +67,32 @@ fn mul(z: [f64; 2], p: [f64; 2]) -> [f64; 2] {
 /// `z = Σ conj(p̃ᵢ) q̃ᵢ / Σ |p̃ᵢ|²` for centred points). `None` with fewer than two
 /// distinct source points.
 pub fn fit_similarity_2d(p: &[[f64; 2]], q: &[[f64; 2]]) -> Option<Similarity2> {
+    let (z, pm, qm) = centred_fit(p, q)?;
+    Some(through_means(z, pm, qm))
+}
+
+/// The rotation and translation, at the given `scale`, minimizing `Σ |S(pᵢ) − qᵢ|²` over
+/// similarities `S(x) = scale·R·x + t` (Procrustes at a fixed scale: in complex
+/// arithmetic, `z = scale · c/|c|` with `c = Σ conj(p̃ᵢ) q̃ᵢ` for centred points, and
+/// `t = q̄ − z p̄`). `None` with fewer than two pairs, or when `c` vanishes (the source
+/// points at one place, or no rotation preferred).
+pub fn fit_rotation_2d_at_scale(p: &[[f64; 2]], q: &[[f64; 2]], scale: f64) -> Option<Similarity2> {
+    let (free, pm, qm) = centred_fit(p, q)?;
+    let norm = free[0].hypot(free[1]);
+    if !(norm > 1e-300 && scale.is_finite() && scale > 0.0) {
+        return None;
+    }
+    // The free fit's z is c/Σ|p̃|², so it has c's direction.
+    Some(through_means(
+        [scale * free[0] / norm, scale * free[1] / norm],
+        pm,
+        qm,
+    ))
+}
+
+/// The free fit's `z = Σ conj(p̃ᵢ) q̃ᵢ / Σ |p̃ᵢ|²` and the means `p̄`, `q̄` of the first
+/// `min(|p|, |q|)` pairs; `None` with fewer than two pairs or the `pᵢ` at one place.
+fn centred_fit(p: &[[f64; 2]], q: &[[f64; 2]]) -> Option<([f64; 2], [f64; 2], [f64; 2])> {
     let n = p.len().min(q.len());
     if n < 2 {
         return None;
@@ -90,41 +116,16 @@ pub fn fit_similarity_2d(p: &[[f64; 2]], q: &[[f64; 2]]) -> Option<Similarity2> 
     if den <= 1e-300 {
         return None;
     }
-    let z = [num[0] / den, num[1] / den];
-    let zp = mul(z, pm);
-    Some(Similarity2 {
-        z,
-        t: [qm[0] - zp[0], qm[1] - zp[1]],
-    })
+    Some(([num[0] / den, num[1] / den], pm, qm))
 }
 
-/// The rotation and translation, at the given `scale`, minimizing `Σ |S(pᵢ) − qᵢ|²` over
-/// similarities `S(x) = scale·R·x + t` (Procrustes at a fixed scale: in complex
-/// arithmetic, `z = scale · c/|c|` with `c = Σ conj(p̃ᵢ) q̃ᵢ` for centred points, and
-/// `t = q̄ − z p̄`). `None` with fewer than two pairs, or when `c` vanishes (the source
-/// points at one place, or no rotation preferred).
-pub fn fit_rotation_2d_at_scale(p: &[[f64; 2]], q: &[[f64; 2]], scale: f64) -> Option<Similarity2> {
-    let free = fit_similarity_2d(p, q)?;
-    let norm = free.z[0].hypot(free.z[1]);
-    if !(norm > 1e-300 && scale.is_finite() && scale > 0.0) {
-        return None;
-    }
-    // The free fit's z is c/Σ|p̃|², so it has c's direction.
-    let z = [scale * free.z[0] / norm, scale * free.z[1] / norm];
-    let n = p.len().min(q.len()) as f64;
-    let mean = |v: &[[f64; 2]]| {
-        let s = v
-            .iter()
-            .take(n as usize)
-            .fold([0.0; 2], |a, x| [a[0] + x[0], a[1] + x[1]]);
-        [s[0] / n, s[1] / n]
-    };
-    let (pm, qm) = (mean(p), mean(q));
+/// The similarity `x ↦ z x + t` that takes `p̄` to `q̄`.
+fn through_means(z: [f64; 2], pm: [f64; 2], qm: [f64; 2]) -> Similarity2 {
     let zp = mul(z, pm);
-    Some(Similarity2 {
+    Similarity2 {
         z,
         t: [qm[0] - zp[0], qm[1] - zp[1]],
-    })
+    }
 }
 
 /// A landmark is left out of [`fit_similarity_2d_robust`] when the fit of the others
