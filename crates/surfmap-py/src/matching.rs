@@ -1,5 +1,5 @@
 //! `match(VA, FA, VB, FB, …)`: surface matching (thesis §2.2, §3.2) from Python — the
-//! library's `surfmap::matching::match_surfaces` with the fold check of `surfmap match`,
+//! library's `surfmap::matching::match_meshes` with the fold check of `surfmap match`,
 //! numpy in, numpy out, the GIL released for the solve.
 
 use numpy::IntoPyArray;
@@ -7,14 +7,9 @@ use numpy::ndarray::Array2;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use surfmap::TriMesh;
-use surfmap::matching::overlap::{crops_for_match, cut, drop_folds_as_given};
 use surfmap::matching::{
-    Align, Guidance, HoleFeatures, InputNumbering, Landmarks, MatchError, MatchOptions, ScaleB,
-    SearchWhen, match_surfaces, output,
+    Align, Guidance, HoleFeatures, Landmarks, MatchError, MatchOptions, ScaleB, SearchWhen, folder,
 };
-use surfmap::mesh::repair::FaceOrigins;
-use surfmap::raster::FeatureFile;
 
 use crate::advice::match_defect_message;
 use crate::arrays;
@@ -240,7 +235,7 @@ pub fn match_meshes<'py>(
         split_hole_rims: if whole_hole_rims {
             0.0
         } else {
-            surfmap::matching::holes::SPLIT_HOLE_RIMS
+            surfmap::matching::options::SPLIT_HOLE_RIMS
         },
         ..Default::default()
     };
@@ -287,7 +282,7 @@ pub fn match_meshes<'py>(
             .map(|f| arrays::feature_file(f, "features_b", b.num_vertices()))
             .transpose()?,
     };
-    let crop = match crop_overlap {
+    options.crop_overlap = match crop_overlap {
         "auto" => true,
         "off" => false,
         other => {
@@ -296,74 +291,18 @@ pub fn match_meshes<'py>(
             )));
         }
     };
-    let (corr, report) = py
-        .detach(|| -> Result<_, MatchError> {
-            // As `surfmap match --crop-overlap`: cut both down to the part they share,
-            // match, and number the rows as the meshes were given.
-            let crops = if crop && options.hole_features != HoleFeatures::On {
-                let (guide_a, guide_b) = guidance.vertices();
-                crops_for_match(&a, &b, &guide_a, &guide_b, options.scale_b)
-            } else {
-                None
-            };
-            let Some(crops) = crops else {
-                let m = match_surfaces(&a, &b, &guidance, &options)?;
-                let checked = m.checked_correspondence(&a, &b, options.drop_folds)?;
-                let report = m.report(&checked, &options);
-                return Ok((checked.points, report));
-            };
-            let (cut_a, origins_a) = cut(a.clone(), None, crops.a.as_ref());
-            let (cut_b, origins_b) = cut(b.clone(), None, crops.b.as_ref());
-            let copies = |input: &TriMesh, kept: &TriMesh, o: &Option<FaceOrigins>| match o {
-                Some(o) => o.vertex_copies(input, kept),
-                None => (0..input.num_vertices() as u32).map(Some).collect(),
-            };
-            let copies_a = copies(&a, &cut_a, &origins_a);
-            let copies_b = copies(&b, &cut_b, &origins_b);
-            let renumber = |f: &Option<FeatureFile>, c: &[Option<u32>]| {
-                f.as_ref()
-                    .map(|f| f.renumbered(c))
-                    .transpose()
-                    .map_err(|e| MatchError::Guidance(e.to_string()))
-            };
-            let on_cut = Guidance {
-                landmarks: guidance
-                    .landmarks
-                    .as_ref()
-                    .map(|lm| lm.renumbered(&copies_a, &copies_b))
-                    .transpose()?,
-                features_a: renumber(&guidance.features_a, &copies_a)?,
-                features_b: renumber(&guidance.features_b, &copies_b)?,
-            };
-            let m = match_surfaces(&cut_a, &cut_b, &on_cut, &options)?;
-            let checked = m.checked_correspondence(&cut_a, &cut_b, options.drop_folds)?;
-            let mut report = m.report(&checked, &options);
-            report.input_numbering = Some(InputNumbering {
-                vertices_a: a.num_vertices(),
-                vertices_b: b.num_vertices(),
-                triangles_b: b.triangles.len(),
-                removed_vertices_a: copies_a.iter().filter(|c| c.is_none()).count(),
-            });
-            report.overlap_crop = Some(crops);
-            let mut rows =
-                output::numbered_as_given(&checked.points, &copies_a, origins_b.as_ref());
-            if options.drop_folds {
-                let pinned = match &guidance.landmarks {
-                    Some(lm) if options.pin_landmarks => lm.a.clone(),
-                    _ => vec![],
-                };
-                report.count_dropped(drop_folds_as_given(&a, &b, &mut rows, &pinned));
-            }
-            Ok((rows, report))
-        })
+    let matched = py
+        .detach(|| surfmap::matching::match_meshes(&a, &b, &guidance, &options))
         .map_err(match_error)?;
+    let report = matched.report;
+    let corr = matched.correspondence;
     // The report's doubts (`report["warnings"]`) also as Python warnings.
     for w in &report.warnings {
         let message = std::ffi::CString::new(w.as_str()).unwrap_or_default();
         let category = py.get_type::<pyo3::exceptions::PyRuntimeWarning>();
         PyErr::warn(py, category.as_any(), &message, 1)?;
     }
-    let rows = Array2::from_shape_vec((corr.len(), 4), output::correspondence_rows(&corr))
+    let rows = Array2::from_shape_vec((corr.len(), 4), folder::correspondence_rows(&corr))
         .expect("four values per vertex")
         .into_pyarray(py)
         .into_any();

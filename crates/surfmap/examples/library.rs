@@ -174,9 +174,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         size: 129,
         ..Default::default()
     };
-    let m = surfmap::matching::match_surfaces(&out, &moved, &Default::default(), &options)?;
-    let checked = m.checked_correspondence(&out, &moved, true)?;
-    let (correspondence, folds, dropped) = (checked.points, checked.folds, checked.dropped);
+    let m = surfmap::matching::match_meshes(&out, &moved, &Default::default(), &options)?;
+    let (correspondence, report) = (&m.correspondence, &m.report);
     let errors: Vec<f64> = correspondence
         .iter()
         .enumerate()
@@ -191,11 +190,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "matched {} of {} vertices (min det Dφ {:.3}, {} folded image triangles, {} vertices dropped), mean error {:.4} (patch width 1)",
         errors.len(),
         correspondence.len(),
-        m.min_det,
-        folds.flipped.len() + folds.collapsed.len(),
-        dropped,
+        report.min_det,
+        report.flipped_triangles + report.collapsed_triangles,
+        report.dropped_vertices,
         mean
     );
-    assert!(m.min_det > 0.0 && mean < 0.02);
+    assert!(report.min_det > 0.0 && mean < 0.02);
     Ok(())
 }

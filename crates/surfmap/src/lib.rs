@@ -65,7 +65,7 @@
 //! fixes it ([`FlattenError::NotADisc`], [`mesh::repair`]); holes (eyes, mouth) can be
 //! filled for the solve with [`FlattenOptions::fill_holes`]. `examples/library.rs`
 //! builds a mesh from arrays, fills its holes, reads the whole report, locates points
-//! and matches the surface onto a moved copy ([`matching::match_surfaces`]).
+//! and matches the surface onto a moved copy (`matching::match_meshes`).
 //!
 //! ## Modules
 //!

@@ -8,14 +8,12 @@ use std::path::PathBuf;
 use super::advice::{match_defect_message, worded_flatten_error};
 use anyhow::{Context, bail};
 use surfmap::TriMesh;
-use surfmap::matching::overlap::{SurfaceCrop, crops_for_match, cut, drop_folds_as_given};
 use surfmap::matching::{
-    Align, Guidance, HoleFeatures, InputNumbering, Landmarks, MatchError, MatchOptions, ScaleB,
-    SearchWhen, match_surfaces, output, pictures, write_match_folder,
+    Align, Guidance, HoleFeatures, Landmarks, MatchError, MatchInput, MatchOptions, ScaleB,
+    SearchWhen, match_meshes,
 };
 use surfmap::mesh::repair::FaceOrigins;
 use surfmap::raster::FeatureFile;
-use surfmap::render::save_png;
 
 use super::{RepairArgs, load_mesh};
 
@@ -156,14 +154,14 @@ pub struct Args {
     /// matched neighbours where φ just misses B (its rim, the fill of its holes), after
     /// the two rings of matched vertices next to them are smoothed; 0 reports them
     /// unmatched and keeps φ's matches as they are.
-    #[arg(long, value_name = "N", default_value_t = surfmap::matching::complete::COMPLETE_RINGS)]
+    #[arg(long, value_name = "N", default_value_t = surfmap::matching::options::COMPLETE_RINGS)]
     pub complete_rings: usize,
     /// How far past B's outer rim (in mean edges of the vertex) the prediction of a vertex
     /// that φ left unmatched may fall and the vertex still be matched to the rim. The
     /// default, half an edge, keeps partial correspondence (the part of A beyond B's crop
     /// unmatched); more matches more of A along a tight crop of B, and more vertices that
     /// have no counterpart (BENCHMARKS.md: 3 edges matches every vertex near the rim).
-    #[arg(long, value_name = "EDGES", default_value_t = surfmap::matching::complete::COMPLETE_TOLERANCE.elsewhere)]
+    #[arg(long, value_name = "EDGES", default_value_t = surfmap::matching::options::COMPLETE_TOLERANCE.elsewhere)]
     pub rim_tolerance: f64,
     /// Compare the surfaces in space after their smooth difference in shape: the position
     /// term's residual smoothed by a Gaussian this wide (a fraction of the parameter
@@ -176,7 +174,7 @@ pub struct Args {
     /// Rings of A's vertices around each hole rim that follow it when the rim is carried
     /// exactly onto B's paired rim (holes match holes: eyes to eyes, mouth to mouth);
     /// wider where the rim moves far; 0 leaves the rims where φ puts them.
-    #[arg(long, value_name = "N", default_value_t = surfmap::matching::rim_fit::RIM_FIT_RINGS)]
+    #[arg(long, value_name = "N", default_value_t = surfmap::matching::options::RIM_FIT_RINGS)]
     pub rim_fit_rings: usize,
     /// Leave the landmarks where φ puts them: by default each landmark of A is matched
     /// exactly to its vertex of B in the output, and the vertices around it follow.
@@ -208,20 +206,22 @@ fn read_features(path: &Option<PathBuf>, vertices: usize) -> anyhow::Result<Opti
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let clock = std::time::Instant::now();
     // Repaired meshes are matched; the outputs (and the landmark and feature ids read)
     // are numbered as the files are.
     let input_a = load_mesh(&args.a)?.mesh;
     let input_b = load_mesh(&args.b)?.mesh;
-    let (mesh_a, origins_a) = args.repair.apply_tracked(&input_a, args.quiet)?;
-    let (mesh_b, origins_b) = args.repair.apply_tracked(&input_b, args.quiet)?;
-    let copies = |input: &TriMesh, repaired: &TriMesh, origins: &Option<FaceOrigins>| match origins
-    {
-        Some(o) => o.vertex_copies(input, repaired),
-        None => (0..input.num_vertices() as u32).map(Some).collect(),
+    let repaired = |input| -> anyhow::Result<Option<(TriMesh, FaceOrigins)>> {
+        let (mesh, origins) = args.repair.apply_tracked(input, args.quiet)?;
+        Ok(origins.map(|o| (mesh, o)))
     };
-    let copies_a = copies(&input_a, &mesh_a, &origins_a);
-    let copies_b = copies(&input_b, &mesh_b, &origins_b);
+    let a = MatchInput {
+        given: &input_a,
+        repaired: repaired(&input_a)?,
+    };
+    let b = MatchInput {
+        given: &input_b,
+        repaired: repaired(&input_b)?,
+    };
     let mut options = MatchOptions {
         size: args.size,
         fill_holes: !args.no_fill_holes,
@@ -244,8 +244,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         split_hole_rims: if args.whole_hole_rims {
             0.0
         } else {
-            surfmap::matching::holes::SPLIT_HOLE_RIMS
+            surfmap::matching::options::SPLIT_HOLE_RIMS
         },
+        crop_overlap: args.crop_overlap == CropArg::Auto,
         ..Default::default()
     };
     if let Some(b) = &args.beta {
@@ -283,7 +284,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     surfmap::grid::grid_level(args.size).context("--size")?;
     // The guidance as the files number it.
-    let raw = Guidance {
+    let guidance = Guidance {
         landmarks: match &args.landmarks {
             Some(p) => {
                 let json = std::fs::read_to_string(p)
@@ -300,58 +301,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         features_a: read_features(&args.features_a, input_a.num_vertices())?,
         features_b: read_features(&args.features_b, input_b.num_vertices())?,
     };
-    // The crop to the part the surfaces share, sparing every vertex the guidance names
-    // (in the repaired meshes' numbering). Not with `--hole-features on`: a cut could
-    // take away holes the user pairs.
-    let crops = if args.crop_overlap == CropArg::Auto && options.hole_features != HoleFeatures::On {
-        let (ids_a, ids_b) = raw.vertices();
-        let on_repaired = |ids: Vec<u32>, copies: &[Option<u32>]| -> Vec<u32> {
-            ids.into_iter()
-                .filter_map(|v| copies.get(v as usize).copied().flatten())
-                .collect()
-        };
-        crops_for_match(
-            &mesh_a,
-            &mesh_b,
-            &on_repaired(ids_a, &copies_a),
-            &on_repaired(ids_b, &copies_b),
-            options.scale_b,
-        )
-    } else {
-        None
-    };
-    let (mesh_a, origins_a) = cut(mesh_a, origins_a, crops.as_ref().and_then(|c| c.a.as_ref()));
-    let (mesh_b, origins_b) = cut(mesh_b, origins_b, crops.as_ref().and_then(|c| c.b.as_ref()));
-    let renumber = origins_a.is_some() || origins_b.is_some();
-    let copies_a = copies(&input_a, &mesh_a, &origins_a);
-    let copies_b = copies(&input_b, &mesh_b, &origins_b);
-    // Landmarks of A in the files' numbering: spared by the fold check on the given meshes.
-    let landmarks_a: Vec<u32> = raw.landmarks.as_ref().map_or(vec![], |lm| lm.a.clone());
-    let named = |path: &Option<PathBuf>| {
-        path.as_ref()
-            .map_or(String::new(), |p| p.display().to_string())
-    };
-    let guidance = if renumber {
-        let features = |file: &Option<FeatureFile>, copies: &[Option<u32>], path| {
-            file.as_ref()
-                .map(|f| f.renumbered(copies))
-                .transpose()
-                .with_context(|| format!("features file {}", named(path)))
-        };
-        Guidance {
-            landmarks: raw
-                .landmarks
-                .as_ref()
-                .map(|lm| lm.renumbered(&copies_a, &copies_b))
-                .transpose()
-                .with_context(|| format!("landmarks file {}", named(&args.landmarks)))?,
-            features_a: features(&raw.features_a, &copies_a, &args.features_a)?,
-            features_b: features(&raw.features_b, &copies_b, &args.features_b)?,
-        }
-    } else {
-        raw
-    };
-    let matched = match_surfaces(&mesh_a, &mesh_b, &guidance, &options)
+    let matched = match_meshes(a, b, &guidance, &options)
         .map_err(|e| match &e {
             // The flattening's remedies as this command's flags.
             MatchError::Flatten { surface, source } => {
@@ -372,239 +322,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 args.b.display()
             )
         })?;
-    let checked = matched.checked_correspondence(&mesh_a, &mesh_b, options.drop_folds)?;
-    let mut report = matched.report(&checked, &options);
-    let mut corr = checked.points;
-    // The files' numbering: each input vertex of A takes its copy's counterpart, each
-    // point of B goes back to the input face it lies on.
-    let numbered = renumber.then(|| {
-        let mut points = output::numbered_as_given(&corr, &copies_a, origins_b.as_ref());
-        if crops.is_some() && options.drop_folds {
-            let pinned = if options.pin_landmarks {
-                landmarks_a.clone()
-            } else {
-                vec![]
-            };
-            let n = drop_folds_as_given(&input_a, &input_b, &mut points, &pinned);
-            report.count_dropped(n);
-        }
-        // A's faces as matched (the repaired ones, consistently oriented), on the input's
-        // vertex numbers; where a repair split a vertex into copies, its row is one
-        // copy's, and the faces around the others are left out (their corner's place on
-        // B is not the row's).
-        let faces_a = match &origins_a {
-            Some(o) => TriMesh::new(
-                input_a.positions.clone(),
-                (0..mesh_a.triangles.len())
-                    .filter_map(|t| {
-                        let source = input_a.triangles[o.face[t] as usize];
-                        let tri = o.corner[t].map(|k| source[k as usize]);
-                        (0..3)
-                            .all(|k| copies_a[tri[k] as usize] == Some(mesh_a.triangles[t][k]))
-                            .then_some(tri)
-                    })
-                    .collect(),
-            ),
-            None => input_a.clone(),
-        };
-        let placed = output::a_on_b(&faces_a, &input_b, &matched, &points);
-        report.overlap_crop = crops.clone();
-        report.input_numbering = Some(InputNumbering {
-            vertices_a: input_a.num_vertices(),
-            vertices_b: input_b.num_vertices(),
-            triangles_b: input_b.triangles.len(),
-            removed_vertices_a: copies_a.iter().filter(|c| c.is_none()).count(),
-        });
-        (points, placed)
-    });
-    // The fold check on the given meshes (after a cut) may have unmatched more vertices:
-    // the pictures show them unmatched too.
-    if let Some((points, _)) = &numbered {
-        for (v, c) in copies_a.iter().enumerate() {
-            if let Some(c) = c
-                && points[v].is_none()
-            {
-                corr[*c as usize] = None;
-            }
-        }
-    }
-    // Pictures are drawn before anything is written: an error leaves no partial folder.
-    let placed = output::a_on_b(&mesh_a, &mesh_b, &matched, &corr);
-    let drawn = if args.pictures {
-        let mut drawn = vec![
-            (
-                "checker_carried.png",
-                pictures::checker_carried(&mesh_a, &placed, &matched, &corr, 700),
-            ),
-            ("deformed_grid.png", pictures::deformed_grid(&matched, 800)),
-            (
-                "energy.png",
-                pictures::energy_staircase(&matched, (900, 500)),
-            ),
-        ];
-        if let Some(img) = pictures::features_carried(&matched, 700) {
-            drawn.push(("features.png", img));
-        }
-        drawn
-    } else {
-        vec![]
-    };
-    let (out_corr, out_placed) = numbered.as_ref().map_or((&corr, &placed), |(c, p)| (c, p));
-    let mut written = write_match_folder(&args.output, &matched, out_corr, out_placed, &report)
+    let written = matched
+        .write_folder(&args.output, args.pictures)
         .with_context(|| format!("cannot write the match into {}", args.output.display()))?;
-    for (name, img) in &drawn {
-        let path = args.output.join(name);
-        save_png(&path, img).with_context(|| format!("cannot write {}", path.display()))?;
-        written.push(path);
-    }
     if !args.quiet {
-        let paired = match (
-            report.alignment.hole_pairs.len(),
-            report.alignment.split_holes.len(),
-        ) {
-            (0, _) => String::new(),
-            (p, 0) => format!(", {p} hole rims paired as features"),
-            (p, s) => format!(", {p} hole rims paired as features ({s} split at their corners)"),
-        };
-        let filled = match (report.holes_filled_a, report.holes_filled_b) {
-            (0, 0) => String::new(),
-            (a, b) => format!(", holes filled for the solve A {a} B {b}{paired}"),
-        };
-        let pinned = match report.pinned_landmarks {
-            0 => String::new(),
-            n => format!(
-                ", {n} landmarks matched exactly (φ had left them up to {:.3} of B's units off)",
-                report.largest_landmark_miss
-            ),
-        };
-        let searched = match &report.alignment.search {
-            None => String::new(),
-            Some(s) => format!(
-                ", similarity search {:+.2}°, scale {:.3} (energy per matched area {:.4e} → {:.4e}, {} evaluations; {})",
-                s.similarity.angle().to_degrees(),
-                s.similarity.scale(),
-                s.energy_start,
-                s.energy_end,
-                s.evaluations,
-                match (s.kept, s.implausible_size, s.area_ratio_search, s.area_ratio_alignment) {
-                    (true, ..) => "kept".to_string(),
-                    (false, true, Some(searched), Some(aligned)) => format!(
-                        "not kept: solved from it, the coarsest level matched A at {searched:.2}× its area on B, \
-                         from the alignment at {aligned:.2}×"
-                    ),
-                    _ => "not kept: solved from it, the coarsest level did not end lower without matching less"
-                        .to_string(),
-                }
-            ),
-        };
-        let in_space = match &report.alignment.features_in_space {
-            None => String::new(),
-            Some(f) => format!(
-                ", the features' alignment refined in space {} (coarsest level's energy {:.4e} from the features' start, {:.4e} from it)",
-                if f.kept { "kept" } else { "not kept" },
-                f.energy_features,
-                f.energy_space
-            ),
-        };
-        let position = match report.shape_residual {
-            Some(sigma) => format!(
-                ", position weight {:.3e} (the surfaces {sigma:.4} of √area apart in space, along the normals)",
-                report.position_weight
-            ),
-            None => format!(", position weight {:.3e} (fixed)", report.position_weight),
-        };
-        let fit = report.rim_fit;
-        let rims = match (fit.holes, fit.by_arc_length) {
-            (0, _) => String::new(),
-            (h, 0) => format!(
-                ", {h} hole rims carried onto B's ({} vertices moved)",
-                fit.moved
-            ),
-            (h, l) => format!(
-                ", {h} hole rims carried onto B's ({l} by arc length alone; {} vertices moved)",
-                fit.moved
-            ),
-        };
-        let left_out = match report.alignment.left_out.as_slice() {
-            [] => String::new(),
-            names => format!(
-                " (left out of its fit, the others disagreeing: {}; they still guide the solve)",
-                names.join(", ")
-            ),
-        };
-        let crop_note = |side: char, other: char, c: &Option<SurfaceCrop>| {
-            c.as_ref().map(|c| {
-                format!(
-                    "{side} cut to the part near {other} ({:.0}% of its area far from {other} left out)",
-                    100.0 * c.removed_area
-                )
-            })
-        };
-        let crop = match &crops {
-            Some(c) => format!(
-                "{}; --crop-overlap off to match whole, ",
-                [crop_note('A', 'B', &c.a), crop_note('B', 'A', &c.b)]
-                    .into_iter()
-                    .flatten()
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
-            None => String::new(),
-        };
-        let scaled = if report.scale_b == 1.0 {
-            String::new()
-        } else {
-            let sizes = (mesh_a.area() / mesh_b.area()).sqrt();
-            format!(
-                "B ×{} for the match ({}; outputs in B's units), ",
-                report.scale_b,
-                match options.scale_b {
-                    ScaleB::Auto => format!(
-                        "A is {sizes:.3}× B's size (√area): taken for different units; --scale-b 1 to match as given"
-                    ),
-                    ScaleB::Factor(_) => "--scale-b".into(),
-                }
-            )
-        };
-        outln!(
-            "match: {crop}{scaled}{} levels up to {n}², {} iterations, energy {:.4e}, min det Dφ {:.3}, matched {:.1}% of A ({} of {}, {} completed at rims){rims}, {:.1}% of B covered{filled}, {} vertices unmatched for folds ({} flipped, {} collapsed){pinned}, alignment {}{left_out}{in_space}{searched}{position}, {:.2} s",
-            report.levels.len(),
-            report.iterations,
-            report.energy,
-            report.min_det,
-            100.0 * report.matched_fraction_a,
-            report.matched_vertices_a,
-            report.vertices_a,
-            report.completed_vertices,
-            100.0 * report.covered_fraction_b,
-            report.dropped_vertices,
-            report.flipped_triangles,
-            report.collapsed_triangles,
-            report.alignment.method,
-            clock.elapsed().as_secs_f64(),
-            n = report.grid_size,
-        );
-        if let Some(n) = &report.input_numbering {
-            outln!(
-                "outputs numbered as the files given ({} vertices of A, {} triangles of B){}",
-                n.vertices_a,
-                n.triangles_b,
-                match n.removed_vertices_a {
-                    0 => String::new(),
-                    r => format!(
-                        "; {r} vertices of A removed by the {} are unmatched",
-                        match (
-                            args.repair.asked(),
-                            crops.as_ref().is_some_and(|c| c.a.is_some())
-                        ) {
-                            (true, true) => "repairs and the crop",
-                            (false, true) => "crop",
-                            _ => "repairs",
-                        }
-                    ),
-                }
-            );
-        }
+        outln!("{}", matched.report.summary());
         outln!("wrote into {}:", args.output.display());
         for p in &written {
             outln!(
@@ -615,7 +337,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
     }
     // Doubts are printed even with --quiet (and kept in match.json's `warnings`).
-    for w in &report.warnings {
+    for w in &matched.report.warnings {
         eprintln!("warning: {w}");
     }
     Ok(())

@@ -11,7 +11,6 @@ use surfmap::apps::morph::harmonic_extension;
 use surfmap::apps::texture::read_texture;
 use surfmap::apps::transfer::{
     transfer_labels, transfer_landmarks, transfer_texture, transfer_uvs, transfer_values,
-    vertex_point,
 };
 use surfmap::fsutil::write_atomically;
 use surfmap::mesh::io::ObjMaterial;
@@ -150,9 +149,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let mut points = vec![];
         for l in &file.landmarks {
             let p = match (l.vertex, l.triangle, l.barycentric) {
-                (Some(v), None, None) => vertex_point(&a.triangles, v).ok_or_else(|| {
-                    anyhow::anyhow!("landmark '{}': vertex {v} is on no triangle of A", l.name)
-                })?,
+                (Some(v), None, None) => surfmap::SurfacePoint::at_vertex(&a.triangles, v)
+                    .ok_or_else(|| {
+                        anyhow::anyhow!("landmark '{}': vertex {v} is on no triangle of A", l.name)
+                    })?,
                 (None, Some(triangle), Some(barycentric)) => SurfacePoint {
                     triangle,
                     barycentric,

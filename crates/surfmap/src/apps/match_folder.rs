@@ -10,8 +10,8 @@ use crate::mesh::SurfacePoint;
 use crate::raster::npy::{read_npy_f64, save_npy};
 
 /// File names inside a match folder and the row encoding: the matcher's
-/// ([`crate::matching::output`]), which writes the folders these functions read.
-pub use crate::matching::output::{CORRESPONDENCE_FILE, INFO_FILE, correspondence_rows};
+/// ([`crate::matching::folder`]), which writes the folders these functions read.
+pub use crate::matching::folder::{CORRESPONDENCE_FILE, INFO_FILE, correspondence_rows};
 
 /// A match folder's contents.
 #[derive(Clone, Debug, PartialEq)]

@@ -101,20 +101,6 @@ pub fn transfer_landmarks(
         .collect())
 }
 
-/// The point of a mesh at vertex `v`, as a corner of the first triangle that uses it.
-pub fn vertex_point(triangles: &[[u32; 3]], v: u32) -> Option<SurfacePoint> {
-    triangles.iter().enumerate().find_map(|(t, tri)| {
-        tri.iter().position(|&x| x == v).map(|m| {
-            let mut barycentric = [0.0; 3];
-            barycentric[m] = 1.0;
-            SurfacePoint {
-                triangle: t as u32,
-                barycentric,
-            }
-        })
-    })
-}
-
 /// Texture coordinates of A into B's texture.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TransferredUvs {
@@ -349,7 +335,7 @@ mod tests {
         let f = |p: [f64; 2]| [0.7 * p[0] + 0.05 * p[1] * p[1], 0.75 * p[1]];
         let ab = analytic_map(&a, &b, f);
         let chart = planar_chart(&b);
-        let vertex = vertex_point(&a.triangles, 17).unwrap();
+        let vertex = SurfacePoint::at_vertex(&a.triangles, 17).unwrap();
         let inside = SurfacePoint {
             triangle: 40,
             barycentric: [0.2, 0.3, 0.5],

@@ -1,7 +1,7 @@
 //! Small dense problems: symmetric eigenproblems (faer's self-adjoint eigensolver), for
 //! closed-form fits such as the optimal rotation of a point set (Horn's quaternion
 //! method in [`crate::matching::similarity`]), and square systems (faer's LU with
-//! partial pivoting), for radial-basis interpolation ([`crate::matching::pin`]).
+//! partial pivoting), for radial-basis interpolation (`crate::matching::post::pin`).
 
 use faer::linalg::solvers::Solve;
 use faer::{Mat, Side};

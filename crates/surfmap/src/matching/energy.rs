@@ -21,8 +21,8 @@
 //! * `E_pos^ε` (ours, not the thesis's): `∫ χ^ε |T(x_A) − x_B∘φ|² √det g_A` with a map
 //!   `T(x) = M x + t` of ℝ³ fitted jointly ([`super::similarity`]): the surfaces' 3D
 //!   shapes, compared after the best rigid motion and scale — by default allowing
-//!   also a regularized affine part ([`super::solve::PositionMap`]) — plus, per node, the
-//!   smooth part of the residual ([`super::solve::POSITION_RELIEF`]). The gradient holds
+//!   also a regularized affine part (`super::solve::PositionMap`) — plus, per node, the
+//!   smooth part of the residual (`super::solve::POSITION_RELIEF`). The gradient holds
 //!   `T` and that offset fixed; both are refitted to φ between iterations.
 //!
 //! `χ^ε(ξ) = χ_A^ε(ξ)·χ_B^ε(φ(ξ))` (2.14) with `χ_S^ε = max(1 − dist(·, S)/ε, 0)`,
@@ -38,7 +38,13 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::deformation::{cell_triangles, jacobian, jacobian_adjoint};
+use super::similarity::Similarity3;
 use crate::grid::{Grid, GridPoint};
+
+/// `ε_k`, the cut-off width of level `k` (grid `2^k + 1`): `2^{1−k}`, two cells.
+pub(crate) fn epsilon(k: usize) -> f64 {
+    2.0 * 0.5f64.powi(k as i32)
+}
 
 /// Channel layout of B's sampled field.
 pub(crate) const B_H: usize = 0;
@@ -267,40 +273,6 @@ impl FeatureSet {
     }
 }
 
-/// The map `T(x) = M x + t` of the position term: a similarity, or an affine map near
-/// one ([`super::solve::PositionMap`]).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct Similarity3 {
-    pub matrix: [[f64; 3]; 3],
-    pub translation: [f64; 3],
-}
-
-impl Similarity3 {
-    pub fn identity() -> Self {
-        Self {
-            matrix: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
-            translation: [0.0; 3],
-        }
-    }
-
-    #[inline]
-    pub fn apply(&self, x: [f64; 3]) -> [f64; 3] {
-        let m = &self.matrix;
-        std::array::from_fn(|r| {
-            m[r][0] * x[0] + m[r][1] * x[1] + m[r][2] * x[2] + self.translation[r]
-        })
-    }
-
-    /// The scale `s` of `M = s·R`: `|det M|^(1/3)`.
-    pub fn scale(&self) -> f64 {
-        let m = &self.matrix;
-        let det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
-            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-        det.abs().cbrt()
-    }
-}
-
 /// The energy of one level: A's and B's images at the level's scale, ε, β, α.
 #[derive(Clone, Debug)]
 pub(crate) struct LevelEnergy {
@@ -316,7 +288,7 @@ pub(crate) struct LevelEnergy {
     /// `T` and refitted with it.
     pub position_offset: Vec<[f64; 3]>,
     /// Whether the refits set `position_offset` (off until the coarsest level has
-    /// placed φ; [`super::solve::POSITION_RELIEF`]).
+    /// placed φ; [`super::options::POSITION_RELIEF`]).
     pub relief: bool,
     /// Cut-off width of `χ_B` in the position term (at least ε).
     pub position_band: f64,

@@ -1,52 +1,203 @@
-//! Surface matching (thesis §2.2, §3.2, §4.2): a smooth, fold-free correspondence
+//! Surface matching (thesis §2.2, §3.2): a smooth, fold-free correspondence
 //! `φ_M = x_B ∘ φ ∘ x_A⁻¹` between two disc-like surfaces, found by minimizing the
 //! matching energy (2.16) over deformations φ of the parameter plane, coarse to fine.
 //!
-//! Data flow: each surface is flattened and rasterized into geometry images
-//! ([`surface`]); the deformation lives on the grid ([`deformation`]); the energy
-//! terms and their gradients are in [`energy`]; [`ncg`] minimizes one level;
-//! [`solve`] runs the multiscale schedule with the initial alignment
-//! ([`similarity`], [`rigid`], [`align`]); [`output`] checks the result for folds in
-//! space, maps points and writes the match folder; [`feature_fit`] measures how far φ
-//! leaves each paired feature from B's; [`pictures`] draws it.
+//! One call runs it all: [`match_meshes`]. Its stages, each a function of its own, a
+//! type in and a type out; each imports only the stages before it and the shared pieces
+//! below (never the other way):
+//!
+//! ```text
+//!  MatchInput A, B ─┐
+//!  Guidance ────────┼─► prepare ──► align ──► solve ──► post ──────► report ──► Match
+//!  MatchOptions ────┘   Prepared    Start     Solved    Correspondence  MatchReport
+//!                       crop, scale  rigid ICP  multiscale φ  rim fit, folds,  counts, warnings,
+//!                       flatten,     / landmarks, NCG per level pinning, fill-in, feature fits
+//!                       images       hole pairs                numbering as given
+//! ```
+//!
+//! - [`prepare`]: the meshes as given (and repaired) → both surfaces cut to the part
+//!   they share ([`prepare::overlap`]), the guidance renumbered and paired, each surface
+//!   flattened and rasterized into geometry images.
+//! - `align`: where φ starts — the planes' similarity from landmarks, or from the
+//!   surfaces aligned in space by trimmed ICP ([`rigid`]); hole rims paired as features.
+//! - `solve`: φ level by level ([`energy`] on a grid [`deformation`], minimized by
+//!   preconditioned nonlinear conjugate gradients), with the similarity search and the
+//!   two starts on the coarsest level.
+//! - `post`: φ → one counterpart per vertex of A, checked for folds in space
+//!   ([`folds`]), numbered as the meshes were given.
+//! - [`report`]: [`MatchReport`], what `match.json` holds.
+//!
+//! Shared by the stages: the options ([`MatchOptions`]), the guidance ([`Guidance`]),
+//! the similarity fits ([`similarity`]), the rigid alignment ([`rigid`]), the energy
+//! ([`energy`]) and φ ([`deformation`]), the fold check ([`folds`]). A [`Match`] writes
+//! the match folder ([`folder`]) and draws its pictures ([`pictures`]).
 
-pub mod align;
-pub mod complete;
 pub mod deformation;
 pub mod energy;
-pub mod feature_fit;
-pub mod holes;
-pub mod ncg;
-mod options;
-pub mod output;
-pub mod overlap;
+pub mod folder;
+pub mod folds;
+pub mod guidance;
+pub mod options;
 pub mod pictures;
-pub mod pin;
-pub mod precondition;
+pub mod prepare;
+pub mod report;
 pub mod rigid;
-pub mod rim_fit;
 pub mod similarity;
-pub mod similarity_search;
-pub mod solve;
-pub mod surface;
 
+pub(crate) mod align;
+pub(crate) mod post;
+pub(crate) mod solve;
+
+use std::path::{Path, PathBuf};
+
+use crate::mesh::repair::FaceOrigins;
+use crate::mesh::{SurfacePoint, TriMesh};
+
+pub use align::{AlignmentReport, FeatureStarts};
 pub use deformation::Deformation;
-pub use energy::{Betas, EnergyTerms, Similarity3};
-pub use feature_fit::FeatureFit;
-pub use ncg::{LevelLog, NcgSettings, StopReason};
-pub use output::{
-    FoldCheck, InputNumbering, MatchReport, PointMap, check_folds, write_match_folder,
+pub use energy::{Betas, EnergyTerms};
+pub use folds::{FoldCheck, check_folds};
+pub use guidance::{Guidance, Landmarks};
+pub use options::{
+    Align, COARSEST_SOBOLEV_WIDTH, FEATURES_TO_ALIGN, HoleFeatures, MatchOptions, NcgSettings,
+    POSITION_AFFINE_RIDGE, POSITION_KAPPA, POSITION_RELIEF, POSITION_RESIDUAL_CAP,
+    POSITION_RESIDUAL_FLOOR, PositionMap, PositionWeight, RELIEF_MIDDLE_BUDGET,
+    RELIEF_PHASE_FRACTION, ScaleB, SearchWhen, SimilaritySearch, UNIT_MISMATCH,
 };
-pub use similarity::Similarity2;
-pub use similarity_search::{SearchWhen, SimilaritySearch, SimilaritySearchLog};
-pub use solve::{
-    Align, AlignmentReport, COARSEST_SOBOLEV_WIDTH, FEATURES_TO_ALIGN, FeatureStarts, Guidance,
-    HoleFeatures, Landmarks, MatchOptions, POSITION_AFFINE_RIDGE, POSITION_KAPPA, POSITION_RELIEF,
-    POSITION_RESIDUAL_CAP, POSITION_RESIDUAL_FLOOR, PositionMap, PositionWeight,
-    RELIEF_MIDDLE_BUDGET, RELIEF_PHASE_FRACTION, ScaleB, SurfaceMatch, UNIT_MISMATCH,
-    match_surfaces,
-};
-pub use surface::MatchSurface;
+pub use report::feature_fit::FeatureFit;
+pub use report::{InputNumbering, MatchReport};
+pub use similarity::{Similarity2, Similarity3};
+pub use solve::SimilaritySearchLog;
+pub use solve::ncg::{LevelLog, StopReason};
+
+/// Matches surface A onto surface B: every stage of the module documentation, from
+/// the meshes as given to the report. `a` and `b` are the meshes (`&TriMesh`) or, when
+/// the caller repaired them first, a [`MatchInput`] with the repaired mesh and where its
+/// faces came from; the guidance is numbered as the meshes were given, and so are the
+/// outputs.
+pub fn match_meshes<'m>(
+    a: impl Into<MatchInput<'m>>,
+    b: impl Into<MatchInput<'m>>,
+    guidance: &Guidance,
+    options: &MatchOptions,
+) -> Result<Match, MatchError> {
+    let begin = std::time::Instant::now();
+    let mut prepared = prepare::prepare(a.into(), b.into(), guidance, options)?;
+    let clock = std::time::Instant::now();
+    let start = align::align(&mut prepared, options)?;
+    let solved = solve::solve(&prepared.a, &prepared.b, start, options);
+    let seconds_solve = clock.elapsed().as_secs_f64();
+    let correspondence = post::post(&prepared, &solved, options)?;
+    let mut report = report::report(&prepared, &solved, &correspondence, options, seconds_solve);
+    report.seconds_total = begin.elapsed().as_secs_f64();
+    Ok(Match {
+        correspondence: correspondence.given,
+        a_on_b: correspondence.a_on_b,
+        report,
+        pictures: Pictures {
+            mesh_a: prepared.mesh_a,
+            mesh_b: prepared.mesh_b,
+            points: correspondence.matched,
+            a: prepared.a,
+            b: prepared.b,
+            scale_b: prepared.scale_b,
+        },
+        solved,
+    })
+}
+
+/// One surface given to [`match_meshes`]: the mesh as given (the numbering of the
+/// guidance and of the outputs) and, when the caller repaired it, the repaired mesh to
+/// match in its place with where each of its faces came from
+/// ([`crate::mesh::repair::FaceOrigins`]).
+pub struct MatchInput<'m> {
+    pub given: &'m TriMesh,
+    pub repaired: Option<(TriMesh, FaceOrigins)>,
+}
+
+impl<'m> From<&'m TriMesh> for MatchInput<'m> {
+    fn from(given: &'m TriMesh) -> Self {
+        Self {
+            given,
+            repaired: None,
+        }
+    }
+}
+
+/// A match of A onto B: everything its outputs need.
+#[derive(Debug)]
+pub struct Match {
+    /// One entry per vertex of A as given: its counterpart on B as given (a triangle of
+    /// B and barycentric coordinates), or `None`.
+    pub correspondence: Vec<Option<SurfacePoint>>,
+    /// A's triangles at their matched points on B, in B's units, numbered as A was given
+    /// (unmatched vertices moved by the position term's map; triangles with an unmatched
+    /// vertex left out).
+    pub a_on_b: TriMesh,
+    pub report: MatchReport,
+    pictures: Pictures,
+    solved: solve::Solved,
+}
+
+/// What the pictures are drawn from: the meshes as matched and their correspondence.
+#[derive(Debug)]
+pub(crate) struct Pictures {
+    pub mesh_a: TriMesh,
+    pub mesh_b: TriMesh,
+    pub points: Vec<Option<SurfacePoint>>,
+    pub a: prepare::surface::MatchSurface,
+    pub b: prepare::surface::MatchSurface,
+    pub scale_b: f64,
+}
+
+impl Match {
+    /// φ on the finest grid (in ω_A → ω_B).
+    pub fn deformation(&self) -> &Deformation {
+        &self.solved.deformation
+    }
+
+    /// The correspondence as rows `[triangle of B, b0, b1, b2]` (triangle −1 where
+    /// unmatched), row-major `(n_A, 4)`: `correspondence.npy`.
+    pub fn correspondence_rows(&self) -> Vec<f64> {
+        folder::correspondence_rows(&self.correspondence)
+    }
+
+    /// The pictures of the match, with their file names: A's checkerboard carried onto
+    /// B, the deformed grid, the energy staircase and, with paired features, the
+    /// features before and after the solve ([`pictures`]).
+    pub fn pictures(&self) -> Vec<(&'static str, image::RgbImage)> {
+        pictures::all(&self.pictures, &self.solved)
+    }
+
+    /// Writes the match folder into `dir` (created if missing): the files of
+    /// [`folder`] and, with `with_pictures`, the pictures — drawn before anything is
+    /// written, so an error leaves no partial folder. Returns the paths written.
+    pub fn write_folder(
+        &self,
+        dir: &Path,
+        with_pictures: bool,
+    ) -> Result<Vec<PathBuf>, MatchError> {
+        let drawn = if with_pictures {
+            self.pictures()
+        } else {
+            vec![]
+        };
+        let mut written = folder::write_match_folder(
+            dir,
+            &self.solved.deformation,
+            &self.correspondence,
+            &self.a_on_b,
+            &self.report,
+        )?;
+        for (name, img) in &drawn {
+            let path = dir.join(name);
+            crate::render::save_png(&path, img)
+                .map_err(|e| MatchError::Output(format!("cannot write {}: {e}", path.display())))?;
+            written.push(path);
+        }
+        Ok(written)
+    }
+}
 
 /// What went wrong while matching, and what to do about it.
 #[derive(Debug, thiserror::Error)]

@@ -1,10 +1,656 @@
-//! Checked setters of [`MatchOptions`] for the values a user gives: `surfmap match`'s
-//! `--beta`, `--position-weight`, `--search-candidates` and `--rim-tolerance`, and the
-//! Python `match`'s `beta`, `position_weight`, `search_candidates` and `rim_tolerance`.
-//! One check and one message for both; `name` is the argument as the caller spells it,
+//! What a user can set for a match ([`MatchOptions`]), the choices it offers ([`Align`],
+//! [`HoleFeatures`], [`ScaleB`], [`PositionWeight`]), and the checked setters the front
+//! ends use for the values a user types (`surfmap match`'s `--beta`, `--position-weight`,
+//! `--search-candidates`, `--rim-tolerance`, `--relief`; the Python `match`'s keywords):
+//! one check and one message for both; `name` is the argument as the caller spells it,
 //! and the message starts with it.
 
-use super::{MatchOptions, PositionWeight};
+use serde::Serialize;
+
+use super::energy::Betas;
+
+/// Fewest paired features or landmarks (a landmark, or one curve's centroid, each a point
+/// of the plane) from which [`Align::Auto`] aligns the planes by them; with fewer it
+/// aligns the shapes in space and the features only guide the solve. One point fixes no
+/// turn of the plane, two fix it poorly where the surfaces' flattenings differ around
+/// them, and a similarity (4 unknowns) fitted to three or four cannot tell a misplaced
+/// one from the others (`fit_similarity_2d_robust` drops one only from five on, keeping
+/// four). Measured on the FLAME and ICT pairs given subsets of their landmarks
+/// (BENCHMARKS.md, "Few landmarks"): from two mouth corners the features' start gave
+/// 4–42 % within 0.05 where the shapes' gave 82–93 %; from three (the nose tip too)
+/// 4–66 % where the shapes' gave 83–92 %; from four, 62 % on one pair against 84 %.
+pub const FEATURES_TO_ALIGN: usize = 5;
+
+/// How the initial similarity between ω_A and ω_B is found.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Align {
+    /// From the features/landmarks when [`FEATURES_TO_ALIGN`] or more are given, else
+    /// from the surfaces' shapes ([`Align::Shape`]; fewer features still guide the
+    /// solve).
+    #[default]
+    Auto,
+    /// From the features/landmarks (an error with fewer than two: one point fixes no
+    /// turn of the plane); two keep the size the meshes' units give.
+    Features,
+    /// From the surfaces' 3D shapes even when features are given: a rigid alignment
+    /// in space by trimmed ICP ([`super::rigid`]) pairs the vertices, and their domain
+    /// positions give the similarity of the planes.
+    Shape,
+    /// The domains as placed in ω (the thesis's "rough alignment").
+    None,
+}
+
+/// Options of [`super::match_meshes`].
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct MatchOptions {
+    /// Finest grid, `2^K + 1` nodes per side.
+    pub size: usize,
+    /// Coarsest level `k₀` (grid `2^k₀ + 1`). Default 6 (65²): once the surfaces are
+    /// aligned in space ([`Align::Shape`]), the coarser levels (σ ≥ 1/16 of the domain)
+    /// mostly let the blurred energy drag φ away from a good start — measured on the
+    /// ICT pairs, starting at level 3 lost 8–37 points of the fraction within 0.05 on
+    /// whole faces, while a partial pair gained 8 (BENCHMARKS.md, "Matching").
+    pub coarsest_level: usize,
+    pub betas: Betas,
+    /// `(αl, αa)` of the regularization density (2.8).
+    pub alpha: (f64, f64),
+    /// Factor of B's metric far outside ω_B (thesis §2.2.5: a "softer" material).
+    pub soft: f64,
+    pub ncg: NcgSettings,
+    pub align: Align,
+    /// Rotations tried by the alignment search.
+    pub align_rotations: usize,
+    /// A search over plane similarities of φ before the solve; the solve goes on from
+    /// the similarity found only when the coarsest level solved from it ends with a
+    /// lower energy without matching less, at a plausible size when the alignment's
+    /// start gives one (`crate::matching::solve::similarity_search`).
+    pub similarity_search: SimilaritySearch,
+    /// Fill holes (eyes, mouth) for the flattenings.
+    pub fill_holes: bool,
+    /// Cut each surface down to the part it shares with the other before matching
+    /// ([`super::prepare::overlap`]); not with [`HoleFeatures::On`], whose rims are
+    /// paired as given.
+    #[serde(skip)]
+    pub crop_overlap: bool,
+    /// Pair the rims of filled holes and match them as features.
+    pub hole_features: HoleFeatures,
+    /// Split each pair of elongated hole rims (mouth, eyes) at its two corners into two
+    /// arcs matched as separate features when the more elongated rim's principal extents
+    /// differ by at least this ratio (`crate::matching::align::holes::split_rim_pair`); 0: one closed curve
+    /// per rim.
+    pub split_hole_rims: f64,
+    /// Let the position term's similarity scale (else a rigid motion).
+    pub allow_scale: bool,
+    /// The map of ℝ³ the position term compares the surfaces after: that similarity,
+    /// or an affine map held near it ([`PositionMap`]).
+    pub position_map: PositionMap,
+    /// Cut-off width (ω units) of the position term around ω_B: B's harmonically
+    /// extended positions keep pulling A's rim into place up to this far outside.
+    pub position_band: f64,
+    /// Vertices of A mapped within this many finest-grid cells of B's surface are
+    /// snapped onto it (`crate::matching::post::fitted_correspondence`).
+    pub snap_cells: f64,
+    /// Width (finest-grid cells) of the Gaussian applied to the mean curvature before
+    /// the pyramid (0: the thesis's unfiltered finest level).
+    pub curvature_sigma: f64,
+    /// Scale τ (ℓ units) of the position term's robust penalty: residuals beyond it
+    /// stop pulling (0: plain squares).
+    pub position_scale: f64,
+    /// Width σ (ω units) of the Gaussian that smooths the position term's residual
+    /// into its target (`relief_offsets`, [`POSITION_RELIEF`]); 0: none (the
+    /// surfaces compared after the fitted map alone).
+    pub position_relief: f64,
+    /// Sobolev preconditioner width in grid cells of each level (`λ = (w·h_k)²`);
+    /// 0: plain L² gradients, as the thesis.
+    pub sobolev_cells: f64,
+    /// Width (ω units) of the wide metric the coarsest level descends in first, for
+    /// half of its iterations, before it goes on in the local one (`sobolev_cells`):
+    /// [`COARSEST_SOBOLEV_WIDTH`]; 0: the local metric throughout.
+    pub coarsest_sobolev_width: f64,
+    /// With three or more paired features or landmarks, also solve the coarsest level
+    /// from the features' alignment refined in space, and go on from whichever start
+    /// ends lower without matching less (`FeatureStarts`; with two, which align the
+    /// planes only with [`Align::Features`], from the shapes' own alignment in space);
+    /// not when the similarity search runs after the features' alignment
+    /// ([`SearchWhen::Always`]), which then takes the coarsest level.
+    pub features_in_space: bool,
+    /// Report the vertices of image triangles that turn over or collapse in space as
+    /// unmatched rather than wrong (`crate::matching::folds::check_folds`).
+    pub drop_folds: bool,
+    /// Rings of A's vertices around each hole rim that follow the rim when it is
+    /// carried exactly onto B's paired rim (`crate::matching::post::rim_fit`); 0 turns the fit off.
+    pub rim_fit_rings: usize,
+    /// Rings of unmatched vertices next to matched ones that rim completion may match
+    /// from their neighbours (`crate::matching::post::complete`); 0 turns it off.
+    pub complete_rings: usize,
+    /// Largest distance (fraction of the vertex's mean edge length) from a completed
+    /// vertex's predicted point to B ([`COMPLETE_TOLERANCE`]).
+    pub complete_tolerance: Tolerance,
+    /// Smoothing of the matched border before completion
+    /// ([`RimSmoothing`]).
+    pub rim_smoothing: RimSmoothing,
+    /// Match the landmarks exactly in the reported correspondence, carrying the
+    /// correction to the vertices around them (`crate::matching::post::pin`); φ is only guided.
+    pub pin_landmarks: bool,
+    /// How the position term's weight is set: from the surfaces' disagreement in space
+    /// (default) or `betas.position` as given.
+    pub position_weight: PositionWeight,
+    /// B's size for the match: as given, or multiplied by a power of ten when the two
+    /// surfaces are evidently in different units ([`ScaleB`]).
+    pub scale_b: ScaleB,
+}
+
+/// How B's size is reconciled with A's before matching.
+///
+/// The matcher keeps the surfaces' relative size (one length unit for both: a crop of a
+/// face is matched as the part of the whole it is), and aligns them in space by rigid
+/// motions. Two scans in different units — a face in centimetres and another in metres —
+/// are then 100 times apart in size: no rigid motion lays one onto the other, and the
+/// result is a fold-free but meaningless map (measured on ICT crops, in cm, against FLAME
+/// crops, in m: nose tip and mouth corners a mean 41–52 mm off; 2–6 mm with B scaled and
+/// [`super::rigid::align_surfaces`]; BENCHMARKS.md, "Faces from two sources").
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ScaleB {
+    /// B as given unless the sizes `√area` differ by more than [`UNIT_MISMATCH`] times;
+    /// then B is multiplied by the power of ten nearest to `√(area A / area B)` (the
+    /// usual unit mismatches, mm / cm / m, are powers of ten; the faces' own difference
+    /// in size stays for the similarity to take up).
+    Auto,
+    /// B's positions multiplied by this factor (1: as given).
+    Factor(f64),
+}
+
+/// Ratio of the surfaces' sizes `√area` beyond which [`ScaleB::Auto`] reads a unit
+/// mismatch: 25 times the area — more than separates a face crop from a whole head in
+/// one unit, less than the factor 10 in length between mm and cm.
+pub const UNIT_MISMATCH: f64 = 5.0;
+
+impl ScaleB {
+    /// The factor B's positions are multiplied by, for surfaces of areas `area_a` and
+    /// `area_b` (in their own units).
+    pub fn factor(self, area_a: f64, area_b: f64) -> f64 {
+        match self {
+            ScaleB::Factor(f) => f,
+            ScaleB::Auto => {
+                let ratio = (area_a / area_b).sqrt();
+                if !(ratio.is_finite() && ratio > 0.0)
+                    || (1.0 / UNIT_MISMATCH..=UNIT_MISMATCH).contains(&ratio)
+                {
+                    1.0
+                } else {
+                    10f64.powf(ratio.log10().round())
+                }
+            }
+        }
+    }
+}
+
+/// How the weight `β_pos` of the position term is set.
+///
+/// The position term `β_pos ∫ χ |T(x_A) − x_B∘φ|² dA` (ours, beyond the thesis) is a
+/// squared residual; read as a Gaussian likelihood its weight is the inverse variance of
+/// the residual one expects at the right correspondence, and that depends on the pair:
+/// two scans of one face, or registered identities that differ by millimetres, agree in
+/// space almost everywhere; two different people do not, and there positions must give
+/// way to curvature and metric. So by default
+///
+/// `β_pos = κ / clamp(σ, σ_min, σ_max)²`,
+///
+/// `σ` the RMS distance (ℓ units) between the surfaces along B's normals after their
+/// best rigid alignment in space (trimmed point-to-plane ICP,
+/// [`super::rigid::align_rigidly`]: [`super::rigid::RigidAlignment::plane_rms`]; along
+/// A's normals when B, the much smaller surface, is laid onto A:
+/// [`super::rigid::align_surfaces`]),
+/// `κ` = [`POSITION_KAPPA`] (the term's value per unit area at a residual of `σ`
+/// everywhere), `σ_min` = [`POSITION_RESIDUAL_FLOOR`] (a surface and a moved copy of
+/// itself have `σ` ≈ 10⁻¹⁶: the weight stays at most `κ/σ_min²` = 2·10⁵) and `σ_max` =
+/// [`POSITION_RESIDUAL_CAP`]: a larger residual is not trusted to mean "the shapes
+/// differ" — on a partial overlap it also measures how ambiguous the overlap is, where
+/// the positions are what anchors the match — so the weight never falls below
+/// `κ/σ_max²` = 2000.
+///
+/// Along the normals, not to B's closest vertices: the distance from a point of A to
+/// the nearest *vertex* of B grows with B's edges, so a coarser B read as a worse
+/// agreement — the same two ICT faces 0.0059 ℓ apart at one resolution and 0.0076 ℓ with
+/// B remeshed 1.6× coarser, against 0.0040 and 0.0041 ℓ along the normals. Measured in
+/// BENCHMARKS.md ("The position weight from distances along the normals", three runs
+/// each, both modes): with `κ` = 0.2 (the closest-vertex distances had 0.1; 0.1 and 0.3
+/// measured too) ICT partial 95.4 → 97.9 % within 0.02 without input and 91.5 → 97.4
+/// with landmarks, resolution 96.6 → 97.7 without input, FLAME partial with landmarks
+/// 61.6 → 65.7; FLAME identity within 0.02 71.0 → 68.9 without input and 72.3 → 70.3
+/// with landmarks (within 0.05 with landmarks 97.1 → 96.1). Earlier, with the
+/// closest-vertex distance ("Matching": "The position term weighted by the shapes'
+/// disagreement"): a fixed weight of 1000 was too weak for the ICT pairs and 10⁴ too
+/// strong for the FLAME identities (−6 points within 0.05), and `κ/σ²` without the cap
+/// lost 2.6 points on the FLAME partial pairs with landmarks.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PositionWeight {
+    /// `β_pos = κ / clamp(σ, floor, cap)²` (above).
+    FromShapeResidual { kappa: f64, floor: f64, cap: f64 },
+    /// `betas.position` as given (the thesis energy alone with 0).
+    Fixed,
+}
+
+/// Width (ω units) of the metric the coarsest level descends in first
+/// ([`MatchOptions::coarsest_sobolev_width`]): a quarter of ω, 16 cells of 65².
+///
+/// The Sobolev metric `⟨u, v⟩ = ∫ u·v + L² ∇u : ∇v` smooths every descent direction
+/// over a length `L`. In the local metric (4 cells of each level) the descent absorbs a
+/// global misfit of the start — a few percent of scale or a few degrees between two
+/// faces, which the rigid alignment in space cannot see — into local deformation and
+/// settles there; in a metric a quarter of ω wide each step moves φ over whole regions,
+/// so the misfit is corrected first. The wide metric resolves detail slowly, though (a
+/// retriangulated copy of a surface matched to 0.76 cells instead of 0.53, and the
+/// finer levels' budgets do not make up for it), so it takes the first half of the
+/// coarsest level's iterations and the local metric the second half: at most the same
+/// 300 iterations as before (a level that used to converge early now runs both halves).
+/// Measured on the 18 ICT and 10 FLAME pairs without input
+/// (BENCHMARKS.md, "A wide metric for the coarsest level"): within 0.02 / 0.05, ICT
+/// partial 91.6 / 96.6 → 95.8 / 98.4 %, FLAME partial 57.3 / 82.9 → 62.0 / 87.2 %, ICT
+/// resolution 96.0 → 96.6 % within 0.02; FLAME identity within 0.05 96.3 → 95.2 % (one
+/// pair); the solve's time unchanged in the median over the 18 ICT pairs.
+pub const COARSEST_SOBOLEV_WIDTH: f64 = 0.25;
+
+/// `κ` of [`PositionWeight::FromShapeResidual`].
+pub const POSITION_KAPPA: f64 = 0.2;
+
+/// The map `T` of ℝ³ in the position term `β_pos ∫ χ |T(x_A) − x_B∘φ|² dA`, refitted
+/// to the current φ every few iterations (weighted least squares over the matched
+/// nodes, [`NcgSettings::refit_every`]).
+///
+/// Two faces of different people differ by more than a rotation and a scale — one is
+/// wider, or longer, or deeper than the other — and what a similarity leaves unexplained
+/// the position term reads as a reason to slide the correspondence (towards B's closest
+/// points). An affine map takes up such global proportions; left free, though, it is
+/// decided by noise along a direction in which the matched points barely spread (the
+/// depth of a crop that keeps one side of a face) and then distorts the comparison
+/// everywhere. So by default `T` is the affine map held near the similarity by a ridge
+/// ([`super::similarity::fit_affine_3d_near`], ridge [`POSITION_AFFINE_RIDGE`]: along a
+/// direction whose spread equals the mean spread of the three, data and similarity weigh
+/// alike). Measured in BENCHMARKS.md ("Matching": "The position term's map: affine near
+/// the similarity").
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PositionMap {
+    /// A similarity (a rigid motion when `allow_scale` is off).
+    Similarity,
+    /// The affine map nearest the data with `ridge · tr C / 3 · ‖M − M_sim‖²` added.
+    AffineNearSimilarity { ridge: f64 },
+}
+
+/// The width σ (ω units) of the position term's relief (`relief_offsets`): the
+/// default (`MatchOptions::position_relief`, `surfmap match --relief`; 0 turns it off).
+///
+/// The fitted map `T` of ℝ³ explains the two faces' difference in pose and proportions
+/// but not in shape — a higher forehead, a longer nose — and where the shapes differ the
+/// term pulls φ towards B's closest points to `T(x_A)`, which slide off the counterpart on
+/// every slope. With the relief the target is `T(x_A) + R`, `R` the residual
+/// `x_B∘φ − T(x_A)` smoothed by a Gaussian of width σ: the smooth part of the difference
+/// is taken as given and only the detail pulls, as a non-rigid ICP takes a smooth
+/// deformation as free. But it takes the smooth part of *any* residual as given, a
+/// start's error too, so the coarsest level first places φ without it (the wide, then
+/// the local metric, as by default) and only then goes on with it, in a third phase in
+/// the local metric (a coarsest level without the wide phase goes without it); the finer
+/// levels use it throughout, and the starts the coarsest level compares are compared
+/// without it (`Solver::plain_energy`). (With the relief
+/// from the start, a crop that covers one side of a face drifted, and a start a quarter
+/// too small — `the_wide_metric_grows_a_shrunken_start_into_place` — was not grown into
+/// place.) Measured in BENCHMARKS.md ("Matching": "The position term's relief"): FLAME
+/// identity without input 68.9 → 74.1 % within 0.02, the ICT tracks within a few tenths.
+/// The default since it was measured as one (BENCHMARKS.md, "The relief as the default");
+/// σ was chosen from 0.05 / 0.1 / 0.2 on the FLAME pairs.
+pub const POSITION_RELIEF: f64 = 0.1;
+
+/// With the relief ([`POSITION_RELIEF`]), the coarsest level's third phase (the one with
+/// it) gets this fraction of the level's iterations and evaluation budget, and every level
+/// between the coarsest and the finest [`RELIEF_MIDDLE_BUDGET`] of its budget. With the
+/// relief the middle level (129²) no longer converges but descends slowly until its
+/// budget (160 evaluations against 63 without, on an ICT identity pair) — work the finest
+/// level largely redoes — and the third phase at half the iterations was the other half
+/// of the relief's cost (+15 % of the solve, median over the 18 ICT pairs). At a quarter
+/// and 0.6 the solve costs what it did without the relief (interleaved median ratios 0.90
+/// against a half and the whole budget, 1.015 against no relief), and the three-run
+/// accuracy is within 0.15 points of the longer schedule's (BENCHMARKS.md, "A cheaper
+/// schedule for the relief").
+pub const RELIEF_PHASE_FRACTION: f64 = 0.25;
+
+/// The fraction of their evaluation budget that levels between the coarsest and the
+/// finest get with the relief on ([`RELIEF_PHASE_FRACTION`]).
+pub const RELIEF_MIDDLE_BUDGET: f64 = 0.6;
+
+/// Ridge of [`PositionMap::AffineNearSimilarity`].
+pub const POSITION_AFFINE_RIDGE: f64 = 1.0;
+
+/// `σ_min` (ℓ units) of [`PositionWeight::FromShapeResidual`].
+pub const POSITION_RESIDUAL_FLOOR: f64 = 0.001;
+
+/// `σ_max` (ℓ units) of [`PositionWeight::FromShapeResidual`].
+pub const POSITION_RESIDUAL_CAP: f64 = 0.01;
+
+impl PositionWeight {
+    /// `β_pos` for the surfaces' RMS distance `sigma` in space (ℓ units), given the
+    /// options' `betas.position`: that weight when fixed, when it is 0 (the term turned
+    /// off: the thesis energy) or when `sigma` is unknown (the surfaces could not be
+    /// aligned in space).
+    pub fn weight(self, given: f64, sigma: Option<f64>) -> f64 {
+        match (self, sigma) {
+            (PositionWeight::FromShapeResidual { kappa, floor, cap }, Some(sigma))
+                if given != 0.0 && sigma.is_finite() =>
+            {
+                // (not `clamp`, which panics on a floor above the cap: the cap wins)
+                kappa / sigma.max(floor).min(cap).powi(2)
+            }
+            _ => given,
+        }
+    }
+}
+
+impl Default for MatchOptions {
+    fn default() -> Self {
+        Self {
+            size: 257,
+            coarsest_level: 6,
+            betas: Betas {
+                bend: 1.0,
+                reg: 0.01,
+                features: 5.0,
+                position: 1000.0,
+                uncovered: 0.0,
+            },
+            alpha: (0.5, 0.5),
+            soft: 0.1,
+            ncg: NcgSettings::default(),
+            align: Align::Auto,
+            align_rotations: 24,
+            similarity_search: SimilaritySearch::default(),
+            fill_holes: true,
+            crop_overlap: true,
+            hole_features: HoleFeatures::Auto,
+            split_hole_rims: SPLIT_HOLE_RIMS,
+            allow_scale: true,
+            position_map: PositionMap::AffineNearSimilarity {
+                ridge: POSITION_AFFINE_RIDGE,
+            },
+            sobolev_cells: 4.0,
+            coarsest_sobolev_width: COARSEST_SOBOLEV_WIDTH,
+            features_in_space: true,
+            position_band: 0.0,
+            curvature_sigma: 0.0,
+            snap_cells: SNAP_CELLS,
+            position_scale: 0.0,
+            position_relief: POSITION_RELIEF,
+            drop_folds: true,
+            rim_fit_rings: RIM_FIT_RINGS,
+            complete_rings: COMPLETE_RINGS,
+            complete_tolerance: COMPLETE_TOLERANCE,
+            rim_smoothing: RIM_SMOOTHING,
+            pin_landmarks: true,
+            position_weight: PositionWeight::FromShapeResidual {
+                kappa: POSITION_KAPPA,
+                floor: POSITION_RESIDUAL_FLOOR,
+                cap: POSITION_RESIDUAL_CAP,
+            },
+            scale_b: ScaleB::Auto,
+        }
+    }
+}
+
+/// Whether the rims of filled holes (eyes, mouth) are paired across the surfaces and
+/// matched as labelled features.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum HoleFeatures {
+    /// When both surfaces have the same number of holes and the rims pair up
+    /// unambiguously after the alignment.
+    #[default]
+    Auto,
+    /// Always (an error when the hole counts differ or the rims do not pair up).
+    On,
+    Off,
+}
+
+/// Settings of one level's minimization.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct NcgSettings {
+    /// Stop when `(E_k − E_{k+1}) / E_k` is below this.
+    pub tolerance: f64,
+    /// The same on the finest level of the multiscale solve (unfiltered images): looser
+    /// than `tolerance` because there, measured on the ICT pairs, the last iterations
+    /// cost most of the time and do not change the accuracy (BENCHMARKS.md, "Matching").
+    pub finest_tolerance: f64,
+    pub max_iterations: usize,
+    /// Iterations over which the relative decrease is averaged for the stopping rule
+    /// (at least 1; 1, the default, is the plain per-step rule). No level stops as
+    /// converged before this many iterations.
+    pub window: usize,
+    /// The window on the coarsest level of the multiscale solve, where the plain rule
+    /// stopped too early (module docs); measured on the referee's pairs over three runs
+    /// each, a window on the finer levels too changed no track's accuracy and cost time
+    /// (BENCHMARKS.md, "Matching": the stopping rule).
+    pub coarsest_window: usize,
+    /// Armijo sufficient-decrease constant.
+    pub armijo_c: f64,
+    /// Refit the position term's similarity every this many iterations (0: never).
+    pub refit_every: usize,
+    /// Most energy evaluations on the finest level of the multiscale solve (0: no cap);
+    /// a level `2^j` times coarser may use `4^j` times as many, the same cost
+    /// ([`NcgSettings::level_evaluations`]). The level then stops with
+    /// `StopReason::Budget`. Default 40 (640 at 65², 160 at 129²; with the position
+    /// term's relief 96 at 129², `super::solve::RELIEF_MIDDLE_BUDGET`, and the coarsest
+    /// level's relief phase a quarter of its budget on top,
+    /// `super::solve::RELIEF_PHASE_FRACTION`): measured over the
+    /// referee's 18 ICT pairs and the 10 FLAME pairs, the evaluations beyond it on the
+    /// two finest levels (120 before) changed no track's fraction within 0.01, 0.02 or
+    /// 0.05 nor its mean error beyond the run-to-run noise, and took a quarter of the
+    /// solve; at 25 the partial pairs lost 1–3 points (BENCHMARKS.md, "Matching").
+    pub max_evaluations: usize,
+    /// Most energy evaluations of a whole multiscale solve, counted in finest-level
+    /// evaluations (one on a grid `2^j` times coarser counts `4^-j`); 0: no cap. A level
+    /// gets at most what the levels before it left, so the solve's cost is bounded even
+    /// when every level would use its own budget ([`NcgSettings::max_evaluations`]).
+    pub total_evaluations: usize,
+}
+
+impl NcgSettings {
+    /// Sets the per-level budget ([`NcgSettings::max_evaluations`]); 0 lifts it and the
+    /// whole solve's cap ([`NcgSettings::total_evaluations`]) too, so that every level
+    /// runs to its stopping rule (the thesis's). `surfmap match --budget` and the Python
+    /// `match(..., budget=)`.
+    pub fn set_budget(&mut self, budget: usize) {
+        self.max_evaluations = budget;
+        if budget == 0 {
+            self.total_evaluations = 0;
+        }
+    }
+
+    /// The evaluation cap of a level with `size` nodes per side when the finest level has
+    /// `finest` (both `2^k + 1`): [`NcgSettings::max_evaluations`] × `((finest − 1)/(size − 1))²`,
+    /// or `usize::MAX` without a cap.
+    pub fn level_evaluations(&self, size: usize, finest: usize) -> usize {
+        if self.max_evaluations == 0 {
+            return usize::MAX;
+        }
+        let ratio = (finest - 1) / (size - 1).max(1);
+        self.max_evaluations
+            .saturating_mul(ratio.saturating_mul(ratio))
+    }
+}
+
+impl Default for NcgSettings {
+    fn default() -> Self {
+        Self {
+            tolerance: 1e-6,
+            finest_tolerance: 1e-5,
+            max_iterations: 300,
+            window: 1,
+            coarsest_window: 10,
+            armijo_c: 1e-4,
+            refit_every: 10,
+            max_evaluations: 40,
+            total_evaluations: 220,
+        }
+    }
+}
+
+/// When the coarsest level searches over similarities of φ before its NCG.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SearchWhen {
+    /// Never.
+    Off,
+    /// Only when the start comes from the surfaces' shapes ([`super::Align::Shape`], or
+    /// `Auto` without features or landmarks): the default. With landmarks the start is
+    /// their similarity and the feature term holds φ to it (an early variant of the
+    /// search — on 65², always kept — lost 12 points within 0.05 with landmarks on the
+    /// FLAME identity pairs).
+    #[default]
+    Shape,
+    /// For every alignment.
+    Always,
+}
+
+/// Settings of the similarity search (module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct SimilaritySearch {
+    pub when: SearchWhen,
+    /// The level `k` whose energy is searched (grid `2^k + 1`, images filtered with
+    /// `σ = 2^−k`); at most the solve's coarsest level. φ there is the alignment's
+    /// similarity, and the similarity found starts the solve.
+    pub level: usize,
+    /// Most rounds of (refit the position term's similarity, set `λ = E/M`, then BFGS);
+    /// they stop earlier once a round lowers `E/M` by less than 10⁻⁴ of it. The refit
+    /// and the plane similarity are coupled through the position term, so the rounds
+    /// converge slowly: with 4, a start 12° off a synthetic self-match stopped 6° short
+    /// (the test in `super::solve`); 20 reach it.
+    pub rounds: usize,
+    /// Most BFGS iterations per round.
+    pub iterations: usize,
+    /// A round stops when an iteration lowers the energy by less than this fraction.
+    pub tolerance: f64,
+    /// Extra starts: rotations by `±candidate_angle` (radians) and scalings by
+    /// `e^{±candidate_log_scale}` of the start, `(0, 0)` for none; the combinations of
+    /// `{−1, 0, 1}` steps of both (8 extra starts) are tried when both are non-zero.
+    /// Off by default: ±5° and ±5 % changed nothing beyond noise on the FLAME and ICT
+    /// pairs (BENCHMARKS.md).
+    pub candidate_angle: f64,
+    pub candidate_log_scale: f64,
+}
+
+impl Default for SimilaritySearch {
+    fn default() -> Self {
+        Self {
+            when: SearchWhen::Shape,
+            level: 4,
+            rounds: 20,
+            iterations: 30,
+            tolerance: 1e-7,
+            candidate_angle: 0.0,
+            candidate_log_scale: 0.0,
+        }
+    }
+}
+
+impl SimilaritySearch {
+    /// The starts tried, as `(angle, log scale)` relative to the given φ.
+    pub(crate) fn candidates(&self) -> Vec<(f64, f64)> {
+        let (a, s) = (self.candidate_angle, self.candidate_log_scale);
+        let steps = |x: f64| if x > 0.0 { vec![0.0, -x, x] } else { vec![0.0] };
+        let mut out = vec![];
+        for &da in &steps(a) {
+            for &ds in &steps(s) {
+                out.push((da, ds));
+            }
+        }
+        out
+    }
+}
+
+/// Default number of rings grown from the matched region.
+pub const COMPLETE_RINGS: usize = 4;
+
+/// Largest distance from a predicted point to B's surface, as a fraction of the vertex's
+/// mean edge length (scaled to B), by where on B the closest point lies.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Tolerance {
+    /// When the closest point is on the rim of one of B's holes (every boundary loop but
+    /// the longest, which [`crate::mesh::repair`] fills for the flattening): the holes
+    /// are matched to A's (eyes to eyes), so the vertices around A's hole have their
+    /// counterparts around B's, and φ, solved on the filled surfaces, carries them into
+    /// the fill by up to a few grid cells.
+    pub hole_rim: f64,
+    /// When the closest point is on B's outer rim: A may simply extend beyond B (partial
+    /// overlap); a vertex of A on the rim's cut misses it by the prediction's error (a
+    /// median 0.2–0.5 edge on the ICT pairs), one ring past it by about one edge: so half
+    /// an edge, halfway between (a quarter before: BENCHMARKS.md, "Matching").
+    pub elsewhere: f64,
+    /// When the closest point is inside B (on no boundary loop): the predicted point lies
+    /// over B's surface, not past its rim, so there is a counterpart to find; the
+    /// distance is the prediction's error normal to B, largest where the surface bends
+    /// (ears, nostrils, lips): one edge.
+    pub interior: f64,
+}
+
+pub const COMPLETE_TOLERANCE: Tolerance = Tolerance {
+    hole_rim: 1.5,
+    elsewhere: 0.5,
+    interior: 1.0,
+};
+
+/// Smoothing of the correspondence along the unmatched region's border before it is
+/// completed (`complete_correspondence`).
+///
+/// φ is smooth on the grid, but where it carries A's vertices next to B's rims (or next
+/// to the triangles `crate::matching::folds::drop_folds` gave up) its error in space is about
+/// an edge, and so the neighbours a completed vertex is placed among are off by as much:
+/// completing it at its right place turns an image triangle over, and it stays
+/// unmatched. So the offsets `o(v)` (module documentation) of the matched vertices
+/// within `rings` rings of an unmatched one are first smoothed by `iterations` Jacobi
+/// sweeps of the umbrella average
+///
+/// `o(v) ← (o(v) + Σ_{u∈N(v), matched} o(u)) / (1 + |N(v) matched|)`,
+///
+/// the vertices farther in, which φ places well, staying fixed as anchors; each
+/// smoothed vertex is re-matched to the point of B closest to `S(x_A(v)) + o(v)`,
+/// searched near its former counterpart (`SurfaceProjector::project_near`), unless
+/// that would fold an image triangle. On the rim the average is one-sided, so it
+/// carries the anchors' offsets outward rather than fitting the rim's own: this removes
+/// φ's systematic error there (measured better on the ICT pairs than a local affine
+/// fit, which keeps it; BENCHMARKS.md, "Matching"), at the price of a small bias where
+/// the offsets vary fast (a strong bend; see the tests).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct RimSmoothing {
+    /// Rings of matched vertices next to unmatched ones that are smoothed; 0 turns the
+    /// smoothing off.
+    pub rings: usize,
+    /// Jacobi sweeps.
+    pub iterations: usize,
+}
+
+/// Default rim smoothing: the two rings next to the unmatched region, ten sweeps.
+pub const RIM_SMOOTHING: RimSmoothing = RimSmoothing {
+    rings: 2,
+    iterations: 10,
+};
+
+/// Default (and narrowest) band: the rings of A's vertices around a fitted rim that
+/// follow it. Eight: the rim moves by a grid cell or two (about as many mesh edges), so
+/// each ring's triangles are sheared by a small fraction of an edge.
+pub const RIM_FIT_RINGS: usize = 8;
+
+/// Default elongation from which paired hole rims are split
+/// ([`super::MatchOptions::split_hole_rims`]).
+pub const SPLIT_HOLE_RIMS: f64 = 2.0;
+
+/// Points mapped within this many finest-grid cells of B's surface are snapped onto it
+/// (`crate::matching::post::fitted_correspondence`). Half a cell: a vertex of A one ring past B's crop
+/// lies about one mesh edge (1–1.5 cells at 257²) outside ω_B, so a snap of 1.5 cells
+/// matched it falsely; the vertices on B's rim that φ carries farther than half a cell
+/// out are left to rim completion (`crate::matching::post::complete`), which tells the two apart by
+/// their neighbours (measured in BENCHMARKS.md, "Hole rims split at their corners").
+pub const SNAP_CELLS: f64 = 0.5;
 
 impl MatchOptions {
     /// The energy weights β `[bending, regularization, features]` (thesis 2.16): three,
@@ -35,27 +681,27 @@ impl MatchOptions {
     }
 
     /// The outer-rim tolerance of rim completion
-    /// ([`super::complete::Tolerance::elsewhere`], in mean edges of the vertex): finite
+    /// ([`Tolerance::elsewhere`], in mean edges of the vertex): finite
     /// and ≥ 0 (0 matches no vertex whose prediction misses B's outer rim).
     pub fn set_rim_tolerance(&mut self, edges: f64, name: &str) -> Result<(), String> {
         if !edges.is_finite() || edges < 0.0 {
             return Err(format!(
                 "{name} must be a finite number of edges ≥ 0 (default {}), got {edges}",
-                super::complete::COMPLETE_TOLERANCE.elsewhere
+                COMPLETE_TOLERANCE.elsewhere
             ));
         }
         self.complete_tolerance.elsewhere = edges;
         Ok(())
     }
 
-    /// The position term's relief width σ (ω units, [`super::solve::POSITION_RELIEF`]):
+    /// The position term's relief width σ (ω units, [`POSITION_RELIEF`]):
     /// finite, in `[0, 1]`; 0 turns it off.
     pub fn set_position_relief(&mut self, width: f64, name: &str) -> Result<(), String> {
         if !width.is_finite() || !(0.0..=1.0).contains(&width) {
             return Err(format!(
                 "{name} must be a width in [0, 1] of the parameter square (0: off; {} is \
                  what BENCHMARKS.md measured), got {width}",
-                super::solve::POSITION_RELIEF
+                POSITION_RELIEF
             ));
         }
         self.position_relief = width;

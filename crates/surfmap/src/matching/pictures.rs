@@ -4,8 +4,14 @@
 
 use image::RgbImage;
 
-use super::feature_fit::CarriedFeature;
-use super::solve::SurfaceMatch;
+use super::Pictures;
+use super::align::AlignmentReport;
+use super::deformation::Deformation;
+use super::post::a_on_b;
+use super::prepare::surface::MatchSurface;
+use super::report::feature_fit::{CarriedFeature, carried_features};
+use super::solve::Solved;
+use super::solve::ncg::LevelLog;
 use crate::mesh::{SurfacePoint, TriMesh};
 use crate::render::canvas::{Canvas, rgb, to_rgb8};
 use crate::render::colormap::ColorScale;
@@ -13,14 +19,64 @@ use crate::render::plot::{PlotPanel, Series, line_plot};
 use crate::render::sheet::contact_sheet;
 use crate::render::surface::checker_render;
 
+/// What the pictures read of a match: the surfaces as matched and φ.
+pub(crate) struct MatchView<'a> {
+    pub a: &'a MatchSurface,
+    pub b: &'a MatchSurface,
+    pub deformation: &'a Deformation,
+    pub alignment: &'a AlignmentReport,
+    pub levels: &'a [LevelLog],
+}
+
+impl MatchView<'_> {
+    fn map_domain(&self, xi: [f64; 2]) -> [f64; 2] {
+        self.deformation.apply(xi)
+    }
+
+    fn carried_features(&self, place: impl Fn([f64; 2]) -> [f64; 2]) -> Vec<CarriedFeature> {
+        carried_features(self.a, self.b, place)
+    }
+}
+
+/// Every picture of a match, with its file name (`features.png` only with paired
+/// features).
+pub(crate) fn all(p: &Pictures, solved: &Solved) -> Vec<(&'static str, RgbImage)> {
+    let view = MatchView {
+        a: &p.a,
+        b: &p.b,
+        deformation: &solved.deformation,
+        alignment: &solved.alignment,
+        levels: &solved.levels,
+    };
+    let placed = a_on_b(
+        &p.mesh_a,
+        &p.mesh_b,
+        (&p.a, &p.b, p.scale_b),
+        solved,
+        &p.points,
+    );
+    let mut drawn = vec![
+        (
+            "checker_carried.png",
+            checker_carried(&p.mesh_a, &placed, &view, &p.points, 700),
+        ),
+        ("deformed_grid.png", deformed_grid(&view, 800)),
+        ("energy.png", energy_staircase(&view, (900, 500))),
+    ];
+    if let Some(img) = features_carried(&view, 700) {
+        drawn.push(("features.png", img));
+    }
+    drawn
+}
+
 /// Side by side: A with a checkerboard of its parameter domain, and the same
 /// checkerboard on A's triangles placed at their matched points of B (`placed`, from
-/// [`super::output::a_on_b`]). Only triangles with three matched vertices are drawn,
+/// `a_on_b`). Only triangles with three matched vertices are drawn,
 /// in both panels, so the squares agree.
-pub fn checker_carried(
+fn checker_carried(
     mesh_a: &TriMesh,
     placed: &TriMesh,
-    matched: &SurfaceMatch,
+    matched: &MatchView,
     correspondence: &[Option<SurfacePoint>],
     tile: u32,
 ) -> RgbImage {
@@ -93,7 +149,7 @@ impl View {
 
 /// B's mean-curvature image (grey outside B's surface) on a `pixels`-wide square
 /// canvas showing `view` of ω; returns the canvas and its width.
-fn curvature_canvas(matched: &SurfaceMatch, pixels: u32, view: View) -> (Canvas, f64) {
+fn curvature_canvas(matched: &MatchView, pixels: u32, view: View) -> (Canvas, f64) {
     let b = &matched.b.images;
     let n = b.size;
     let h = b.mean_curvature_extended.as_slice();
@@ -127,9 +183,9 @@ fn curvature_canvas(matched: &SurfaceMatch, pixels: u32, view: View) -> (Canvas,
 
 /// φ's grid lines (every `n/32`-th node line, where A's surface is) drawn in ω_B over
 /// B's mean-curvature image (grey outside B's surface), y up.
-pub fn deformed_grid(matched: &SurfaceMatch, pixels: u32) -> RgbImage {
+fn deformed_grid(matched: &MatchView, pixels: u32) -> RgbImage {
     let (mut canvas, w) = curvature_canvas(matched, pixels, View::WHOLE);
-    let phi = &matched.deformation;
+    let phi = matched.deformation;
     let m = phi.size;
     let step = ((m - 1) / 32).max(1);
     let inside_a = |i: usize, j: usize| {
@@ -179,9 +235,9 @@ const FEATURE_COLORS: [[u8; 3]; 12] = [
 /// into ω_B thin and full in the same colour — on the left by the plane similarity φ started from
 /// ([`super::AlignmentReport::start`]), on the right by φ. Landmarks (one-vertex
 /// features) are squares. Where the solve did its work, the thin curves lie on the
-/// thick ones on the right ([`SurfaceMatch::feature_fits`] gives the distances).
+/// thick ones on the right (`feature_fits` gives the distances).
 /// `None` without features.
-pub fn features_carried(matched: &SurfaceMatch, tile: u32) -> Option<RgbImage> {
+fn features_carried(matched: &MatchView, tile: u32) -> Option<RgbImage> {
     if matched.a.feature_curves.is_empty() {
         return None;
     }
@@ -244,10 +300,10 @@ pub fn features_carried(matched: &SurfaceMatch, tile: u32) -> Option<RgbImage> {
 
 /// Total energy after every iteration of every level, one curve, log axis; the first
 /// iteration of each level marked (the jumps are the changes of ε and resolution).
-pub fn energy_staircase(matched: &SurfaceMatch, size: (u32, u32)) -> RgbImage {
+fn energy_staircase(matched: &MatchView, size: (u32, u32)) -> RgbImage {
     let mut values = vec![];
     let mut starts = vec![];
-    for l in &matched.levels {
+    for l in matched.levels {
         starts.push(values.len());
         values.extend_from_slice(&l.history);
     }

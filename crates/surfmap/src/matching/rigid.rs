@@ -7,7 +7,7 @@
 //! those 28 again shifted across B's extent ([`SHIFT`]: crops that overlap in part have
 //! centroids that do not correspond), and from the caller's candidates.
 //!
-//! Used by the matcher's automatic alignment ([`super::solve`]): the rigid motion
+//! Used by the matcher's automatic alignment (`super::solve`): the rigid motion
 //! pairs A's vertices with their closest vertices of B, which gives the similarity of
 //! the parameter domains. Trimming (the best [`KEEP`] of the pairs) lets a partial
 //! overlap align without its unmatched rim dragging it. Cost: `O(starts · iterations ·
@@ -18,11 +18,11 @@
 //! `COARSE_PROBE` steps stops there (`COARSE_CUT`), and only the best pose is
 //! refined against all of B.
 
-use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 
-use super::energy::Similarity3;
+use super::similarity::Similarity3;
 use crate::linsolve::dense::symmetric_eigen;
+use crate::mesh::closest::ClosestPoints;
 use crate::vec3::{cross3 as cross, dot3 as dot, norm3 as norm, sub3 as sub};
 
 /// Fraction of the pairs (closest first) that each ICP step fits.
@@ -96,37 +96,8 @@ pub struct RigidAlignment {
     /// normal: the distance to `q`'s tangent plane, which the ICP step minimizes. On a
     /// smooth surface sampled with edges `h` the sampling adds only `O(κ h²)`
     /// (curvature `κ`), so this measures how far the shapes themselves are apart
-    /// ([`super::solve::PositionWeight`]).
+    /// (`super::solve::PositionWeight`).
     pub plane_rms: f64,
-}
-
-/// Closest vertices of B by k-d tree.
-pub struct ClosestPoints {
-    tree: ImmutableKdTree<f64, 3>,
-}
-
-impl ClosestPoints {
-    pub fn new(points: &[[f64; 3]]) -> Self {
-        Self {
-            tree: ImmutableKdTree::new_from_slice(points),
-        }
-    }
-
-    /// Index of and squared distance to the closest point.
-    #[inline]
-    pub fn closest(&self, p: &[f64; 3]) -> (usize, f64) {
-        let nn = self.tree.nearest_one::<SquaredEuclidean>(p);
-        (nn.item as usize, nn.distance)
-    }
-
-    /// Indices of the `k` closest points, closest first.
-    pub fn closest_n(&self, p: &[f64; 3], k: usize) -> impl Iterator<Item = usize> {
-        let k = std::num::NonZeroUsize::new(k.max(1)).expect("k ≥ 1");
-        self.tree
-            .nearest_n::<SquaredEuclidean>(p, k)
-            .into_iter()
-            .map(|n| n.item as usize)
-    }
 }
 
 /// The 24 rotations of the cube (signed permutation matrices with determinant +1).

@@ -4,8 +4,41 @@
 
 use serde::Serialize;
 
-use super::energy::Similarity3;
 use crate::linsolve::dense::symmetric_eigen;
+
+/// The map `T(x) = M x + t` of the position term: a similarity, or an affine map near
+/// one (`super::solve::PositionMap`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Similarity3 {
+    pub matrix: [[f64; 3]; 3],
+    pub translation: [f64; 3],
+}
+
+impl Similarity3 {
+    pub fn identity() -> Self {
+        Self {
+            matrix: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            translation: [0.0; 3],
+        }
+    }
+
+    #[inline]
+    pub fn apply(&self, x: [f64; 3]) -> [f64; 3] {
+        let m = &self.matrix;
+        std::array::from_fn(|r| {
+            m[r][0] * x[0] + m[r][1] * x[1] + m[r][2] * x[2] + self.translation[r]
+        })
+    }
+
+    /// The scale `s` of `M = s·R`: `|det M|^(1/3)`.
+    pub fn scale(&self) -> f64 {
+        let m = &self.matrix;
+        let det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+        det.abs().cbrt()
+    }
+}
 
 /// A similarity of the plane, `p ↦ z·p + t` with `z = (c, s)` a complex factor
 /// (rotation by `atan2(s, c)`, scale `|z|`).

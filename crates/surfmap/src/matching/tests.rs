@@ -37,9 +37,12 @@ fn moved_copy_motion() -> impl Fn([f64; 3]) -> [f64; 3] {
     )
 }
 
+/// The tests' surfaces are matched whole (as every test here was written before the
+/// crop to the shared part, which `the_crop_...` tests of `prepare::overlap` cover).
 fn options() -> MatchOptions {
     MatchOptions {
         size: 129,
+        crop_overlap: false,
         ..Default::default()
     }
 }
@@ -117,16 +120,15 @@ fn run(
     b: &TriMesh,
     g: &Guidance,
     o: &MatchOptions,
-) -> (SurfaceMatch, Vec<Option<SurfacePoint>>) {
-    let m = match_surfaces(a, b, g, o).unwrap();
-    assert!(m.min_det > 0.0, "min det Dφ = {}", m.min_det);
-    let checked = m.checked_correspondence(a, b, true).unwrap();
-    let (corr, folds) = (checked.points, checked.folds);
+) -> (Match, Vec<Option<SurfacePoint>>) {
+    let m = match_meshes(a, b, g, o).unwrap();
+    assert!(m.report.min_det > 0.0, "min det Dφ = {}", m.report.min_det);
+    let corr = m.correspondence.clone();
     // After dropping, no fully matched triangle folds.
     let after = check_folds(a, b, &corr);
     assert!(
         after.flipped.is_empty() && after.collapsed.is_empty(),
-        "{folds:?}"
+        "{after:?}"
     );
     (m, corr)
 }
@@ -178,8 +180,7 @@ fn a_landmark_on_the_wrong_vertex_is_named_in_the_warnings() {
     let (m, corr) = run(&a, &b, &guidance, &options());
     let (e, _) = errors(&a, &b, &corr, |v| Some(motion(a.positions[v])));
     assert!(quantile(&e, 0.5) < CELL, "median {}", quantile(&e, 0.5));
-    let checked = m.checked_correspondence(&a, &b, true).unwrap();
-    let report = m.report(&checked, &options());
+    let report = &m.report;
     let fits: Vec<(&str, f64, f64)> = report
         .feature_fit
         .iter()
@@ -219,7 +220,7 @@ fn a_copy_in_other_units_matches_by_the_identity() {
     let motion = moved_copy_motion();
     let b = surface(23, |p| motion(p).map(|c| 100.0 * c));
     let (m, corr) = run(&a, &b, &Guidance::default(), &options());
-    assert_eq!(m.scale_b, 0.01);
+    assert_eq!(m.report.scale_b, 0.01);
     let truth = |v: usize| Some(motion(a.positions[v]).map(|c| 100.0 * c));
     let (e, matched) = errors(&a, &b, &corr, truth);
     assert!(matched > 0.97, "matched {matched}");
@@ -232,9 +233,9 @@ fn a_copy_in_other_units_matches_by_the_identity() {
         scale_b: ScaleB::Factor(1.0),
         ..options()
     };
-    if let Ok(m) = match_surfaces(&a, &b, &Guidance::default(), &as_given) {
-        assert_eq!(m.scale_b, 1.0);
-        let corr = m.checked_correspondence(&a, &b, true).unwrap().points;
+    if let Ok(m) = match_meshes(&a, &b, &Guidance::default(), &as_given) {
+        assert_eq!(m.report.scale_b, 1.0);
+        let corr = m.correspondence;
         let (e, matched) = errors(&a, &b, &corr, truth);
         assert!(
             matched < 0.5 || quantile(&e, 0.5) / 100.0 > 5.0 * CELL,
@@ -328,7 +329,7 @@ fn other_proportions_match_closer_with_the_affine_position_map() {
         // 1.15 / 0.92 = 1.25; a similarity's is 1).
         let gain = |axis: usize| {
             (0..3)
-                .map(|r| m.similarity.matrix[r][axis].powi(2))
+                .map(|r| m.report.similarity.matrix[r][axis].powi(2))
                 .sum::<f64>()
                 .sqrt()
         };
@@ -397,21 +398,20 @@ fn a_turned_copy_guided_by_features_alone_stays_in_place() {
     // nearest the true point, so not closer than B's edges allow). The largest, read in
     // B's distance maps, agrees with the largest miss the landmark pinning measures in
     // space from φ's matched points (another path: B's position image, Euclidean).
-    let fits = m.feature_fits();
+    let fits = m.report.feature_fit.clone();
     assert_eq!(fits.len(), spots.len(), "{fits:?}");
     for f in &fits {
         assert_eq!((f.vertices, f.after), (1, f.after_max), "{f:?}");
         assert!(f.after < f.before && f.after < CELL, "{f:?}");
     }
     let largest = fits.iter().map(|f| f.after).fold(0.0, f64::max);
-    let pinning = m.checked_correspondence(&a, &b, true).unwrap().pinning;
+    let largest_miss = m.report.largest_landmark_miss;
     assert!(
-        (largest - pinning.largest_miss).abs() < 0.5 * CELL,
-        "feature maps {largest}, pinning {}",
-        pinning.largest_miss
+        (largest - largest_miss).abs() < 0.5 * CELL,
+        "feature maps {largest}, pinning {largest_miss}"
     );
     // Without alignment φ started from the identity of the planes.
-    assert_eq!(m.alignment.start(), Similarity2::identity());
+    assert_eq!(m.report.alignment.start(), Similarity2::identity());
 }
 
 /// A start that is really off: B is A stretched by 1.15 along x (and turned), so its
@@ -439,7 +439,7 @@ fn features_alone_pull_a_misaligned_start_into_place() {
         let (m, corr) = run(&a, &b, &guidance, &features_alone(features));
         let (_, matched) = errors(&a, &b, &corr, |v| Some(warp(a.positions[v])));
         assert!(matched > 0.9, "matched {matched}");
-        let fits = m.feature_fits();
+        let fits = m.report.feature_fit.clone();
         assert!(fits.iter().all(|f| f.before > 8.0 * CELL), "{fits:?}");
         ends.push(fits.iter().map(|f| f.after).fold(0.0, f64::max) / CELL);
     }
@@ -484,7 +484,13 @@ fn a_crop_finds_its_region_in_the_whole() {
     );
     // Any surface point of A maps like its vertices: a triangle's centroid lands
     // between its corners' images.
-    let map = PointMap::new(&m).unwrap();
+    let map = post::point_map::PointMap::new(
+        &m.pictures.a,
+        &m.pictures.b,
+        &m.solved,
+        options::SNAP_CELLS,
+    )
+    .unwrap();
     let t = a.triangles.len() / 2;
     let centre = map
         .map(SurfacePoint {
@@ -510,7 +516,7 @@ fn a_crop_finds_its_region_in_the_whole() {
 fn a_closed_surface_is_refused_not_cut() {
     let disc = surface(6, |p| p);
     let sphere = crate::mesh::generate::sphere(2);
-    let err = match_surfaces(&sphere, &disc, &Guidance::default(), &options()).unwrap_err();
+    let err = match_meshes(&sphere, &disc, &Guidance::default(), &options()).unwrap_err();
     let message = err.to_string();
     assert!(message.contains("closed"), "{message}");
 }
@@ -533,7 +539,7 @@ fn a_surface_without_area_is_refused_by_its_defect() {
         (&line, "2 faces have zero area"),
     ] {
         for (a, b, which) in [(bad, &disc, "surface A"), (&disc, bad, "surface B")] {
-            let err = match_surfaces(a, b, &Guidance::default(), &options()).unwrap_err();
+            let err = match_meshes(a, b, &Guidance::default(), &options()).unwrap_err();
             let message = err.to_string();
             assert!(
                 matches!(err, MatchError::Flatten { .. }) && message.contains(which),
@@ -547,7 +553,7 @@ fn a_surface_without_area_is_refused_by_its_defect() {
         vec![[0.0; 3], [1e200, 0.0, 0.0], [0.0, 1e200, 0.0]],
         vec![[0, 1, 2]],
     );
-    let err = match_surfaces(&disc, &huge, &Guidance::default(), &options()).unwrap_err();
+    let err = match_meshes(&disc, &huge, &Guidance::default(), &options()).unwrap_err();
     let message = err.to_string();
     assert!(
         matches!(err, MatchError::Input(_)) && message.contains("surface B's area is inf"),
@@ -584,7 +590,7 @@ fn the_coarsest_level_never_converges_within_its_window() {
     let window = o.ncg.coarsest_window;
     assert!(window > 1 && o.ncg.window == 1);
     let (windowed, _) = run(&a, &b, &Guidance::default(), &o);
-    let coarse = &windowed.levels[0];
+    let coarse = &windowed.solved.levels[0];
     assert!(
         coarse.iterations >= window,
         "{} iterations",
@@ -594,9 +600,9 @@ fn the_coarsest_level_never_converges_within_its_window() {
     o.ncg.coarsest_window = 1;
     let (plain, _) = run(&a, &b, &Guidance::default(), &o);
     assert!(
-        plain.levels[0].iterations < coarse.iterations,
+        plain.solved.levels[0].iterations < coarse.iterations,
         "{} vs {}",
-        plain.levels[0].iterations,
+        plain.solved.levels[0].iterations,
         coarse.iterations
     );
 }
@@ -609,8 +615,9 @@ fn the_total_budget_bounds_the_whole_solve() {
     let (free, _) = run(&a, &b, &Guidance::default(), &o);
     // Cost of a level's evaluation in finest-level (129²) evaluations.
     let cost = |size: usize| ((size - 1) as f64 / 128.0).powi(2);
-    let spent = |m: &SurfaceMatch| -> f64 {
-        m.levels
+    let spent = |m: &Match| -> f64 {
+        m.solved
+            .levels
             .iter()
             .map(|l| l.evaluations as f64 * cost(l.size))
             .sum()
@@ -619,14 +626,25 @@ fn the_total_budget_bounds_the_whole_solve() {
     o.ncg.total_evaluations = total as usize;
     let (capped, _) = run(&a, &b, &Guidance::default(), &o);
     // Each level may overrun what is left by its last line search and a refit (42).
-    let slack: f64 = capped.levels.iter().map(|l| 42.0 * cost(l.size)).sum();
+    let slack: f64 = capped
+        .solved
+        .levels
+        .iter()
+        .map(|l| 42.0 * cost(l.size))
+        .sum();
     assert!(
         spent(&capped) <= total.floor() + slack,
         "spent {} of {total}",
         spent(&capped)
     );
-    assert!(capped.levels.iter().any(|l| l.stop == StopReason::Budget));
-    assert!(capped.min_det > 0.0);
+    assert!(
+        capped
+            .solved
+            .levels
+            .iter()
+            .any(|l| l.stop == StopReason::Budget)
+    );
+    assert!(capped.report.min_det > 0.0);
 }
 
 #[test]
@@ -637,8 +655,8 @@ fn a_spent_budget_stops_every_level_fold_free() {
     // Only the per-level caps.
     o.ncg.total_evaluations = 0;
     let (m, _) = run(&a, &b, &Guidance::default(), &o);
-    assert_eq!(m.levels.len(), 2);
-    for l in &m.levels {
+    assert_eq!(m.solved.levels.len(), 2);
+    for l in &m.solved.levels {
         let cap = o.ncg.level_evaluations(l.size, 129);
         // No iteration starts past the cap; the last one's line search (at most 40
         // trials) and a refit's evaluation may overrun it. (With the relief, the default,
@@ -653,11 +671,11 @@ fn a_spent_budget_stops_every_level_fold_free() {
             assert!(l.evaluations >= cap, "level {}", l.level);
         }
     }
-    assert!(m.levels.iter().any(|l| l.stop == StopReason::Budget));
+    assert!(m.solved.levels.iter().any(|l| l.stop == StopReason::Budget));
     // Without a cap the same start runs further.
     o.ncg.max_evaluations = 0;
-    let free = match_surfaces(&a, &b, &Guidance::default(), &o).unwrap();
-    assert!(free.levels[1].evaluations > m.levels[1].evaluations);
+    let free = match_meshes(&a, &b, &Guidance::default(), &o).unwrap();
+    assert!(free.solved.levels[1].evaluations > m.solved.levels[1].evaluations);
 }
 
 /// The position term's weight follows the surfaces' disagreement in space
@@ -679,7 +697,7 @@ fn the_position_weight_falls_as_the_shapes_disagree() {
     let coarse = surface(11, &motion);
     let ripple = |p: [f64; 3]| 0.15 * (4.0 * p[0]).sin() * (3.0 * p[1]).cos();
     let rippled = surface(23, |p| motion([p[0], p[1], p[2] + ripple(p)]));
-    let unit = |b: &TriMesh| super::solve::shared_length_unit(a.area(), b.area());
+    let unit = |b: &TriMesh| super::prepare::shared_length_unit(a.area(), b.area());
     let rms =
         |values: Vec<f64>| (values.iter().map(|x| x * x).sum::<f64>() / values.len() as f64).sqrt();
     // RMS distance from A's vertices at the true motion to B's closest vertices.
@@ -699,18 +717,19 @@ fn the_position_weight_falls_as_the_shapes_disagree() {
     };
     let (mut residuals, mut weights) = (vec![], vec![]);
     for b in [&fine, &coarse, &rippled] {
-        let m = match_surfaces(&a, b, &Guidance::default(), &options()).unwrap();
+        let m = match_meshes(&a, b, &Guidance::default(), &options()).unwrap();
         let sigma = m
+            .report
             .shape_residual
             .expect("the default weight measures the shapes");
         let capped = sigma.clamp(POSITION_RESIDUAL_FLOOR, POSITION_RESIDUAL_CAP);
         assert!(
-            (m.position_weight * capped * capped / POSITION_KAPPA - 1.0).abs() < 1e-12,
+            (m.report.position_weight * capped * capped / POSITION_KAPPA - 1.0).abs() < 1e-12,
             "weight {} for residual {sigma}",
-            m.position_weight
+            m.report.position_weight
         );
         residuals.push(sigma);
-        weights.push(m.position_weight);
+        weights.push(m.report.position_weight);
     }
     // Measured: closest-vertex distances 0.010 and 0.021 ℓ (both beyond the cap, so the
     // copies would weigh as little as the rippled one), residuals 0.00012 and 0.00052 ℓ
@@ -739,10 +758,11 @@ fn the_position_weight_falls_as_the_shapes_disagree() {
     );
     assert!(weights[2] < weights[0], "weights {weights:?}");
     let exact = surface(18, &motion);
-    let m = match_surfaces(&a, &exact, &Guidance::default(), &options()).unwrap();
-    assert!(m.shape_residual.unwrap() < 1e-9 && m.min_det > 0.0);
+    let m = match_meshes(&a, &exact, &Guidance::default(), &options()).unwrap();
+    assert!(m.report.shape_residual.unwrap() < 1e-9 && m.report.min_det > 0.0);
     assert!(
-        (m.position_weight * POSITION_RESIDUAL_FLOOR.powi(2) / POSITION_KAPPA - 1.0).abs() < 1e-12
+        (m.report.position_weight * POSITION_RESIDUAL_FLOOR.powi(2) / POSITION_KAPPA - 1.0).abs()
+            < 1e-12
     );
     for given in [321.0, 0.0] {
         let mut o = options();
@@ -750,8 +770,11 @@ fn the_position_weight_falls_as_the_shapes_disagree() {
         if given != 0.0 {
             o.position_weight = PositionWeight::Fixed;
         }
-        let m = match_surfaces(&a, &fine, &Guidance::default(), &o).unwrap();
-        assert_eq!((m.position_weight, m.shape_residual), (given, None));
+        let m = match_meshes(&a, &fine, &Guidance::default(), &o).unwrap();
+        assert_eq!(
+            (m.report.position_weight, m.report.shape_residual),
+            (given, None)
+        );
     }
 }
 
@@ -836,20 +859,20 @@ fn landmarks_that_moved_with_the_surface_start_from_space() {
         // Four landmarks are fewer than `auto` aligns by ([`FEATURES_TO_ALIGN`]).
         o.align = Align::Features;
         let (m, corr) = run(&a, &b, &guidance, &o);
-        assert!(m.min_det > 0.0);
+        assert!(m.report.min_det > 0.0);
         // The start the solve went on from is the kept one's.
-        if let Some(f) = m.alignment.features_in_space
+        if let Some(f) = m.report.alignment.features_in_space
             && f.kept
         {
-            assert_eq!(m.alignment.start(), f.similarity);
+            assert_eq!(m.report.alignment.start(), f.similarity);
         } else {
-            assert_eq!(m.alignment.start(), m.alignment.similarity);
+            assert_eq!(m.report.alignment.start(), m.report.alignment.similarity);
         }
         let (e, matched) = errors(&a, &b, &corr, truth);
         found.push((
             quantile(&e, 0.5) / CELL,
             matched,
-            m.alignment.features_in_space,
+            m.report.alignment.features_in_space,
         ));
     }
     // Measured: the start from space ends at energy 6.87 against 8.06 and is kept;
@@ -887,19 +910,19 @@ fn too_few_landmarks_align_by_the_shapes_and_still_guide() {
     for n in [1, 2, 4, FEATURES_TO_ALIGN] {
         let guidance = landmarks_at(&a, &b, &spots[..n], &motion);
         let (m, corr) = run(&a, &b, &guidance, &options());
-        let method = &m.alignment.method;
+        let method = &m.report.alignment.method;
         if n < FEATURES_TO_ALIGN {
             assert!(
                 method.starts_with("shape")
                     && method.contains(&format!("{n} of the {FEATURES_TO_ALIGN} features")),
                 "{n} landmarks: {method}"
             );
-            assert!(m.alignment.features_in_space.is_none());
+            assert!(m.report.alignment.features_in_space.is_none());
         } else {
             assert_eq!(method, "features", "{n} landmarks");
         }
         // Each landmark is a feature of the solve, and φ lays it on its counterpart.
-        let fits = m.feature_fits();
+        let fits = m.report.feature_fit.clone();
         assert_eq!(fits.len(), n, "{n} landmarks: {fits:?}");
         assert!(
             fits.iter().all(|f| f.after < f.reach),
@@ -917,7 +940,7 @@ fn too_few_landmarks_align_by_the_shapes_and_still_guide() {
         align: Align::Features,
         ..options()
     };
-    match match_surfaces(&a, &b, &one, &o) {
+    match match_meshes(&a, &b, &one, &o) {
         Err(MatchError::Guidance(why)) => assert!(why.contains("two or more"), "{why}"),
         other => panic!(
             "one landmark aligned the planes by itself: {:?}",

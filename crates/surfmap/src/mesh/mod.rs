@@ -3,6 +3,7 @@
 //! decimation; points on a mesh ([`SurfacePoint`]) and their location in a flattening
 //! ([`PointLocator`]).
 
+pub mod closest;
 pub mod crop;
 pub mod cut;
 pub mod decimate;

@@ -21,6 +21,20 @@ pub struct SurfacePoint {
 }
 
 impl SurfacePoint {
+    /// The point at vertex `v`: a corner of the first of `triangles` that uses it
+    /// (`None` when no triangle does).
+    pub fn at_vertex(triangles: &[[u32; 3]], v: u32) -> Option<Self> {
+        triangles.iter().enumerate().find_map(|(t, tri)| {
+            let k = tri.iter().position(|&u| u == v)?;
+            let mut barycentric = [0.0; 3];
+            barycentric[k] = 1.0;
+            Some(SurfacePoint {
+                triangle: t as u32,
+                barycentric,
+            })
+        })
+    }
+
     /// The 3D position of the point: [`Self::interpolate`] of the vertex positions.
     ///
     /// Panics if `triangle` or one of its vertex indices is out of range (as slice

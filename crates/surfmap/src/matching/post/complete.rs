@@ -3,7 +3,7 @@
 //! φ is found on a grid, so along the outer rim of ω_B and along B's filled holes (eyes,
 //! mouth) a vertex of A whose counterpart lies on B's rim is often carried a few grid
 //! cells past it — off ω_B, or into the fill of a hole, which is not B's surface — and
-//! comes back unmatched; so do the vertices [`super::output::drop_folds`] gives up. Those
+//! comes back unmatched; so do the vertices [`crate::matching::folds::drop_folds`] gives up. Those
 //! vertices have matched neighbours, and the neighbours say where they belong.
 //!
 //! **Rule.** Let `S` be the similarity (rotation, scale, translation) that best carries
@@ -15,7 +15,7 @@
 //!
 //! and matched to the closest point `q` of B's surface if `|p(u) − q| ≤ τ · s · ē(u)`,
 //! `s` the scale of `S`, `ē(u)` the mean length of `u`'s edges in A and `τ`
-//! [`COMPLETE_TOLERANCE`]: 1.5 when `q` is on the rim of one of B's holes (holes are
+//! [`COMPLETE_TOLERANCE`](crate::matching::options::COMPLETE_TOLERANCE): 1.5 when `q` is on the rim of one of B's holes (holes are
 //! matched to holes, so A's vertices around a hole have counterparts around B's), 1
 //! inside B, ½ on B's outer rim. `q` is searched near the neighbours' counterparts
 //! ([`SurfaceProjector::project_near`]), never across a gap of B (a closed mouth's
@@ -33,42 +33,11 @@
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::energy::Similarity3;
-use super::output::{ImageFold, image_fold};
-use super::rigid::ClosestPoints;
-use super::similarity::fit_similarity_3d;
+use super::super::folds::{ImageFold, image_fold};
+use super::super::options::{RimSmoothing, Tolerance};
+use super::super::similarity::{Similarity3, fit_similarity_3d};
+use crate::mesh::closest::{SurfaceProjector, compressed_rows, vertex_triangles};
 use crate::mesh::{SurfacePoint, Topology, TriMesh};
-
-/// Default number of rings grown from the matched region.
-pub const COMPLETE_RINGS: usize = 4;
-
-/// Largest distance from a predicted point to B's surface, as a fraction of the vertex's
-/// mean edge length (scaled to B), by where on B the closest point lies.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
-pub struct Tolerance {
-    /// When the closest point is on the rim of one of B's holes (every boundary loop but
-    /// the longest, which [`crate::mesh::repair`] fills for the flattening): the holes
-    /// are matched to A's (eyes to eyes), so the vertices around A's hole have their
-    /// counterparts around B's, and φ, solved on the filled surfaces, carries them into
-    /// the fill by up to a few grid cells.
-    pub hole_rim: f64,
-    /// When the closest point is on B's outer rim: A may simply extend beyond B (partial
-    /// overlap); a vertex of A on the rim's cut misses it by the prediction's error (a
-    /// median 0.2–0.5 edge on the ICT pairs), one ring past it by about one edge: so half
-    /// an edge, halfway between (a quarter before: BENCHMARKS.md, "Matching").
-    pub elsewhere: f64,
-    /// When the closest point is inside B (on no boundary loop): the predicted point lies
-    /// over B's surface, not past its rim, so there is a counterpart to find; the
-    /// distance is the prediction's error normal to B, largest where the surface bends
-    /// (ears, nostrils, lips): one edge.
-    pub interior: f64,
-}
-
-pub const COMPLETE_TOLERANCE: Tolerance = Tolerance {
-    hole_rim: 1.5,
-    elsewhere: 0.5,
-    interior: 1.0,
-};
 
 /// Where a surface point lies relative to a mesh's boundary loops.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -157,219 +126,6 @@ pub struct Completion {
     /// Matched vertices moved by the rim smoothing ([`RimSmoothing`]).
     pub smoothed: usize,
 }
-
-/// The closest point of a triangle `(a, b, c)` to `p`, as barycentric coordinates
-/// (Ericson, *Real-Time Collision Detection*, §5.1.5: Voronoi regions of the vertices,
-/// then of the edges, else the face).
-pub fn closest_point_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> [f64; 3] {
-    let ab = b - a;
-    let ac = c - a;
-    let ap = p - a;
-    let d1 = ab.dot(ap);
-    let d2 = ac.dot(ap);
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return [1.0, 0.0, 0.0];
-    }
-    let bp = p - b;
-    let d3 = ab.dot(bp);
-    let d4 = ac.dot(bp);
-    if d3 >= 0.0 && d4 <= d3 {
-        return [0.0, 1.0, 0.0];
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        let v = d1 / (d1 - d3);
-        return [1.0 - v, v, 0.0];
-    }
-    let cp = p - c;
-    let d5 = ab.dot(cp);
-    let d6 = ac.dot(cp);
-    if d6 >= 0.0 && d5 <= d6 {
-        return [0.0, 0.0, 1.0];
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        let w = d2 / (d2 - d6);
-        return [1.0 - w, 0.0, w];
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        return [0.0, 1.0 - w, w];
-    }
-    let denom = 1.0 / (va + vb + vc);
-    let v = vb * denom;
-    let w = vc * denom;
-    [1.0 - v - w, v, w]
-}
-
-/// Compressed rows: the items `(row, value)` grouped by row, as `(start, list)` with row
-/// `r`'s values in `list[start[r]..start[r + 1]]` (in the order given).
-pub(crate) fn compressed_rows(
-    rows: usize,
-    items: impl Iterator<Item = (u32, u32)> + Clone,
-) -> (Vec<u32>, Vec<u32>) {
-    let mut start = vec![0u32; rows + 1];
-    for (r, _) in items.clone() {
-        start[r as usize + 1] += 1;
-    }
-    for r in 0..rows {
-        start[r + 1] += start[r];
-    }
-    let mut fill = start.clone();
-    let mut list = vec![0u32; start[rows] as usize];
-    for (r, value) in items {
-        list[fill[r as usize] as usize] = value;
-        fill[r as usize] += 1;
-    }
-    (start, list)
-}
-
-/// Triangles around each vertex as CSR arrays `(start, list)`: the triangles of vertex
-/// `v` are `list[start[v]..start[v + 1]]`.
-pub fn vertex_triangles(triangles: &[[u32; 3]], num_vertices: usize) -> (Vec<u32>, Vec<u32>) {
-    compressed_rows(
-        num_vertices,
-        triangles
-            .iter()
-            .enumerate()
-            .flat_map(|(t, tri)| tri.map(|v| (v, t as u32))),
-    )
-}
-
-/// Closest points on a triangle mesh: the triangles around the `K` nearest vertices
-/// (k-d tree) are searched — exact for the meshes we match, whose triangles are not much
-/// longer than their neighbours' spacing.
-pub struct SurfaceProjector<'a> {
-    mesh: &'a TriMesh,
-    vertices: ClosestPoints,
-    /// CSR vertex → triangles.
-    start: Vec<u32>,
-    triangles: Vec<u32>,
-}
-
-impl<'a> SurfaceProjector<'a> {
-    const K: usize = 6;
-
-    pub fn new(mesh: &'a TriMesh) -> Self {
-        let (start, triangles) = vertex_triangles(&mesh.triangles, mesh.positions.len());
-        Self {
-            mesh,
-            vertices: ClosestPoints::new(&mesh.positions),
-            start,
-            triangles,
-        }
-    }
-
-    /// The closest point of the surface to `p` and its distance.
-    pub fn project(&self, p: [f64; 3]) -> Option<(SurfacePoint, f64)> {
-        let near = self.vertices.closest_n(&p, Self::K);
-        self.closest_among(
-            DVec3::from_array(p),
-            near.into_iter()
-                .flat_map(|v| &self.triangles[self.start[v] as usize..self.start[v + 1] as usize])
-                .copied(),
-        )
-    }
-
-    /// The closest point to `p` among the triangles within `rings` rings (triangles
-    /// sharing a vertex) of the `seeds` triangles, and its distance: a projection that
-    /// cannot jump across a narrow gap of the surface (the two lips of a closed mouth,
-    /// the sheets of an ear) to a part not connected to the seeds nearby.
-    pub fn project_near(
-        &self,
-        p: [f64; 3],
-        seeds: &[u32],
-        rings: usize,
-    ) -> Option<(SurfacePoint, f64)> {
-        let mut set: Vec<u32> = seeds.to_vec();
-        set.sort_unstable();
-        set.dedup();
-        let mut frontier = set.clone();
-        for _ in 0..rings {
-            let mut next: Vec<u32> = frontier
-                .iter()
-                .flat_map(|&t| self.mesh.triangles[t as usize])
-                .flat_map(|v| {
-                    &self.triangles
-                        [self.start[v as usize] as usize..self.start[v as usize + 1] as usize]
-                })
-                .copied()
-                .filter(|t| set.binary_search(t).is_err())
-                .collect();
-            next.sort_unstable();
-            next.dedup();
-            if next.is_empty() {
-                break;
-            }
-            set.extend_from_slice(&next);
-            set.sort_unstable();
-            frontier = next;
-        }
-        self.closest_among(DVec3::from_array(p), set.into_iter())
-    }
-
-    fn closest_among(
-        &self,
-        p: DVec3,
-        triangles: impl Iterator<Item = u32>,
-    ) -> Option<(SurfacePoint, f64)> {
-        let mut best: Option<(SurfacePoint, f64)> = None;
-        for t in triangles {
-            let [a, b, c] = self.mesh.triangles[t as usize]
-                .map(|i| DVec3::from_array(self.mesh.positions[i as usize]));
-            let l = closest_point_on_triangle(p, a, b, c);
-            let q = a * l[0] + b * l[1] + c * l[2];
-            let d = q.distance(p);
-            if best.is_none_or(|(_, bd)| d < bd) {
-                best = Some((
-                    SurfacePoint {
-                        triangle: t,
-                        barycentric: l,
-                    },
-                    d,
-                ));
-            }
-        }
-        best
-    }
-}
-
-/// Smoothing of the correspondence along the unmatched region's border before it is
-/// completed ([`complete_correspondence`]).
-///
-/// φ is smooth on the grid, but where it carries A's vertices next to B's rims (or next
-/// to the triangles [`super::output::drop_folds`] gave up) its error in space is about
-/// an edge, and so the neighbours a completed vertex is placed among are off by as much:
-/// completing it at its right place turns an image triangle over, and it stays
-/// unmatched. So the offsets `o(v)` (module documentation) of the matched vertices
-/// within `rings` rings of an unmatched one are first smoothed by `iterations` Jacobi
-/// sweeps of the umbrella average
-///
-/// `o(v) ← (o(v) + Σ_{u∈N(v), matched} o(u)) / (1 + |N(v) matched|)`,
-///
-/// the vertices farther in, which φ places well, staying fixed as anchors; each
-/// smoothed vertex is re-matched to the point of B closest to `S(x_A(v)) + o(v)`,
-/// searched near its former counterpart ([`SurfaceProjector::project_near`]), unless
-/// that would fold an image triangle. On the rim the average is one-sided, so it
-/// carries the anchors' offsets outward rather than fitting the rim's own: this removes
-/// φ's systematic error there (measured better on the ICT pairs than a local affine
-/// fit, which keeps it; BENCHMARKS.md, "Matching"), at the price of a small bias where
-/// the offsets vary fast (a strong bend; see the tests).
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
-pub struct RimSmoothing {
-    /// Rings of matched vertices next to unmatched ones that are smoothed; 0 turns the
-    /// smoothing off.
-    pub rings: usize,
-    /// Jacobi sweeps.
-    pub iterations: usize,
-}
-
-/// Default rim smoothing: the two rings next to the unmatched region, ten sweeps.
-pub const RIM_SMOOTHING: RimSmoothing = RimSmoothing {
-    rings: 2,
-    iterations: 10,
-};
 
 /// What completion works with: A's neighbourhoods, B's surface, the similarity and the
 /// matched vertices' offsets.
@@ -660,13 +416,10 @@ pub fn complete_correspondence(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::matching::options::{COMPLETE_RINGS, COMPLETE_TOLERANCE, RIM_SMOOTHING};
+    use crate::mesh::closest::closest_point_on_triangle;
     use crate::mesh::generate::bumpy_disc;
     use crate::testing::{Rng, crop};
-
-    /// A vertex of `mesh` as a surface point (a triangle around it, weight 1 there).
-    fn at_vertex(mesh: &TriMesh, v: u32) -> Option<SurfacePoint> {
-        super::super::pin::vertex_point(mesh, v)
-    }
 
     /// A disc with a hole (A) and the same surface bent and moved (B): every vertex of A
     /// has a known counterpart, the vertex of the same index.
@@ -700,7 +453,7 @@ mod tests {
     }
 
     fn assert_no_folds(a: &TriMesh, b: &TriMesh, corr: &[Option<SurfacePoint>]) {
-        let folds = super::super::output::check_folds(a, b, corr);
+        let folds = crate::matching::folds::check_folds(a, b, corr);
         assert!(
             folds.flipped.is_empty() && folds.collapsed.is_empty(),
             "{folds:?}"
@@ -771,7 +524,7 @@ mod tests {
         let mut corr: Vec<Option<SurfacePoint>> = (0..a.num_vertices() as u32)
             .map(|v| {
                 (!missing(a.positions[v as usize]))
-                    .then(|| at_vertex(&b, v))
+                    .then(|| SurfacePoint::at_vertex(&b.triangles, v))
                     .flatten()
             })
             .collect();
@@ -870,7 +623,7 @@ mod tests {
                     ];
                     return projector.project(moved).map(|(q, _)| q);
                 }
-                at_vertex(&b, v as u32)
+                SurfacePoint::at_vertex(&b.triangles, v as u32)
             })
             .collect();
         let band_error = |corr: &[Option<SurfacePoint>]| -> f64 {
@@ -981,7 +734,7 @@ mod tests {
             .map(|v| {
                 index[v]
                     .filter(|&w| !rim[w as usize])
-                    .and_then(|w| at_vertex(&b, w))
+                    .and_then(|w| SurfacePoint::at_vertex(&b.triangles, w))
             })
             .collect();
         let done = complete_correspondence(

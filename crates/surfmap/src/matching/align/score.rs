@@ -12,8 +12,8 @@
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::energy::{B_SD, B_X, LevelA, LevelB, Similarity3};
-use super::similarity::{Similarity2, fit_similarity_3d};
+use super::super::energy::{B_SD, B_X, LevelA, LevelB};
+use super::super::similarity::{Similarity2, Similarity3, fit_similarity_3d};
 
 /// One scored candidate.
 #[derive(Clone, Copy, Debug, Serialize)]

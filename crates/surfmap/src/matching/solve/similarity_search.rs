@@ -37,7 +37,7 @@
 //! the FLAME partial pairs: E alone is halved by scaling φ up by 15–20 %, and the match
 //! gets worse). The search therefore minimizes the ratio `E(q)/M(q)` with the matched
 //! area `M = ∫ χ_A χ_B^ε∘φ √det g_A` (the criterion of the alignment search,
-//! [`super::align`]), by Dinkelbach's iteration: each round minimizes
+//! [`crate::matching::align::score`]), by Dinkelbach's iteration: each round minimizes
 //! `E + λ·(|A| − M)` — the energy with the uncovered-area term weighted by `λ`
 //! (`Betas::uncovered`, whose gradient the energy already has) — at the round's
 //! `λ = E/M`; a fixed point of the rounds is a stationary point of the ratio.
@@ -45,7 +45,7 @@
 //! **Minimization.** BFGS on the four coordinates (Nocedal & Wright, Algorithm 6.1,
 //! initial inverse Hessian scaled by (6.20)) with Armijo backtracking, the first trial
 //! of a round moving A's nodes by about half a grid cell. The position term's similarity
-//! of ℝ³ (`T` in [`super::energy`]) is refitted at the start of every round (the refit
+//! of ℝ³ (`T` in [`crate::matching::energy`]) is refitted at the start of every round (the refit
 //! never raises the energy), so that the search does not stay tied to the motion in
 //! space found by the alignment. Optionally the search also starts from rotated and
 //! scaled copies of the start ([`SimilaritySearch::candidate_angle`]) and keeps the
@@ -80,82 +80,10 @@
 
 use serde::Serialize;
 
-use super::deformation::{Deformation, cell_triangles, jacobian, node};
-use super::energy::{B_CHANNELS, B_G, B_SD, LevelEnergy, Similarity3, Workspace, chi};
-use super::similarity::{Similarity2, fit_similarity_2d};
-
-/// When the coarsest level searches over similarities of φ before its NCG.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum SearchWhen {
-    /// Never.
-    Off,
-    /// Only when the start comes from the surfaces' shapes ([`super::Align::Shape`], or
-    /// `Auto` without features or landmarks): the default. With landmarks the start is
-    /// their similarity and the feature term holds φ to it (an early variant of the
-    /// search — on 65², always kept — lost 12 points within 0.05 with landmarks on the
-    /// FLAME identity pairs).
-    #[default]
-    Shape,
-    /// For every alignment.
-    Always,
-}
-
-/// Settings of the similarity search (module docs).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct SimilaritySearch {
-    pub when: SearchWhen,
-    /// The level `k` whose energy is searched (grid `2^k + 1`, images filtered with
-    /// `σ = 2^−k`); at most the solve's coarsest level. φ there is the alignment's
-    /// similarity, and the similarity found starts the solve.
-    pub level: usize,
-    /// Most rounds of (refit the position term's similarity, set `λ = E/M`, then BFGS);
-    /// they stop earlier once a round lowers `E/M` by less than 10⁻⁴ of it. The refit
-    /// and the plane similarity are coupled through the position term, so the rounds
-    /// converge slowly: with 4, a start 12° off a synthetic self-match stopped 6° short
-    /// (the test in [`super::solve`]); 20 reach it.
-    pub rounds: usize,
-    /// Most BFGS iterations per round.
-    pub iterations: usize,
-    /// A round stops when an iteration lowers the energy by less than this fraction.
-    pub tolerance: f64,
-    /// Extra starts: rotations by `±candidate_angle` (radians) and scalings by
-    /// `e^{±candidate_log_scale}` of the start, `(0, 0)` for none; the combinations of
-    /// `{−1, 0, 1}` steps of both (8 extra starts) are tried when both are non-zero.
-    /// Off by default: ±5° and ±5 % changed nothing beyond noise on the FLAME and ICT
-    /// pairs (BENCHMARKS.md).
-    pub candidate_angle: f64,
-    pub candidate_log_scale: f64,
-}
-
-impl Default for SimilaritySearch {
-    fn default() -> Self {
-        Self {
-            when: SearchWhen::Shape,
-            level: 4,
-            rounds: 20,
-            iterations: 30,
-            tolerance: 1e-7,
-            candidate_angle: 0.0,
-            candidate_log_scale: 0.0,
-        }
-    }
-}
-
-impl SimilaritySearch {
-    /// The starts tried, as `(angle, log scale)` relative to the given φ.
-    fn candidates(&self) -> Vec<(f64, f64)> {
-        let (a, s) = (self.candidate_angle, self.candidate_log_scale);
-        let steps = |x: f64| if x > 0.0 { vec![0.0, -x, x] } else { vec![0.0] };
-        let mut out = vec![];
-        for &da in &steps(a) {
-            for &ds in &steps(s) {
-                out.push((da, ds));
-            }
-        }
-        out
-    }
-}
+use super::super::deformation::{Deformation, cell_triangles, jacobian, node};
+use super::super::energy::{B_CHANNELS, B_G, B_SD, LevelEnergy, Workspace, chi};
+use super::super::options::SimilaritySearch;
+use super::super::similarity::{Similarity2, Similarity3, fit_similarity_2d};
 
 /// What the similarity search did.
 #[derive(Clone, Debug, Serialize)]
@@ -179,7 +107,7 @@ pub struct SimilaritySearchLog {
     pub area_ratio_alignment: Option<f64>,
     pub area_ratio_search: Option<f64>,
     /// From the search's start the coarsest level matched A at an implausible size
-    /// (outside 1/3–3 times its area, [`super::output::plausible_area_ratio`]) and from
+    /// (outside 1/3–3 times its area, `crate::matching::solve::plausible_area_ratio`) and from
     /// the alignment's it did not: the searched start is then not kept, whatever the
     /// energies.
     pub implausible_size: bool,
@@ -282,7 +210,7 @@ fn ratio(energy: &LevelEnergy, phi: &Deformation, buf: &mut Buffers) -> (f64, f6
 /// over the grid's triangles `T` (B's metric and signed distance the means of the
 /// corners' samples, as in the energy's triangle terms). Near 1 when surfaces of like
 /// size are matched where they correspond; the report's area ratio
-/// ([`super::output::MatchReport::area_ratio`]) measures the same in space on the
+/// ([`crate::matching::MatchReport::area_ratio`]) measures the same in space on the
 /// output. `None` when nothing is matched or φ folds.
 pub(crate) fn matched_area_ratio(energy: &LevelEnergy, phi: &Deformation) -> Option<f64> {
     let n = phi.size;
@@ -510,12 +438,29 @@ pub(crate) fn search_similarity(
         implausible_size: false,
     })
 }
+/// Largest factor by which a plausible match changes the matched part's area (either
+/// way) before [`match_warnings`](crate::matching::report::match_warnings) doubts it. Faces of different people, expressions,
+/// crops and sources stay within 0.82–1.16 (BENCHMARKS, "Doubtful matches"); a factor of
+/// 3 is a different kind of result (a head scan squeezed into a template: 0.27), not a
+/// worse one of the same kind. It does not catch a moderately wrong match (0.56 on the
+/// worst ICT → FLAME pair, 45 mm off), and it leaves room for faces of different sizes
+/// (a child's onto an adult's).
+pub const AREA_RATIO_DOUBT: f64 = 3.0;
+
+/// Whether a match that changes the matched part's area by the factor `r` is of the
+/// kind surfaces of like size give: `1/`[`AREA_RATIO_DOUBT`]` ≤ r ≤ `[`AREA_RATIO_DOUBT`].
+/// The report warns outside ([`match_warnings`](crate::matching::report::match_warnings)); the similarity search's start is not
+/// kept when it leads outside and the alignment's does not ([`crate::matching::solve::similarity_search`]).
+pub fn plausible_area_ratio(r: f64) -> bool {
+    (1.0 / AREA_RATIO_DOUBT..=AREA_RATIO_DOUBT).contains(&r)
+}
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::matching::energy::Betas;
     use crate::matching::energy::tests::{self_match, synthetic};
+    use crate::matching::options::SearchWhen;
 
     fn all_terms() -> Betas {
         Betas {

@@ -2,10 +2,10 @@
 //! mouth) are paired across the surfaces after the alignment and matched as labelled
 //! feature curves (thesis §3.2.2's feature term, (2.11), with automatic features).
 
-use super::MatchError;
-use super::similarity::Similarity2;
-use super::solve::HoleFeatures;
-use super::surface::MatchSurface;
+use super::super::MatchError;
+use super::super::options::HoleFeatures;
+use super::super::prepare::surface::MatchSurface;
+use super::super::similarity::Similarity2;
 use crate::raster::{FeatureCurve, FeatureFile};
 
 /// A pair of hole rims: `(hole of A, hole of B, distance of their centres in ω after the
@@ -130,10 +130,6 @@ pub(crate) fn add_hole_features(
     done_b?;
     Ok((pairs, split_pairs))
 }
-
-/// Default elongation from which paired hole rims are split
-/// ([`super::MatchOptions::split_hole_rims`]).
-pub const SPLIT_HOLE_RIMS: f64 = 2.0;
 
 /// Splits a pair of hole rims, given as closed polygons in one frame (A's after the
 /// alignment, B's), at their corners into two arcs each, paired side by side.

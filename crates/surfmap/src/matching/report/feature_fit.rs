@@ -3,7 +3,7 @@
 //! For a feature `f` paired between A and B (a curve, a landmark — a one-vertex feature —
 //! or a hole rim paired automatically), each vertex `v` of A's curve is placed in ω_B
 //! twice: by the plane similarity φ started from on the coarsest level
-//! ([`AlignmentReport::start`]), and by φ itself. At each place B's distance map of the
+//! (`AlignmentReport::start`), and by φ itself. At each place B's distance map of the
 //! same feature `d_B^f` (the one the feature term (2.11) reads: the geodesic distance to
 //! B's curve in B's metric, extended past B's rim) is read bilinearly:
 //!
@@ -26,9 +26,8 @@
 
 use serde::Serialize;
 
-use super::AlignmentReport;
-use super::similarity::Similarity2;
-use super::solve::SurfaceMatch;
+use super::super::prepare::surface::MatchSurface;
+use super::super::solve::Solved;
 
 /// One paired feature's distance from A's curve, carried into ω_B, to B's curve.
 #[derive(Clone, Debug, Serialize)]
@@ -64,7 +63,7 @@ pub fn feature_warnings(fits: &[FeatureFit]) -> Vec<String> {
         .collect()
 }
 
-/// One paired feature in ω_B ([`SurfaceMatch::carried_features`]).
+/// One paired feature in ω_B (`SurfaceMatch::carried_features`).
 #[derive(Clone, Debug)]
 pub struct CarriedFeature {
     pub name: String,
@@ -75,81 +74,67 @@ pub struct CarriedFeature {
     pub closed: bool,
 }
 
-impl AlignmentReport {
-    /// The plane similarity φ started from on the coarsest level: the alignment's
-    /// (`similarity`), or the start the solve went on from instead — the similarity
-    /// search's (applied after it) or the features' alignment refined in space — when
-    /// that one was kept.
-    pub fn start(&self) -> Similarity2 {
-        if let Some(f) = &self.features_in_space
-            && f.kept
-        {
-            return f.similarity;
-        }
-        if let Some(s) = &self.search
-            && s.kept
-        {
-            return s.similarity.after(&self.similarity);
-        }
-        self.similarity
-    }
+/// The features' domain positions on A and B, paired: for every feature of A (in
+/// order), A's curve carried into ω_B by `place`, and B's curve in ω_B.
+pub fn carried_features(
+    a: &MatchSurface,
+    b: &MatchSurface,
+    place: impl Fn([f64; 2]) -> [f64; 2],
+) -> Vec<CarriedFeature> {
+    a.feature_curves
+        .iter()
+        .zip(&b.feature_curves)
+        .map(|(fa, fb)| {
+            let a = fa
+                .vertices
+                .iter()
+                .map(|&v| place(a.vertex_domain_position(v as usize)))
+                .collect();
+            let b = fb
+                .vertices
+                .iter()
+                .map(|&v| b.vertex_domain_position(v as usize))
+                .collect();
+            CarriedFeature {
+                name: fa.name.clone(),
+                a,
+                b,
+                closed: fa.closed,
+            }
+        })
+        .collect()
 }
 
-impl SurfaceMatch {
-    /// The features' domain positions on A and B, paired: for every feature of A (in
-    /// order), A's curve carried into ω_B by `place`, and B's curve in ω_B.
-    pub fn carried_features(&self, place: impl Fn([f64; 2]) -> [f64; 2]) -> Vec<CarriedFeature> {
-        self.a
-            .feature_curves
-            .iter()
-            .zip(&self.b.feature_curves)
-            .map(|(fa, fb)| {
-                let a = fa
-                    .vertices
-                    .iter()
-                    .map(|&v| place(self.a.vertex_domain_position(v as usize)))
-                    .collect();
-                let b = fb
-                    .vertices
-                    .iter()
-                    .map(|&v| self.b.vertex_domain_position(v as usize))
-                    .collect();
-                CarriedFeature {
-                    name: fa.name.clone(),
-                    a,
-                    b,
-                    closed: fa.closed,
-                }
-            })
-            .collect()
-    }
-
-    /// Every paired feature's fit before and after the solve (module docs); empty
-    /// without features.
-    pub fn feature_fits(&self) -> Vec<FeatureFit> {
-        let start = self.alignment.start();
-        // ℓ units → B's own units (B was scaled by `scale_b` for the match).
-        let unit = self.a.length_unit / self.scale_b;
-        let reach = self.levels.last().map_or(f64::NAN, |l| l.epsilon.sqrt()) * unit;
-        let before = self.carried_features(|xi| start.apply(xi));
-        let after = self.carried_features(|xi| self.map_domain(xi));
-        before
-            .iter()
-            .zip(&after)
-            .enumerate()
-            .map(|(f, (before, after))| {
-                let distance = self.b.feature_distance(f);
-                let at = |p: &[f64; 2]| distance.sample(*p) * unit;
-                let count = before.a.len().max(1) as f64;
-                FeatureFit {
-                    name: before.name.clone(),
-                    vertices: before.a.len(),
-                    before: before.a.iter().map(at).sum::<f64>() / count,
-                    after: after.a.iter().map(at).sum::<f64>() / count,
-                    after_max: after.a.iter().map(at).fold(0.0, f64::max),
-                    reach,
-                }
-            })
-            .collect()
-    }
+/// Every paired feature's fit before and after the solve (module docs); empty
+/// without features.
+pub(crate) fn feature_fits(
+    a: &MatchSurface,
+    b: &MatchSurface,
+    solved: &Solved,
+    scale_b: f64,
+) -> Vec<FeatureFit> {
+    let start = solved.alignment.start();
+    // ℓ units → B's own units (B was scaled by `scale_b` for the match).
+    let unit = a.length_unit / scale_b;
+    let reach = solved.levels.last().map_or(f64::NAN, |l| l.epsilon.sqrt()) * unit;
+    let before = carried_features(a, b, |xi| start.apply(xi));
+    let after = carried_features(a, b, |xi| solved.map_domain(xi));
+    before
+        .iter()
+        .zip(&after)
+        .enumerate()
+        .map(|(f, (before, after))| {
+            let distance = b.feature_distance(f);
+            let at = |p: &[f64; 2]| distance.sample(*p) * unit;
+            let count = before.a.len().max(1) as f64;
+            FeatureFit {
+                name: before.name.clone(),
+                vertices: before.a.len(),
+                before: before.a.iter().map(at).sum::<f64>() / count,
+                after: after.a.iter().map(at).sum::<f64>() / count,
+                after_max: after.a.iter().map(at).fold(0.0, f64::max),
+                reach,
+            }
+        })
+        .collect()
 }

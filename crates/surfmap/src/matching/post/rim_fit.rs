@@ -23,7 +23,7 @@
 //!    images (least squares, searched over `8·max(n_A, n_B)` steps of the rim). Each
 //!    target `t(v_k)` is the point of B's rim at `S_k`.
 //! 3. **Band.** The vertices within `w` rings of a fitted rim follow it. The band width
-//!    `w` is `rings` ([`RIM_FIT_RINGS`]), or two rings per rim edge of the rim's
+//!    `w` is `rings` ([`RIM_FIT_RINGS`](crate::matching::options::RIM_FIT_RINGS)), or two rings per rim edge of the rim's
 //!    largest displacement if that is wider (at most 40), so the shear per ring stays
 //!    under half an edge. First the displacement `d(v) = t(v) − y(v)` of the rim
 //!    vertices is extended harmonically over A's mesh — `Σ_{u∈N(v)} (d(u) − d(v)) = 0`
@@ -37,20 +37,15 @@
 //!    into an open mouth), they are straightened — the displacement alone moves the band
 //!    but keeps its folds.
 //!
-//! The fold check after it ([`super::output::drop_folds`]) still decides what is
+//! The fold check after it ([`crate::matching::folds::drop_folds`]) still decides what is
 //! reported; this step only changes where A's vertices land near the holes.
 
 use glam::{DVec2, DVec3};
 
-use super::complete::compressed_rows;
-use super::surface::MatchSurface;
+use super::super::prepare::surface::MatchSurface;
+use crate::mesh::closest::compressed_rows;
 use crate::mesh::{Topology, TriMesh};
 use crate::param::tutte::mean_value_with_fixed;
-
-/// Default (and narrowest) band: the rings of A's vertices around a fitted rim that
-/// follow it. Eight: the rim moves by a grid cell or two (about as many mesh edges), so
-/// each ring's triangles are sheared by a small fraction of an edge.
-pub const RIM_FIT_RINGS: usize = 8;
 
 /// A rim moved farther is followed by a wider band: two rings per mean rim edge of its
 /// largest displacement, so that the shear per ring stays under half an edge and no
@@ -406,6 +401,7 @@ pub fn fit_hole_rims(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::matching::options::RIM_FIT_RINGS;
     use crate::mesh::generate::bumpy_disc;
     use crate::testing::crop;
 

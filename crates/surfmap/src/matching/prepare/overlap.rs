@@ -11,7 +11,7 @@
 //! the top of the head: BENCHMARKS.md, "Whole heads against face crops"). Cut down to
 //! the shared part, both flattenings spend the square on what matches.
 //!
-//! How: the surfaces are aligned rigidly in space ([`super::rigid::align_surfaces`]).
+//! How: the surfaces are aligned rigidly in space (`super::rigid::align_surfaces`).
 //! A vertex is *far* when its closest vertex of the other surface is more than
 //! `τ = FAR · √area(smaller surface) + mean edge of the other` away. The faces with a
 //! far vertex form connected pieces; a piece of at least [`MIN_PIECE`] of its
@@ -22,11 +22,11 @@
 //! correspondences the solve's χ handles) are matched whole. A piece holding a vertex
 //! of the user's guidance (a landmark, a feature curve) is never cut.
 
-use super::output::{check_folds, drop_folds};
-use super::rigid::{ClosestPoints, RigidAlignment, align_surfaces};
-use super::solve::ScaleB;
+use super::super::options::ScaleB;
+use super::super::rigid::{RigidAlignment, align_surfaces};
+use crate::mesh::TriMesh;
+use crate::mesh::closest::ClosestPoints;
 use crate::mesh::repair::{FaceOrigins, fix_non_manifold, keep_faces};
-use crate::mesh::{SurfacePoint, TriMesh};
 use crate::vec3::{norm3 as norm, sub3 as sub};
 use serde::Serialize;
 
@@ -94,7 +94,7 @@ pub fn overlap_crops(
 }
 
 /// [`overlap_crops`] with B at the size the match gives it ([`ScaleB`]), sparing the
-/// vertices `guide_a` and `guide_b` (what the guidance names: [`super::solve::Guidance::vertices`]);
+/// vertices `guide_a` and `guide_b` (what the guidance names: `super::solve::Guidance::vertices`);
 /// `None` when nothing is cut.
 pub fn crops_for_match(
     a: &TriMesh,
@@ -131,22 +131,6 @@ pub fn cut(
     let later = FaceOrigins::read(&kept).expect("the cut keeps the faces' tags");
     kept.uvs = None;
     (kept, Some(origins.then(&later)))
-}
-
-/// The fold check once more, on the meshes as given, of a correspondence found on cut
-/// ones and numbered back ([`super::output::numbered_as_given`]): the collapse test
-/// scales each image's area by the surfaces' area ratio, which the cut changes, so an
-/// image the cut surfaces' test let pass can be collapsed by the given ones' (the test
-/// an independent referee applies to the files). Drops the vertices of such triangles
-/// ([`drop_folds`], sparing `keep` where it can) and returns how many.
-pub fn drop_folds_as_given(
-    a: &TriMesh,
-    b: &TriMesh,
-    points: &mut [Option<SurfacePoint>],
-    keep: &[u32],
-) -> usize {
-    let folds = check_folds(a, b, points);
-    drop_folds(a, &folds, points, keep)
 }
 
 /// [`overlap_crops`] from a given rigid alignment of A onto B.

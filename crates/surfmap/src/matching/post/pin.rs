@@ -20,14 +20,14 @@
 //! exactly. Moves are made nearest the landmarks first, and one that would leave more
 //! image triangles around its vertex turned over or collapsed than before is not made.
 //! A vertex of an image triangle still folded afterwards is reported unmatched (never a
-//! landmark, [`super::output::drop_folds`]) and left to rim completion
-//! ([`super::complete`]), which regrows it from its neighbours.
+//! landmark, [`crate::matching::folds::drop_folds`]) and left to rim completion
+//! ([`crate::matching::post::complete`]), which regrows it from its neighbours.
 
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::complete::SurfaceProjector;
-use super::output::{ImageFold, image_fold};
+use super::super::folds::{ImageFold, image_fold};
+use crate::mesh::closest::{SurfaceProjector, vertex_triangles};
 use crate::mesh::{SurfacePoint, TriMesh};
 
 /// What pinning did.
@@ -39,19 +39,6 @@ pub struct Pinning {
     pub moved: usize,
     /// Largest landmark miss before pinning (B's length units).
     pub largest_miss: f64,
-}
-
-/// The surface point at vertex `v` of `mesh` (in the first triangle holding it).
-pub fn vertex_point(mesh: &TriMesh, v: u32) -> Option<SurfacePoint> {
-    mesh.triangles.iter().enumerate().find_map(|(t, tri)| {
-        let k = tri.iter().position(|&u| u == v)?;
-        let mut barycentric = [0.0; 3];
-        barycentric[k] = 1.0;
-        Some(SurfacePoint {
-            triangle: t as u32,
-            barycentric,
-        })
-    })
 }
 
 /// Gaussian weights below this are not applied (the vertex keeps its match).
@@ -108,9 +95,10 @@ pub fn pin_landmarks(
     )
     .map(|w| w.into_iter().map(DVec3::from_array).collect::<Vec<_>>());
     for &(va, vb) in pairs {
-        if let (Some(slot), Some(point)) =
-            (correspondence.get_mut(va as usize), vertex_point(b, vb))
-        {
+        if let (Some(slot), Some(point)) = (
+            correspondence.get_mut(va as usize),
+            SurfacePoint::at_vertex(&b.triangles, vb),
+        ) {
             *slot = Some(point);
             done.landmarks += 1;
         }
@@ -149,7 +137,7 @@ pub fn pin_landmarks(
     // Nearest the landmarks first; a move is made unless it leaves more image triangles
     // around the vertex folded than before.
     moves.sort_by(|x, y| y.1.total_cmp(&x.1));
-    let (tri_start, tri_list) = super::complete::vertex_triangles(&a.triangles, a.positions.len());
+    let (tri_start, tri_list) = vertex_triangles(&a.triangles, a.positions.len());
     let area_ratio = b.area() / a.area();
     let folded_around = |v: usize, correspondence: &[Option<SurfacePoint>]| -> usize {
         tri_list[tri_start[v] as usize..tri_start[v + 1] as usize]
@@ -262,13 +250,13 @@ mod tests {
         assert!(after < 0.65 * before, "{before} -> {after}");
         // As `checked_correspondence` does: the vertices of any image triangle left
         // folded are unmatched, never a landmark, and then nothing is folded.
-        let folds = super::super::output::check_folds(&a, &b, &corr);
-        let dropped = super::super::output::drop_folds(&a, &folds, &mut corr, &landmarks);
+        let folds = crate::matching::folds::check_folds(&a, &b, &corr);
+        let dropped = crate::matching::folds::drop_folds(&a, &folds, &mut corr, &landmarks);
         assert!(dropped <= 10, "{dropped} vertices dropped for folds");
         for &l in &landmarks {
             assert!(corr[l as usize].is_some(), "landmark {l} dropped");
         }
-        let folds = super::super::output::check_folds(&a, &b, &corr);
+        let folds = crate::matching::folds::check_folds(&a, &b, &corr);
         assert!(
             folds.flipped.is_empty() && folds.collapsed.is_empty(),
             "{folds:?}"

@@ -1,6 +1,6 @@
 //! Nonlinear conjugate gradients in the L² metric with an Armijo line search
 //! (thesis §3.2.4), fold-free by construction: every trial step stays below the
-//! closed-form largest fold-free step ([`super::deformation`]).
+//! closed-form largest fold-free step ([`crate::matching::deformation`]).
 //!
 //! Direction: Polak–Ribière+ (`β = max(0, gₖ₊₁·(gₖ₊₁ − gₖ)/|gₖ|²)`), restarted with
 //! steepest descent whenever it is not a descent direction. The first trial step of
@@ -28,92 +28,10 @@
 
 use serde::Serialize;
 
-use super::deformation::Deformation;
-use super::energy::{EnergyTerms, LevelEnergy, Workspace};
+use super::super::deformation::Deformation;
+use super::super::energy::{EnergyTerms, LevelEnergy, Workspace};
+use super::super::options::NcgSettings;
 use super::precondition::SobolevPreconditioner;
-
-/// Settings of one level's minimization.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct NcgSettings {
-    /// Stop when `(E_k − E_{k+1}) / E_k` is below this.
-    pub tolerance: f64,
-    /// The same on the finest level of the multiscale solve (unfiltered images): looser
-    /// than `tolerance` because there, measured on the ICT pairs, the last iterations
-    /// cost most of the time and do not change the accuracy (BENCHMARKS.md, "Matching").
-    pub finest_tolerance: f64,
-    pub max_iterations: usize,
-    /// Iterations over which the relative decrease is averaged for the stopping rule
-    /// (at least 1; 1, the default, is the plain per-step rule). No level stops as
-    /// converged before this many iterations.
-    pub window: usize,
-    /// The window on the coarsest level of the multiscale solve, where the plain rule
-    /// stopped too early (module docs); measured on the referee's pairs over three runs
-    /// each, a window on the finer levels too changed no track's accuracy and cost time
-    /// (BENCHMARKS.md, "Matching": the stopping rule).
-    pub coarsest_window: usize,
-    /// Armijo sufficient-decrease constant.
-    pub armijo_c: f64,
-    /// Refit the position term's similarity every this many iterations (0: never).
-    pub refit_every: usize,
-    /// Most energy evaluations on the finest level of the multiscale solve (0: no cap);
-    /// a level `2^j` times coarser may use `4^j` times as many, the same cost
-    /// ([`NcgSettings::level_evaluations`]). The level then stops with
-    /// [`StopReason::Budget`]. Default 40 (640 at 65², 160 at 129²; with the position
-    /// term's relief 96 at 129², `super::solve::RELIEF_MIDDLE_BUDGET`, and the coarsest
-    /// level's relief phase a quarter of its budget on top,
-    /// `super::solve::RELIEF_PHASE_FRACTION`): measured over the
-    /// referee's 18 ICT pairs and the 10 FLAME pairs, the evaluations beyond it on the
-    /// two finest levels (120 before) changed no track's fraction within 0.01, 0.02 or
-    /// 0.05 nor its mean error beyond the run-to-run noise, and took a quarter of the
-    /// solve; at 25 the partial pairs lost 1–3 points (BENCHMARKS.md, "Matching").
-    pub max_evaluations: usize,
-    /// Most energy evaluations of a whole multiscale solve, counted in finest-level
-    /// evaluations (one on a grid `2^j` times coarser counts `4^-j`); 0: no cap. A level
-    /// gets at most what the levels before it left, so the solve's cost is bounded even
-    /// when every level would use its own budget ([`NcgSettings::max_evaluations`]).
-    pub total_evaluations: usize,
-}
-
-impl NcgSettings {
-    /// Sets the per-level budget ([`NcgSettings::max_evaluations`]); 0 lifts it and the
-    /// whole solve's cap ([`NcgSettings::total_evaluations`]) too, so that every level
-    /// runs to its stopping rule (the thesis's). `surfmap match --budget` and the Python
-    /// `match(..., budget=)`.
-    pub fn set_budget(&mut self, budget: usize) {
-        self.max_evaluations = budget;
-        if budget == 0 {
-            self.total_evaluations = 0;
-        }
-    }
-
-    /// The evaluation cap of a level with `size` nodes per side when the finest level has
-    /// `finest` (both `2^k + 1`): [`NcgSettings::max_evaluations`] × `((finest − 1)/(size − 1))²`,
-    /// or `usize::MAX` without a cap.
-    pub fn level_evaluations(&self, size: usize, finest: usize) -> usize {
-        if self.max_evaluations == 0 {
-            return usize::MAX;
-        }
-        let ratio = (finest - 1) / (size - 1).max(1);
-        self.max_evaluations
-            .saturating_mul(ratio.saturating_mul(ratio))
-    }
-}
-
-impl Default for NcgSettings {
-    fn default() -> Self {
-        Self {
-            tolerance: 1e-6,
-            finest_tolerance: 1e-5,
-            max_iterations: 300,
-            window: 1,
-            coarsest_window: 10,
-            armijo_c: 1e-4,
-            refit_every: 10,
-            max_evaluations: 40,
-            total_evaluations: 220,
-        }
-    }
-}
 
 /// Why a level's minimization stopped.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -145,7 +63,7 @@ pub struct LevelLog {
 
 impl LevelLog {
     /// This run of a level followed by `next`, a second run on the same level from
-    /// where this one ended (another metric, [`super::solve`]): one log with both
+    /// where this one ended (another metric, `super::solve`): one log with both
     /// runs' iterations, evaluations, history and time, `next`'s end and stop reason.
     pub fn then(mut self, next: LevelLog) -> LevelLog {
         self.iterations += next.iterations;

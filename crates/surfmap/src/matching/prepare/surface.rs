@@ -3,8 +3,8 @@
 //! into geometry images at the unit-area length scale, every image extended over all of
 //! ω, and restricted to every level of the multiscale pyramid.
 
-use super::MatchError;
-use super::energy::{B_CHANNELS, FeatureSet, LevelA, LevelB, TriangleA, chi, eta, theta};
+use super::super::MatchError;
+use super::super::energy::{B_CHANNELS, FeatureSet, LevelA, LevelB, TriangleA, chi, eta, theta};
 use crate::grid::pyramid::gaussian_filter;
 use crate::grid::{Grid, Pyramid, harmonic_extension};
 use crate::mesh::TriMesh;
@@ -213,7 +213,7 @@ impl MatchSurface {
         let mut feature_theta = vec![Vec::with_capacity(2 * (m - 1) * (m - 1)); dist.len()];
         for i in 0..m - 1 {
             for j in 0..m - 1 {
-                for tri in super::deformation::cell_triangles(m, i, j) {
+                for tri in super::super::deformation::cell_triangles(m, i, j) {
                     let gt: [f64; 3] = std::array::from_fn(|c| {
                         tri.iter().map(|&q| metric(q)[c]).sum::<f64>() / 3.0
                     });
@@ -288,23 +288,6 @@ impl MatchSurface {
 
     /// Finest-level position (mesh units, extended) and signed boundary distance, for
     /// reading off matched points.
-    pub(crate) fn finest_position_and_distance(&self) -> Grid<[f64; 4]> {
-        let top = self.smooth.finest().as_slice();
-        let sd = self.images.boundary_distance.as_slice();
-        let unit = self.length_unit;
-        let n = self.size();
-        Grid::from_fn(n, |i, j| {
-            let q = i * n + j;
-            [
-                top[q][S_X] * unit,
-                top[q][S_X + 1] * unit,
-                top[q][S_X + 2] * unit,
-                sd[q],
-            ]
-        })
-        .expect("finest size")
-    }
-
     /// Centroid and area (in ω) of the surface's inside nodes.
     pub fn domain_centroid_and_area(&self) -> ([f64; 2], f64) {
         let n = self.size();
@@ -312,7 +295,7 @@ impl MatchSurface {
         let (mut c, mut count) = ([0.0; 2], 0usize);
         for q in 0..n * n {
             if self.images.raster.is_inside(q) {
-                let p = super::deformation::node(n, q);
+                let p = super::super::deformation::node(n, q);
                 c[0] += p[0];
                 c[1] += p[1];
                 count += 1;
