@@ -8,7 +8,8 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use surfmap::matching::{
-    Align, Guidance, HoleFeatures, Landmarks, MatchError, MatchOptions, ScaleB, SearchWhen, folder,
+    Align, FeaturesStart, Guidance, HoleFeatures, Landmarks, MatchError, MatchOptions, OptionError,
+    PositionWeight, ScaleB, SearchWhen, Weights, folder,
 };
 
 use crate::advice::match_defect_message;
@@ -31,6 +32,23 @@ fn match_error(e: MatchError) -> PyErr {
     }
 }
 
+/// The value of `choices` named `given`, or a ValueError listing the names.
+fn choice<T: Copy>(what: &str, given: &str, choices: &[(&str, T)]) -> PyResult<T> {
+    choices
+        .iter()
+        .find(|(name, _)| *name == given)
+        .map(|&(_, value)| value)
+        .ok_or_else(|| {
+            let names: Vec<String> = choices.iter().map(|(n, _)| format!("'{n}'")).collect();
+            let list = match names.split_last() {
+                Some((last, [])) => last.clone(),
+                Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+                None => String::new(),
+            };
+            PyValueError::new_err(format!("{what} must be {list}, got '{given}'"))
+        })
+}
+
 /// `{"names": [...], "A": [...], "B": [...]}` → landmarks.
 fn landmarks(d: &Bound<'_, PyDict>) -> PyResult<Landmarks> {
     let get = |k: &str| {
@@ -49,8 +67,9 @@ fn landmarks(d: &Bound<'_, PyDict>) -> PyResult<Landmarks> {
 
 /// Matches surface A onto surface B: a smooth, fold-free correspondence found by
 /// multiscale registration of their geometry images (``surfmap match``; thesis §2.2).
-/// The keywords are the command line's flags, with their defaults (``fill_holes=False``:
-/// ``--no-fill-holes``; ``pin_landmarks=False``: ``--free-landmarks``).
+/// The keywords are the command line's flags (``fill_holes=False``: ``--no-fill-holes``;
+/// ``pin_landmarks=False``: ``--free-landmarks``); one left out (``None``) keeps the
+/// library's default, the command line's.
 ///
 /// ``VA``, ``VB``: (n, 3) float arrays; ``FA``, ``FB``: (m, 3) integer arrays (discs,
 /// holes filled for the solve).
@@ -133,10 +152,10 @@ fn landmarks(d: &Bound<'_, PyDict>) -> PyResult<Landmarks> {
 /// ((289, 4), True, True)
 /// >>> corners = {"features": [{"name": f"c{k}", "vertices": [v]} for k, v in enumerate([0, n - 1, n * n - 1])]}
 /// >>> C, report = surfmap.match(V, F, VB, F, size=65, align="features", features_a=corners, features_b=corners, beta=(1, 0.01, 10))
-/// >>> report["alignment"]["method"], report["options"]["betas"]["features"]
+/// >>> report["alignment"]["method"], report["options"]["weights"]["features"]
 /// ('features', 10.0)
 #[pyfunction]
-#[pyo3(name = "match", signature = (VA, FA, VB, FB, *, landmarks=None, features_a=None, features_b=None, size=257, align="auto", features_start="both", keep_folds=false, rim_fit_rings=8, complete_rings=4, pin_landmarks=true, scale_b=None, budget=40, hole_features="auto", whole_hole_rims=false, fill_holes=true, beta=None, position_weight=None, similarity_search="shape", search_candidates=None, search_level=4, rim_tolerance=0.5, relief=0.1, crop_overlap="auto"))]
+#[pyo3(name = "match", signature = (VA, FA, VB, FB, *, landmarks=None, features_a=None, features_b=None, size=None, align=None, features_start=None, keep_folds=None, rim_fit_rings=None, complete_rings=None, pin_landmarks=None, scale_b=None, budget=None, hole_features=None, whole_hole_rims=None, fill_holes=None, beta=None, position_weight=None, similarity_search=None, search_candidates=None, search_level=None, rim_tolerance=None, relief=None, crop_overlap=None))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub fn match_meshes<'py>(
     py: Python<'py>,
@@ -147,26 +166,26 @@ pub fn match_meshes<'py>(
     landmarks: Option<&Bound<'py, PyDict>>,
     features_a: Option<&Bound<'py, PyAny>>,
     features_b: Option<&Bound<'py, PyAny>>,
-    size: usize,
-    align: &str,
-    features_start: &str,
-    keep_folds: bool,
-    rim_fit_rings: usize,
-    complete_rings: usize,
-    pin_landmarks: bool,
+    size: Option<usize>,
+    align: Option<&str>,
+    features_start: Option<&str>,
+    keep_folds: Option<bool>,
+    rim_fit_rings: Option<usize>,
+    complete_rings: Option<usize>,
+    pin_landmarks: Option<bool>,
     scale_b: Option<f64>,
-    budget: usize,
-    hole_features: &str,
-    whole_hole_rims: bool,
-    fill_holes: bool,
+    budget: Option<usize>,
+    hole_features: Option<&str>,
+    whole_hole_rims: Option<bool>,
+    fill_holes: Option<bool>,
     beta: Option<Vec<f64>>,
     position_weight: Option<f64>,
-    similarity_search: &str,
+    similarity_search: Option<&str>,
     search_candidates: Option<Vec<f64>>,
-    search_level: usize,
-    rim_tolerance: f64,
-    relief: f64,
-    crop_overlap: &str,
+    search_level: Option<usize>,
+    rim_tolerance: Option<f64>,
+    relief: Option<f64>,
+    crop_overlap: Option<&str>,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>)> {
     // As the command line's `--features-a` and `--features-b` (each requires the other).
     match (features_a.is_some(), features_b.is_some()) {
@@ -182,97 +201,91 @@ pub fn match_meshes<'py>(
         }
         _ => {}
     }
-    surfmap::grid::grid_level(size).map_err(|e| PyValueError::new_err(format!("size: {e}")))?;
+    // Every keyword left out keeps the library's default (`MatchOptions::default()`).
+    let mut o = MatchOptions::default();
     let a = arrays::mesh(VA, FA)?;
     let b = arrays::mesh(VB, FB)?;
-    let scale_b = match scale_b {
-        None => ScaleB::Auto,
-        Some(f) if f.is_finite() && f > 0.0 => ScaleB::Factor(f),
-        Some(f) => {
+    if let Some(f) = scale_b {
+        if !(f.is_finite() && f > 0.0) {
             return Err(PyValueError::new_err(format!(
                 "scale_b must be None (automatic) or a positive factor, got {f}"
             )));
         }
-    };
-    let mut options = MatchOptions {
-        size,
-        scale_b,
-        fill_holes,
-        drop_folds: !keep_folds,
-        rim_fit_rings,
-        complete_rings,
-        pin_landmarks,
-        align: match align {
-            "auto" => Align::Auto,
-            "features" => Align::Features,
-            "shape" => Align::Shape,
-            "none" => Align::None,
-            other => {
-                return Err(PyValueError::new_err(format!(
-                    "align must be 'auto', 'features', 'shape' or 'none', got '{other}'"
-                )));
-            }
-        },
-        features_in_space: match features_start {
-            "both" => true,
-            "plane" => false,
-            other => {
-                return Err(PyValueError::new_err(format!(
-                    "features_start must be 'both' or 'plane', got '{other}'"
-                )));
-            }
-        },
-        hole_features: match hole_features {
-            "auto" => HoleFeatures::Auto,
-            "on" => HoleFeatures::On,
-            "off" => HoleFeatures::Off,
-            other => {
-                return Err(PyValueError::new_err(format!(
-                    "hole_features must be 'auto', 'on' or 'off', got '{other}'"
-                )));
-            }
-        },
-        split_hole_rims: if whole_hole_rims {
-            0.0
-        } else {
-            surfmap::matching::options::SPLIT_HOLE_RIMS
-        },
-        ..Default::default()
-    };
+        o.scale_b = ScaleB::Factor(f);
+    }
+    let bad = |e: OptionError| PyValueError::new_err(e.to_string());
+    o.size = size.unwrap_or(o.size);
     if let Some(b) = &beta {
-        options
-            .set_betas(b, "beta")
-            .map_err(PyValueError::new_err)?;
+        o.weights = Weights::from_slice(b).map_err(bad)?;
     }
     if let Some(w) = position_weight {
-        options
-            .set_position_weight(w, "position_weight")
-            .map_err(PyValueError::new_err)?;
+        o.position_weight = PositionWeight::Fixed(w);
     }
-    options.similarity_search.when = match similarity_search {
-        "shape" => SearchWhen::Shape,
-        "off" => SearchWhen::Off,
-        "always" => SearchWhen::Always,
-        other => {
-            return Err(PyValueError::new_err(format!(
-                "similarity_search must be 'shape', 'off' or 'always', got '{other}'"
-            )));
-        }
-    };
-    // Checked by the library (`MatchError::Option`, a ValueError here), as for the CLI.
-    options.similarity_search.level = search_level;
-    options.ncg.set_budget(budget);
-    options
-        .set_rim_tolerance(rim_tolerance, "rim_tolerance")
-        .map_err(PyValueError::new_err)?;
-    options
-        .set_position_relief(relief, "relief")
-        .map_err(PyValueError::new_err)?;
-    if let Some(c) = &search_candidates {
-        options
-            .set_search_candidates(c, "search_candidates")
-            .map_err(PyValueError::new_err)?;
+    if let Some(a) = align {
+        o.align = choice(
+            "align",
+            a,
+            &[
+                ("auto", Align::Auto),
+                ("features", Align::Features),
+                ("shape", Align::Shape),
+                ("none", Align::None),
+            ],
+        )?;
     }
+    if let Some(f) = features_start {
+        o.features_start = choice(
+            "features_start",
+            f,
+            &[
+                ("both", FeaturesStart::Both),
+                ("plane", FeaturesStart::Plane),
+            ],
+        )?;
+    }
+    if let Some(h) = hole_features {
+        o.hole_features = choice(
+            "hole_features",
+            h,
+            &[
+                ("auto", HoleFeatures::Auto),
+                ("on", HoleFeatures::On),
+                ("off", HoleFeatures::Off),
+            ],
+        )?;
+    }
+    if let Some(s) = similarity_search {
+        o.similarity_search = choice(
+            "similarity_search",
+            s,
+            &[
+                ("shape", SearchWhen::Shape),
+                ("off", SearchWhen::Off),
+                ("always", SearchWhen::Always),
+            ],
+        )?;
+    }
+    if let Some(c) = crop_overlap {
+        o.crop_overlap = choice("crop_overlap", c, &[("auto", true), ("off", false)])?;
+    }
+    o.keep_folds = keep_folds.unwrap_or(o.keep_folds);
+    o.pin_landmarks = pin_landmarks.unwrap_or(o.pin_landmarks);
+    o.budget = budget.unwrap_or(o.budget);
+    o.fill_holes = fill_holes.unwrap_or(o.fill_holes);
+    o.split_hole_rims = !whole_hole_rims.unwrap_or(!o.split_hole_rims);
+    let adv = &mut o.advanced;
+    adv.rim_fit_rings = rim_fit_rings.unwrap_or(adv.rim_fit_rings);
+    adv.complete_rings = complete_rings.unwrap_or(adv.complete_rings);
+    adv.rim_tolerance = rim_tolerance.unwrap_or(adv.rim_tolerance);
+    adv.relief = relief.unwrap_or(adv.relief);
+    adv.search_level = search_level.unwrap_or(adv.search_level);
+    match search_candidates.as_deref() {
+        None => {}
+        Some(&[deg, scale]) => adv.search_candidates = [deg, scale],
+        Some(other) => return Err(bad(OptionError::SearchCandidates(other.to_vec()))),
+    }
+    o.validate().map_err(bad)?;
+    let options = o;
     let guidance = Guidance {
         landmarks: landmarks.map(self::landmarks).transpose()?,
         features_a: features_a
@@ -281,15 +294,6 @@ pub fn match_meshes<'py>(
         features_b: features_b
             .map(|f| arrays::feature_file(f, "features_b", b.num_vertices()))
             .transpose()?,
-    };
-    options.crop_overlap = match crop_overlap {
-        "auto" => true,
-        "off" => false,
-        other => {
-            return Err(PyValueError::new_err(format!(
-                "crop_overlap must be 'auto' or 'off', got '{other}'"
-            )));
-        }
     };
     let matched = py
         .detach(|| surfmap::matching::match_meshes(&a, &b, &guidance, &options))

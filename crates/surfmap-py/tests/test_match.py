@@ -199,8 +199,8 @@ def test_feature_curves_match_as_on_the_command_line(cli, data, tmp_path):
     both, plane = reports["both"], reports["plane"]
     # The features' alignment refined in space was tried (and, the chin having moved,
     # kept) only from both starts.
-    assert both["options"]["features_in_space"] is True and both["alignment"]["features_in_space"]["kept"]
-    assert plane["options"]["features_in_space"] is False and plane["alignment"]["features_in_space"] is None
+    assert both["options"]["features_start"] == "both" and both["alignment"]["features_in_space"]["kept"]
+    assert plane["options"]["features_start"] == "plane" and plane["alignment"]["features_in_space"] is None
 
 
 def holey_pair(n=33):
@@ -238,8 +238,8 @@ def holey(tmp_path_factory):
 
 
 def betas(report):
-    b = report["options"]["betas"]
-    return b["bend"], b["reg"], b["features"]
+    w = report["options"]["weights"]
+    return w["bending"], w["regularization"], w["features"]
 
 
 # (keywords, the command line's flags, what the report says with them — not by default)
@@ -253,20 +253,19 @@ OPTIONS = {
         {"position_weight": 0.0},
         ["--position-weight", "0"],
         lambda r: r["position_weight"] == 0.0
-        and r["options"]["position_weight"] == "fixed"
+        and r["options"]["position_weight"] == {"fixed": 0.0}
         and r["shape_residual"] is None,
     ),
     "similarity_search": (
         {"similarity_search": "off"},
         ["--similarity-search", "off"],
-        lambda r: r["options"]["similarity_search"]["when"] == "off" and r["alignment"]["search"] is None,
+        lambda r: r["options"]["similarity_search"] == "off" and r["alignment"]["search"] is None,
     ),
     "search_candidates": (
         {"search_candidates": (5.0, 0.05), "search_level": 3},
         ["--search-candidates", "5,0.05", "--search-level", "3"],
-        lambda r: r["options"]["similarity_search"]["candidate_angle"] == pytest.approx(np.radians(5.0), rel=1e-12)
-        and r["options"]["similarity_search"]["candidate_log_scale"] == pytest.approx(np.log(1.05), rel=1e-12)
-        and r["options"]["similarity_search"]["level"] == 3,
+        lambda r: r["options"]["advanced"]["search_candidates"] == [5.0, 0.05]
+        and r["options"]["advanced"]["search_level"] == 3,
     ),
     "hole_features": (
         {"hole_features": "off"},
@@ -276,17 +275,17 @@ OPTIONS = {
     "rim_tolerance": (
         {"rim_tolerance": 3.0},
         ["--rim-tolerance", "3"],
-        lambda r: r["options"]["complete_tolerance"]["elsewhere"] == 3.0,
+        lambda r: r["options"]["advanced"]["rim_tolerance"] == 3.0,
     ),
     "relief": (
         {"relief": 0.0},
         ["--relief", "0"],
-        lambda r: r["options"]["position_relief"] == 0.0,
+        lambda r: r["options"]["advanced"]["relief"] == 0.0,
     ),
     "whole_hole_rims": (
         {"whole_hole_rims": True},
         ["--whole-hole-rims"],
-        lambda r: r["options"]["split_hole_rims"] == 0
+        lambda r: r["options"]["split_hole_rims"] is False
         and len(r["alignment"]["hole_pairs"]) == 1
         and r["alignment"]["split_holes"] == [],
     ),
@@ -310,11 +309,11 @@ def test_each_option_reaches_the_report_as_on_the_command_line(name, cli, holey,
 def test_the_defaults_are_the_command_lines(holey):
     _, _, default = holey
     options = default["options"]
-    assert betas(default) == (1.0, 0.01, 5.0) and "from_shape_residual" in options["position_weight"]
-    assert options["similarity_search"]["when"] == "shape" and options["similarity_search"]["level"] == 4
-    assert options["similarity_search"]["candidate_angle"] == options["similarity_search"]["candidate_log_scale"] == 0
-    assert options["hole_features"] == "auto" and options["split_hole_rims"] == 2.0 and options["fill_holes"]
-    assert options["features_in_space"] is True
+    assert betas(default) == (1.0, 0.01, 5.0) and options["position_weight"] == "auto"
+    assert options["similarity_search"] == "shape" and options["advanced"]["search_level"] == 4
+    assert options["advanced"]["search_candidates"] == [0.0, 0.0] and options["budget"] == 40
+    assert options["hole_features"] == "auto" and options["split_hole_rims"] is True and options["fill_holes"]
+    assert options["features_start"] == "both" and options["crop_overlap"] is True
     # The hole filled and its rims paired as features, split at the corners; the
     # alignment from the shapes, and the similarity search after it.
     assert default["holes_filled_a"] == 1 and default["alignment"]["split_holes"] == [0]
@@ -450,7 +449,7 @@ def test_a_wider_rim_tolerance_matches_more_of_a_along_b_s_crop():
     matched, matched_far_past = {}, {}
     for t in (0.0, 0.5, 3.0):
         C, report = surfmap.match(V, F, VB, FB, size=65, rim_tolerance=t)
-        assert report["options"]["complete_tolerance"]["elsewhere"] == t
+        assert report["options"]["advanced"]["rim_tolerance"] == t
         matched[t] = int((C[:, 0] >= 0).sum())
         matched_far_past[t] = int((C[far_past, 0] >= 0).sum())
     assert matched[0.0] <= matched[0.5] < matched[3.0], matched

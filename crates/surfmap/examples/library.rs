@@ -170,10 +170,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .collect(),
         out.triangles.clone(),
     );
-    let options = surfmap::matching::MatchOptions {
-        size: 129,
-        ..Default::default()
-    };
+    let mut options = surfmap::matching::MatchOptions::default();
+    options.size = 129;
     let m = surfmap::matching::match_meshes(&out, &moved, &Default::default(), &options)?;
     let (correspondence, report) = (&m.correspondence, &m.report);
     let errors: Vec<f64> = correspondence

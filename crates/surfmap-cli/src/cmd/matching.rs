@@ -6,11 +6,11 @@
 use std::path::PathBuf;
 
 use super::advice::{match_defect_message, worded_flatten_error};
-use anyhow::{Context, bail};
+use anyhow::Context;
 use surfmap::TriMesh;
 use surfmap::matching::{
-    Align, Guidance, HoleFeatures, Landmarks, MatchError, MatchInput, MatchOptions, ScaleB,
-    SearchWhen, match_meshes,
+    Advanced, Align, FeaturesStart, Guidance, HoleFeatures, Landmarks, MatchError, MatchInput,
+    MatchOptions, OptionError, PositionWeight, ScaleB, SearchWhen, Weights, match_meshes,
 };
 use surfmap::mesh::repair::FaceOrigins;
 use surfmap::raster::FeatureFile;
@@ -134,7 +134,7 @@ pub struct Args {
     pub search_candidates: Option<Vec<f64>>,
     /// Level k of the similarity search's energy (grid 2^k + 1; at least 1, at most the
     /// solve's coarsest level, 6).
-    #[arg(long, value_name = "K", default_value_t = 4)]
+    #[arg(long, value_name = "K", default_value_t = surfmap::matching::options::SEARCH_LEVEL)]
     pub search_level: usize,
     /// Most energy evaluations per level, counted at the finest level (a level 2^j
     /// times coarser may use 4^j times as many): a level stops there if its energy
@@ -144,7 +144,7 @@ pub struct Args {
     /// accuracy measure on 28 face pairs and costs time (BENCHMARKS.md). With the relief
     /// (--relief) the levels between the coarsest and the finest get 0.6 of theirs, and
     /// the coarsest level's phase with the relief a quarter of its own on top.
-    #[arg(long, value_name = "N", default_value_t = surfmap::matching::NcgSettings::default().max_evaluations)]
+    #[arg(long, value_name = "N", default_value_t = surfmap::matching::options::BUDGET)]
     pub budget: usize,
     /// Keep the vertices of image triangles that turn over or collapse in space
     /// (by default they are reported unmatched).
@@ -161,7 +161,7 @@ pub struct Args {
     /// default, half an edge, keeps partial correspondence (the part of A beyond B's crop
     /// unmatched); more matches more of A along a tight crop of B, and more vertices that
     /// have no counterpart (BENCHMARKS.md: 3 edges matches every vertex near the rim).
-    #[arg(long, value_name = "EDGES", default_value_t = surfmap::matching::options::COMPLETE_TOLERANCE.elsewhere)]
+    #[arg(long, value_name = "EDGES", default_value_t = surfmap::matching::options::RIM_TOLERANCE)]
     pub rim_tolerance: f64,
     /// Compare the surfaces in space after their smooth difference in shape: the position
     /// term's residual smoothed by a Gaussian this wide (a fraction of the parameter
@@ -196,6 +196,62 @@ pub struct Args {
     pub repair: RepairArgs,
 }
 
+/// The flags as [`MatchOptions`], checked.
+fn match_options(args: &Args) -> Result<MatchOptions, OptionError> {
+    let mut o = MatchOptions::default();
+    o.size = args.size;
+    if let Some(b) = &args.beta {
+        o.weights = Weights::from_slice(b)?;
+    }
+    if let Some(w) = args.position_weight {
+        o.position_weight = PositionWeight::Fixed(w);
+    }
+    o.align = match args.align {
+        AlignArg::Auto => Align::Auto,
+        AlignArg::Features => Align::Features,
+        AlignArg::Shape => Align::Shape,
+        AlignArg::None => Align::None,
+    };
+    o.features_start = match args.features_start {
+        FeaturesStartArg::Both => FeaturesStart::Both,
+        FeaturesStartArg::Plane => FeaturesStart::Plane,
+    };
+    o.similarity_search = match args.similarity_search {
+        SearchArg::Off => SearchWhen::Off,
+        SearchArg::Shape => SearchWhen::Shape,
+        SearchArg::Always => SearchWhen::Always,
+    };
+    o.budget = args.budget;
+    o.fill_holes = !args.no_fill_holes;
+    o.hole_features = match args.hole_features {
+        HoleArg::Auto => HoleFeatures::Auto,
+        HoleArg::On => HoleFeatures::On,
+        HoleArg::Off => HoleFeatures::Off,
+    };
+    o.split_hole_rims = !args.whole_hole_rims;
+    o.crop_overlap = args.crop_overlap == CropArg::Auto;
+    o.scale_b = match args.scale_b.as_str() {
+        "auto" => ScaleB::Auto,
+        text => ScaleB::Factor(text.parse::<f64>().unwrap_or(f64::NAN)),
+    };
+    o.keep_folds = args.keep_folds;
+    o.pin_landmarks = !args.free_landmarks;
+    o.advanced = Advanced {
+        rim_fit_rings: args.rim_fit_rings,
+        complete_rings: args.complete_rings,
+        rim_tolerance: args.rim_tolerance,
+        relief: args.relief,
+        search_level: args.search_level,
+        search_candidates: match args.search_candidates.as_deref() {
+            None => o.advanced.search_candidates,
+            Some(&[deg, scale]) => [deg, scale],
+            Some(other) => return Err(OptionError::SearchCandidates(other.to_vec())),
+        },
+    };
+    o.validate()?;
+    Ok(o)
+}
+
 fn read_features(path: &Option<PathBuf>, vertices: usize) -> anyhow::Result<Option<FeatureFile>> {
     let Some(p) = path else { return Ok(None) };
     let json = std::fs::read_to_string(p)
@@ -222,67 +278,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         given: &input_b,
         repaired: repaired(&input_b)?,
     };
-    let mut options = MatchOptions {
-        size: args.size,
-        fill_holes: !args.no_fill_holes,
-        drop_folds: !args.keep_folds,
-        complete_rings: args.complete_rings,
-        rim_fit_rings: args.rim_fit_rings,
-        pin_landmarks: !args.free_landmarks,
-        features_in_space: matches!(args.features_start, FeaturesStartArg::Both),
-        align: match args.align {
-            AlignArg::Auto => Align::Auto,
-            AlignArg::Features => Align::Features,
-            AlignArg::Shape => Align::Shape,
-            AlignArg::None => Align::None,
-        },
-        hole_features: match args.hole_features {
-            HoleArg::Auto => HoleFeatures::Auto,
-            HoleArg::On => HoleFeatures::On,
-            HoleArg::Off => HoleFeatures::Off,
-        },
-        split_hole_rims: if args.whole_hole_rims {
-            0.0
-        } else {
-            surfmap::matching::options::SPLIT_HOLE_RIMS
-        },
-        crop_overlap: args.crop_overlap == CropArg::Auto,
-        ..Default::default()
-    };
-    if let Some(b) = &args.beta {
-        options.set_betas(b, "--beta").map_err(anyhow::Error::msg)?;
-    }
-    if let Some(w) = args.position_weight {
-        options
-            .set_position_weight(w, "--position-weight")
-            .map_err(anyhow::Error::msg)?;
-    }
-    options.similarity_search.when = match args.similarity_search {
-        SearchArg::Off => SearchWhen::Off,
-        SearchArg::Shape => SearchWhen::Shape,
-        SearchArg::Always => SearchWhen::Always,
-    };
-    options.similarity_search.level = args.search_level;
-    options.ncg.set_budget(args.budget);
-    options
-        .set_rim_tolerance(args.rim_tolerance, "--rim-tolerance")
-        .map_err(anyhow::Error::msg)?;
-    options
-        .set_position_relief(args.relief, "--relief")
-        .map_err(anyhow::Error::msg)?;
-    if let Some(c) = &args.search_candidates {
-        options
-            .set_search_candidates(c, "--search-candidates")
-            .map_err(anyhow::Error::msg)?;
-    }
-    options.scale_b = match args.scale_b.as_str() {
-        "auto" => ScaleB::Auto,
-        text => match text.parse::<f64>() {
-            Ok(f) if f.is_finite() && f > 0.0 => ScaleB::Factor(f),
-            _ => bail!("--scale-b takes `auto` or a positive factor (1: B as given), got {text:?}"),
-        },
-    };
-    surfmap::grid::grid_level(args.size).context("--size")?;
+    let options = match_options(&args)
+        .map_err(|e| anyhow::anyhow!(e.worded(&format!("--{}", e.setting().replace('_', "-")))))?;
     // The guidance as the files number it.
     let guidance = Guidance {
         landmarks: match &args.landmarks {

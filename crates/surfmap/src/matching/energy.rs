@@ -60,7 +60,7 @@ pub struct Betas {
     pub reg: f64,
     pub features: f64,
     /// Weight of the position term (ours, beyond the thesis): A's 3D positions,
-    /// moved by a jointly fitted map ([`super::PositionMap`]), against B's at φ
+    /// moved by a jointly fitted map (`super::PositionMap`), against B's at φ
     /// (BENCHMARKS.md, "Matching"). In [`super::MatchOptions`] it is used as given only
     /// with [`super::PositionWeight::Fixed`] (default 1000); by default the solve sets it
     /// from the surfaces' disagreement in space. 0 turns the term off either way.
@@ -290,25 +290,6 @@ pub(crate) struct LevelEnergy {
     /// Whether the refits set `position_offset` (off until the coarsest level has
     /// placed φ; [`super::options::POSITION_RELIEF`]).
     pub relief: bool,
-    /// Cut-off width of `χ_B` in the position term (at least ε).
-    pub position_band: f64,
-    /// Scale `τ` (ℓ units) of the position term's robust penalty ([`robust`]); 0: plain
-    /// squares.
-    pub position_scale: f64,
-}
-
-/// The Geman–McClure penalty of a squared residual `s`: `ρ(s) = τ² s / (s + τ²)`, which
-/// is `s` for residuals well below `τ` and saturates at `τ²` for large ones (a region that
-/// moved, such as an opened jaw, stops pulling), with `ρ'(s) = τ⁴ / (s + τ²)²`. `τ = 0`
-/// gives plain squares.
-#[inline]
-pub(crate) fn robust(s: f64, tau: f64) -> (f64, f64) {
-    if tau <= 0.0 {
-        return (s, 1.0);
-    }
-    let t2 = tau * tau;
-    let d = s + t2;
-    (t2 * s / d, t2 * t2 / (d * d))
 }
 
 /// `χ^ε_S` from a signed distance (negative inside S) and its derivative in the distance.
@@ -503,12 +484,8 @@ impl LevelEnergy {
                 g[0] -= c * dchi[0];
                 g[1] -= c * dchi[1];
             }
-            // Position (ours), with its own (wider) cut-off band around ω_B, over which
-            // B's positions are the harmonic extension of the surface's.
+            // Position (ours): `β_pos χ^ε |T(x_A) + R − x_B∘φ|²`.
             if beta.position != 0.0 {
-                let (chi_p, dchi_p) = chi(sv[B_SD], self.position_band.max(eps));
-                let chi_p = chi_a * chi_p;
-                let dchi_p = [chi_a * dchi_p * sdx[B_SD], chi_a * dchi_p * sdy[B_SD]];
                 let mut y = self.similarity.apply(self.a.x[k]);
                 if let Some(o) = self.position_offset.get(k) {
                     y = std::array::from_fn(|c| y[c] + o[c]);
@@ -518,10 +495,9 @@ impl LevelEnergy {
                 let rdx = r[0] * sdx[B_X] + r[1] * sdx[B_X + 1] + r[2] * sdx[B_X + 2];
                 let rdy = r[0] * sdy[B_X] + r[1] * sdy[B_X + 1] + r[2] * sdy[B_X + 2];
                 let c = beta.position * w;
-                let (rho, drho) = robust(r2, self.position_scale);
-                terms.position += c * chi_p * rho;
-                g[0] += c * (dchi_p[0] * rho - 2.0 * chi_p * drho * rdx);
-                g[1] += c * (dchi_p[1] * rho - 2.0 * chi_p * drho * rdy);
+                terms.position += c * chi_v * r2;
+                g[0] += c * (dchi[0] * r2 - 2.0 * chi_v * rdx);
+                g[1] += c * (dchi[1] * r2 - 2.0 * chi_v * rdy);
             }
             if chi_v == 0.0 && dchi == [0.0, 0.0] {
                 continue;
@@ -884,8 +860,6 @@ pub(crate) mod tests {
             epsilon: eps,
             betas,
             alpha: (0.4, 0.6),
-            position_band: 0.4,
-            position_scale: 0.3,
             similarity: Similarity3 {
                 matrix: [[0.9, -0.1, 0.0], [0.1, 0.9, 0.05], [0.0, -0.05, 0.95]],
                 translation: [0.02, -0.01, 0.03],

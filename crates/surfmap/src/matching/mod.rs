@@ -55,14 +55,13 @@ use crate::mesh::{SurfacePoint, TriMesh};
 
 pub use align::{AlignmentReport, FeatureStarts};
 pub use deformation::Deformation;
-pub use energy::{Betas, EnergyTerms};
+pub use energy::EnergyTerms;
 pub use folds::{FoldCheck, check_folds};
 pub use guidance::{Guidance, Landmarks};
 pub use options::{
-    Align, COARSEST_SOBOLEV_WIDTH, FEATURES_TO_ALIGN, HoleFeatures, MatchOptions, NcgSettings,
-    POSITION_AFFINE_RIDGE, POSITION_KAPPA, POSITION_RELIEF, POSITION_RESIDUAL_CAP,
-    POSITION_RESIDUAL_FLOOR, PositionMap, PositionWeight, RELIEF_MIDDLE_BUDGET,
-    RELIEF_PHASE_FRACTION, ScaleB, SearchWhen, SimilaritySearch, UNIT_MISMATCH,
+    Advanced, Align, FEATURES_TO_ALIGN, FeaturesStart, HoleFeatures, MatchOptions, OptionError,
+    POSITION_KAPPA, POSITION_RELIEF, POSITION_RESIDUAL_CAP, POSITION_RESIDUAL_FLOOR,
+    PositionWeight, ScaleB, SearchWhen, UNIT_MISMATCH, Weights,
 };
 pub use report::feature_fit::FeatureFit;
 pub use report::{InputNumbering, MatchReport};

@@ -1,9 +1,12 @@
-//! What a user can set for a match ([`MatchOptions`]), the choices it offers ([`Align`],
-//! [`HoleFeatures`], [`ScaleB`], [`PositionWeight`]), and the checked setters the front
-//! ends use for the values a user types (`surfmap match`'s `--beta`, `--position-weight`,
-//! `--search-candidates`, `--rim-tolerance`, `--relief`; the Python `match`'s keywords):
-//! one check and one message for both; `name` is the argument as the caller spells it,
-//! and the message starts with it.
+//! What a user sets for a match ([`MatchOptions`]): the grid size, the energy's
+//! weights, the alignment, how guidance and holes are used, the crop, B's units, what
+//! the output keeps — the flags of `surfmap match` and the keywords of the Python
+//! `match`, one setting each — checked in one place ([`MatchOptions::validate`],
+//! [`OptionError`], which a front end words with its own spelling of the setting).
+//!
+//! Below them, the internal tuning (`Tuning`): the values the solve and the
+//! post-processing were measured with, each a named constant with the reason for its
+//! value; tests vary them, users do not.
 
 use serde::Serialize;
 
@@ -41,105 +44,225 @@ pub enum Align {
     None,
 }
 
-/// Options of [`super::match_meshes`].
+/// What a user sets for [`super::match_meshes`]; `MatchOptions::default()` is what
+/// `surfmap match` does without flags. Set fields on a default value
+/// (`let mut o = MatchOptions::default(); o.size = 129;`); [`MatchOptions::validate`]
+/// checks them (so does every match).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct MatchOptions {
-    /// Finest grid, `2^K + 1` nodes per side.
+    /// Finest grid, `2^K + 1` nodes per side (default 257; 65 at least).
     pub size: usize,
-    /// Coarsest level `k₀` (grid `2^k₀ + 1`). Default 6 (65²): once the surfaces are
-    /// aligned in space ([`Align::Shape`]), the coarser levels (σ ≥ 1/16 of the domain)
-    /// mostly let the blurred energy drag φ away from a good start — measured on the
-    /// ICT pairs, starting at level 3 lost 8–37 points of the fraction within 0.05 on
-    /// whole faces, while a partial pair gained 8 (BENCHMARKS.md, "Matching").
-    pub coarsest_level: usize,
-    pub betas: Betas,
-    /// `(αl, αa)` of the regularization density (2.8).
-    pub alpha: (f64, f64),
-    /// Factor of B's metric far outside ω_B (thesis §2.2.5: a "softer" material).
-    pub soft: f64,
-    pub ncg: NcgSettings,
-    pub align: Align,
-    /// Rotations tried by the alignment search.
-    pub align_rotations: usize,
-    /// A search over plane similarities of φ before the solve; the solve goes on from
-    /// the similarity found only when the coarsest level solved from it ends with a
-    /// lower energy without matching less, at a plausible size when the alignment's
-    /// start gives one (`crate::matching::solve::similarity_search`).
-    pub similarity_search: SimilaritySearch,
-    /// Fill holes (eyes, mouth) for the flattenings.
-    pub fill_holes: bool,
-    /// Cut each surface down to the part it shares with the other before matching
-    /// ([`super::prepare::overlap`]); not with [`HoleFeatures::On`], whose rims are
-    /// paired as given.
-    #[serde(skip)]
-    pub crop_overlap: bool,
-    /// Pair the rims of filled holes and match them as features.
-    pub hole_features: HoleFeatures,
-    /// Split each pair of elongated hole rims (mouth, eyes) at its two corners into two
-    /// arcs matched as separate features when the more elongated rim's principal extents
-    /// differ by at least this ratio (`crate::matching::align::holes::split_rim_pair`); 0: one closed curve
-    /// per rim.
-    pub split_hole_rims: f64,
-    /// Let the position term's similarity scale (else a rigid motion).
-    pub allow_scale: bool,
-    /// The map of ℝ³ the position term compares the surfaces after: that similarity,
-    /// or an affine map held near it ([`PositionMap`]).
-    pub position_map: PositionMap,
-    /// Cut-off width (ω units) of the position term around ω_B: B's harmonically
-    /// extended positions keep pulling A's rim into place up to this far outside.
-    pub position_band: f64,
-    /// Vertices of A mapped within this many finest-grid cells of B's surface are
-    /// snapped onto it (`crate::matching::post::fitted_correspondence`).
-    pub snap_cells: f64,
-    /// Width (finest-grid cells) of the Gaussian applied to the mean curvature before
-    /// the pyramid (0: the thesis's unfiltered finest level).
-    pub curvature_sigma: f64,
-    /// Scale τ (ℓ units) of the position term's robust penalty: residuals beyond it
-    /// stop pulling (0: plain squares).
-    pub position_scale: f64,
-    /// Width σ (ω units) of the Gaussian that smooths the position term's residual
-    /// into its target (`relief_offsets`, [`POSITION_RELIEF`]); 0: none (the
-    /// surfaces compared after the fitted map alone).
-    pub position_relief: f64,
-    /// Sobolev preconditioner width in grid cells of each level (`λ = (w·h_k)²`);
-    /// 0: plain L² gradients, as the thesis.
-    pub sobolev_cells: f64,
-    /// Width (ω units) of the wide metric the coarsest level descends in first, for
-    /// half of its iterations, before it goes on in the local one (`sobolev_cells`):
-    /// [`COARSEST_SOBOLEV_WIDTH`]; 0: the local metric throughout.
-    pub coarsest_sobolev_width: f64,
-    /// With three or more paired features or landmarks, also solve the coarsest level
-    /// from the features' alignment refined in space, and go on from whichever start
-    /// ends lower without matching less (`FeatureStarts`; with two, which align the
-    /// planes only with [`Align::Features`], from the shapes' own alignment in space);
-    /// not when the similarity search runs after the features' alignment
-    /// ([`SearchWhen::Always`]), which then takes the coarsest level.
-    pub features_in_space: bool,
-    /// Report the vertices of image triangles that turn over or collapse in space as
-    /// unmatched rather than wrong (`crate::matching::folds::check_folds`).
-    pub drop_folds: bool,
-    /// Rings of A's vertices around each hole rim that follow the rim when it is
-    /// carried exactly onto B's paired rim (`crate::matching::post::rim_fit`); 0 turns the fit off.
-    pub rim_fit_rings: usize,
-    /// Rings of unmatched vertices next to matched ones that rim completion may match
-    /// from their neighbours (`crate::matching::post::complete`); 0 turns it off.
-    pub complete_rings: usize,
-    /// Largest distance (fraction of the vertex's mean edge length) from a completed
-    /// vertex's predicted point to B ([`COMPLETE_TOLERANCE`]).
-    pub complete_tolerance: Tolerance,
-    /// Smoothing of the matched border before completion
-    /// ([`RimSmoothing`]).
-    pub rim_smoothing: RimSmoothing,
-    /// Match the landmarks exactly in the reported correspondence, carrying the
-    /// correction to the vertices around them (`crate::matching::post::pin`); φ is only guided.
-    pub pin_landmarks: bool,
-    /// How the position term's weight is set: from the surfaces' disagreement in space
-    /// (default) or `betas.position` as given.
+    /// The weights β of the energy's terms (thesis 2.16).
+    pub weights: Weights,
+    /// The weight of the 3D position term (ours, beyond the thesis).
     pub position_weight: PositionWeight,
-    /// B's size for the match: as given, or multiplied by a power of ten when the two
-    /// surfaces are evidently in different units ([`ScaleB`]).
+    /// Where φ starts.
+    pub align: Align,
+    /// With landmarks or features: whether the coarsest level is also solved from
+    /// their alignment refined in space ([`FeaturesStart`]).
+    pub features_start: FeaturesStart,
+    /// When the similarity search looks for a better start ([`SearchWhen`]).
+    pub similarity_search: SearchWhen,
+    /// Most energy evaluations per level, counted at the finest level (a level `2^j`
+    /// times coarser may use `4^j` times as many); 0: every level runs to its stopping
+    /// rule (the thesis's). Default 40 ([`BUDGET`]).
+    pub budget: usize,
+    /// Fill holes (eyes, mouth) for the flattenings (else a surface with holes is refused).
+    pub fill_holes: bool,
+    /// Pair the rims of filled holes across the surfaces and match them as features.
+    pub hole_features: HoleFeatures,
+    /// Match a pair of elongated hole rims (a mouth, an eye) as two arcs split at
+    /// their corners, upper lip to upper lip (else as one closed curve each).
+    pub split_hole_rims: bool,
+    /// Cut each surface down to the part it shares with the other first (a whole head
+    /// against a face crop: [`super::prepare::overlap`]); not with [`HoleFeatures::On`],
+    /// whose rims are paired as given.
+    pub crop_overlap: bool,
+    /// B's size for the match ([`ScaleB`]).
     pub scale_b: ScaleB,
+    /// Keep the vertices of image triangles that turn over or collapse in space (by
+    /// default they are reported unmatched: [`super::folds`]).
+    pub keep_folds: bool,
+    /// Match each landmark exactly to its vertex of B in the output, the vertices
+    /// around it following (else where φ puts it).
+    pub pin_landmarks: bool,
+    /// Settings of the solve and the post-processing that rarely need changing.
+    pub advanced: Advanced,
+    #[serde(skip)]
+    pub(crate) tuning: Tuning,
 }
+
+/// The weights β of the matching energy (thesis 2.16) a user sets: bending
+/// (curvature), regularization (the metric's distortion) and features.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Weights {
+    pub bending: f64,
+    pub regularization: f64,
+    pub features: f64,
+}
+
+impl Weights {
+    /// Three weights `[bending, regularization, features]` (`surfmap match --beta B,R,F`).
+    pub fn from_slice(b: &[f64]) -> Result<Self, OptionError> {
+        match *b {
+            [bending, regularization, features] => Ok(Self {
+                bending,
+                regularization,
+                features,
+            }),
+            _ => Err(OptionError::Weights(b.to_vec())),
+        }
+    }
+}
+
+impl Default for Weights {
+    fn default() -> Self {
+        Self {
+            bending: 1.0,
+            regularization: 0.01,
+            features: 5.0,
+        }
+    }
+}
+
+/// With landmarks or features, where the coarsest level starts.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FeaturesStart {
+    /// From the features' similarity of the planes and (with three or more, or two with
+    /// [`Align::Features`]) from their alignment refined in space: both are solved on
+    /// the coarsest level and the second kept when it ends lower without matching less
+    /// ([`super::FeatureStarts`]).
+    #[default]
+    Both,
+    /// From the features' similarity of the planes alone.
+    Plane,
+}
+
+/// Settings of the solve and the post-processing that rarely need changing.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Advanced {
+    /// Rings of A's vertices around each hole rim that follow the rim when it is
+    /// carried exactly onto B's paired rim; 0 leaves the rims where φ puts them
+    /// ([`RIM_FIT_RINGS`]).
+    pub rim_fit_rings: usize,
+    /// Rings of unmatched vertices next to matched ones that may be completed from
+    /// their matched neighbours where φ just misses B; 0 turns it off
+    /// ([`COMPLETE_RINGS`]).
+    pub complete_rings: usize,
+    /// How far past B's outer rim (in mean edges of the vertex) a completed vertex's
+    /// prediction may fall and still be matched to the rim: ½ keeps partial
+    /// correspondence, more matches more of A along a tight crop of B (and more vertices
+    /// that have no counterpart).
+    pub rim_tolerance: f64,
+    /// Width (a fraction of the parameter square) of the Gaussian that smooths the
+    /// position term's residual into its target, so that only the surfaces' detail
+    /// pulls ([`POSITION_RELIEF`]); 0: off, in [0, 1].
+    pub relief: f64,
+    /// Level `k` of the similarity search's energy (grid `2^k + 1`; 1 to the solve's
+    /// coarsest level, 6).
+    pub search_level: usize,
+    /// Extra starts of the similarity search: rotated by ±`[0]` degrees and scaled by
+    /// (1 ± `[1]`); `[0, 0]` searches from the start alone.
+    pub search_candidates: [f64; 2],
+}
+
+impl Default for Advanced {
+    fn default() -> Self {
+        Self {
+            rim_fit_rings: RIM_FIT_RINGS,
+            complete_rings: COMPLETE_RINGS,
+            rim_tolerance: RIM_TOLERANCE,
+            relief: POSITION_RELIEF,
+            search_level: SEARCH_LEVEL,
+            search_candidates: [0.0, 0.0],
+        }
+    }
+}
+
+/// The default [`MatchOptions::budget`]: 40 evaluations on the finest level (640 at
+/// 65², 160 at 129²). Measured over the referee's 18 ICT pairs and the 10 FLAME pairs,
+/// the evaluations beyond it on the two finest levels (120 before) changed no track's
+/// fraction within 0.01, 0.02 or 0.05 nor its mean error beyond the run-to-run noise,
+/// and took a quarter of the solve; at 25 the partial pairs lost 1–3 points
+/// (BENCHMARKS.md, "Matching").
+pub const BUDGET: usize = 40;
+
+/// The default level of the similarity search's energy ([`Advanced::search_level`]):
+/// 17², where a start's misfit of a few degrees still shows and a candidate costs little.
+pub const SEARCH_LEVEL: usize = 4;
+
+/// A setting of [`MatchOptions`] that cannot be used, with the value given.
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum OptionError {
+    Size(usize),
+    Weights(Vec<f64>),
+    PositionWeight(f64),
+    RimTolerance(f64),
+    Relief(f64),
+    SearchLevel(usize),
+    SearchCandidates(Vec<f64>),
+    ScaleB(f64),
+}
+
+impl OptionError {
+    /// The setting, as the Python `match` spells it (`surfmap match` with `--` and
+    /// hyphens).
+    pub fn setting(&self) -> &'static str {
+        match self {
+            OptionError::Size(_) => "size",
+            OptionError::Weights(_) => "beta",
+            OptionError::PositionWeight(_) => "position_weight",
+            OptionError::RimTolerance(_) => "rim_tolerance",
+            OptionError::Relief(_) => "relief",
+            OptionError::SearchLevel(_) => "search_level",
+            OptionError::SearchCandidates(_) => "search_candidates",
+            OptionError::ScaleB(_) => "scale_b",
+        }
+    }
+
+    /// The message with the setting spelled `name` (`--beta`, `beta`, …).
+    pub fn worded(&self, name: &str) -> String {
+        match self {
+            OptionError::Size(n) => format!(
+                "{name}: grid size {n} is not 2^k + 1 nodes per side with k ≥ 6 (65, 129, 257, 513, …)"
+            ),
+            OptionError::Weights(b) if b.len() != 3 => format!(
+                "{name} takes three weights B,R,F (bending, regularization, features; default 1,0.01,5), got {}",
+                b.len()
+            ),
+            OptionError::Weights(b) => format!("{name}: weights must be finite and ≥ 0, got {b:?}"),
+            OptionError::PositionWeight(w) => format!("{name} must be finite and ≥ 0, got {w}"),
+            OptionError::RimTolerance(e) => format!(
+                "{name} must be a finite number of edges ≥ 0 (default {}), got {e}",
+                COMPLETE_TOLERANCE.elsewhere
+            ),
+            OptionError::Relief(w) => format!(
+                "{name} must be a width in [0, 1] of the parameter square (0: off; {POSITION_RELIEF} \
+                 is what BENCHMARKS.md measured), got {w}"
+            ),
+            OptionError::SearchLevel(k) => format!(
+                "{name}: the search level must be at least 1 and at most the solve's coarsest \
+                 level, {COARSEST_LEVEL} (the similarity search's grid 2^k + 1), got {k}"
+            ),
+            OptionError::SearchCandidates(c) => {
+                format!("{name} takes DEG,SCALE: degrees ≥ 0 and a scale step in [0, 1), got {c:?}")
+            }
+            OptionError::ScaleB(f) => {
+                format!("{name} takes `auto` or a positive factor (1: B as given), got {f}")
+            }
+        }
+    }
+}
+
+impl std::fmt::Display for OptionError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.worded(self.setting()))
+    }
+}
+
+impl std::error::Error for OptionError {}
 
 /// How B's size is reconciled with A's before matching.
 ///
@@ -225,17 +348,18 @@ impl ScaleB {
 /// disagreement"): a fixed weight of 1000 was too weak for the ICT pairs and 10⁴ too
 /// strong for the FLAME identities (−6 points within 0.05), and `κ/σ²` without the cap
 /// lost 2.6 points on the FLAME partial pairs with landmarks.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum PositionWeight {
-    /// `β_pos = κ / clamp(σ, floor, cap)²` (above).
-    FromShapeResidual { kappa: f64, floor: f64, cap: f64 },
-    /// `betas.position` as given (the thesis energy alone with 0).
-    Fixed,
+    /// `β_pos = κ / clamp(σ, σ_min, σ_max)²` (above).
+    #[default]
+    Auto,
+    /// This weight (0: the term off, the thesis energy alone).
+    Fixed(f64),
 }
 
 /// Width (ω units) of the metric the coarsest level descends in first
-/// ([`MatchOptions::coarsest_sobolev_width`]): a quarter of ω, 16 cells of 65².
+/// (`Tuning::coarsest_sobolev_width`): a quarter of ω, 16 cells of 65².
 ///
 /// The Sobolev metric `⟨u, v⟩ = ∫ u·v + L² ∇u : ∇v` smooths every descent direction
 /// over a length `L`. In the local metric (4 cells of each level) the descent absorbs a
@@ -252,9 +376,9 @@ pub enum PositionWeight {
 /// partial 91.6 / 96.6 → 95.8 / 98.4 %, FLAME partial 57.3 / 82.9 → 62.0 / 87.2 %, ICT
 /// resolution 96.0 → 96.6 % within 0.02; FLAME identity within 0.05 96.3 → 95.2 % (one
 /// pair); the solve's time unchanged in the median over the 18 ICT pairs.
-pub const COARSEST_SOBOLEV_WIDTH: f64 = 0.25;
+pub(crate) const COARSEST_SOBOLEV_WIDTH: f64 = 0.25;
 
-/// `κ` of [`PositionWeight::FromShapeResidual`].
+/// `κ` of `PositionWeight::FromShapeResidual`.
 pub const POSITION_KAPPA: f64 = 0.2;
 
 /// The map `T` of ℝ³ in the position term `β_pos ∫ χ |T(x_A) − x_B∘φ|² dA`, refitted
@@ -274,8 +398,10 @@ pub const POSITION_KAPPA: f64 = 0.2;
 /// the similarity").
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 #[serde(rename_all = "snake_case")]
-pub enum PositionMap {
+pub(crate) enum PositionMap {
     /// A similarity (a rigid motion when `allow_scale` is off).
+    /// Compared with the affine map in a test (`other_proportions_…`); not used otherwise.
+    #[cfg_attr(not(test), allow(dead_code))]
     Similarity,
     /// The affine map nearest the data with `ridge · tr C / 3 · ‖M − M_sim‖²` added.
     AffineNearSimilarity { ridge: f64 },
@@ -315,85 +441,128 @@ pub const POSITION_RELIEF: f64 = 0.1;
 /// against a half and the whole budget, 1.015 against no relief), and the three-run
 /// accuracy is within 0.15 points of the longer schedule's (BENCHMARKS.md, "A cheaper
 /// schedule for the relief").
-pub const RELIEF_PHASE_FRACTION: f64 = 0.25;
+pub(crate) const RELIEF_PHASE_FRACTION: f64 = 0.25;
 
 /// The fraction of their evaluation budget that levels between the coarsest and the
 /// finest get with the relief on ([`RELIEF_PHASE_FRACTION`]).
-pub const RELIEF_MIDDLE_BUDGET: f64 = 0.6;
+pub(crate) const RELIEF_MIDDLE_BUDGET: f64 = 0.6;
 
 /// Ridge of [`PositionMap::AffineNearSimilarity`].
-pub const POSITION_AFFINE_RIDGE: f64 = 1.0;
+pub(crate) const POSITION_AFFINE_RIDGE: f64 = 1.0;
 
-/// `σ_min` (ℓ units) of [`PositionWeight::FromShapeResidual`].
+/// `σ_min` (ℓ units) of `PositionWeight::FromShapeResidual`.
 pub const POSITION_RESIDUAL_FLOOR: f64 = 0.001;
 
-/// `σ_max` (ℓ units) of [`PositionWeight::FromShapeResidual`].
+/// `σ_max` (ℓ units) of `PositionWeight::FromShapeResidual`.
 pub const POSITION_RESIDUAL_CAP: f64 = 0.01;
 
 impl PositionWeight {
-    /// `β_pos` for the surfaces' RMS distance `sigma` in space (ℓ units), given the
-    /// options' `betas.position`: that weight when fixed, when it is 0 (the term turned
-    /// off: the thesis energy) or when `sigma` is unknown (the surfaces could not be
-    /// aligned in space).
-    pub fn weight(self, given: f64, sigma: Option<f64>) -> f64 {
+    /// `β_pos` for the surfaces' RMS distance `sigma` in space (ℓ units): the fixed
+    /// weight, or `κ / clamp(σ, σ_min, σ_max)²`; [`POSITION_WEIGHT_UNALIGNED`] when the
+    /// surfaces could not be aligned in space (`sigma` unknown).
+    pub(crate) fn weight(self, sigma: Option<f64>) -> f64 {
         match (self, sigma) {
-            (PositionWeight::FromShapeResidual { kappa, floor, cap }, Some(sigma))
-                if given != 0.0 && sigma.is_finite() =>
-            {
-                // (not `clamp`, which panics on a floor above the cap: the cap wins)
-                kappa / sigma.max(floor).min(cap).powi(2)
+            (PositionWeight::Fixed(w), _) => w,
+            (PositionWeight::Auto, Some(sigma)) if sigma.is_finite() => {
+                POSITION_KAPPA
+                    / sigma
+                        .clamp(POSITION_RESIDUAL_FLOOR, POSITION_RESIDUAL_CAP)
+                        .powi(2)
             }
-            _ => given,
+            _ => POSITION_WEIGHT_UNALIGNED,
         }
     }
 }
+
+/// The position weight when the surfaces could not be aligned in space to measure how
+/// far apart they are (too few vertices): the fixed weight matches were made with before
+/// the weight was measured (BENCHMARKS.md, "Matching").
+pub(crate) const POSITION_WEIGHT_UNALIGNED: f64 = 1000.0;
 
 impl Default for MatchOptions {
     fn default() -> Self {
         Self {
             size: 257,
-            coarsest_level: 6,
-            betas: Betas {
-                bend: 1.0,
-                reg: 0.01,
-                features: 5.0,
-                position: 1000.0,
-                uncovered: 0.0,
-            },
+            weights: Weights::default(),
+            position_weight: PositionWeight::Auto,
+            align: Align::Auto,
+            features_start: FeaturesStart::Both,
+            similarity_search: SearchWhen::Shape,
+            budget: BUDGET,
+            fill_holes: true,
+            hole_features: HoleFeatures::Auto,
+            split_hole_rims: true,
+            crop_overlap: true,
+            scale_b: ScaleB::Auto,
+            keep_folds: false,
+            pin_landmarks: true,
+            advanced: Advanced::default(),
+            tuning: Tuning::default(),
+        }
+    }
+}
+
+/// The internal tuning of a match: what the solve and the post-processing were measured
+/// with (each value's constant says why). Not a user's setting; tests vary it.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Tuning {
+    /// Coarsest level `k₀` ([`COARSEST_LEVEL`]).
+    pub coarsest_level: usize,
+    /// `(αl, αa)` of the regularization density (2.8).
+    pub alpha: (f64, f64),
+    /// Factor of B's metric far outside ω_B (thesis §2.2.5: a "softer" material).
+    pub soft: f64,
+    /// One level's minimization (its `max_evaluations` is [`MatchOptions::budget`]).
+    pub ncg: NcgSettings,
+    /// Rotations tried by the alignment search.
+    pub align_rotations: usize,
+    /// The similarity search's rounds, iterations and tolerance.
+    pub search: SimilaritySearch,
+    /// Let the position term's map scale (else a rigid motion).
+    pub allow_scale: bool,
+    /// The map of ℝ³ the position term compares the surfaces after ([`PositionMap`]).
+    pub position_map: PositionMap,
+    /// Vertices of A mapped within this many finest-grid cells of B's surface are
+    /// snapped onto it ([`SNAP_CELLS`]).
+    pub snap_cells: f64,
+    /// Sobolev preconditioner width in grid cells of each level (`λ = (w·h_k)²`);
+    /// 0: plain L² gradients, as the thesis.
+    pub sobolev_cells: f64,
+    /// Width (ω units) of the wide metric the coarsest level descends in first
+    /// ([`COARSEST_SOBOLEV_WIDTH`]; 0: the local metric throughout).
+    pub coarsest_sobolev_width: f64,
+    /// Rim completion's tolerances by where on B the closest point lies (the outer
+    /// rim's is [`Advanced::rim_tolerance`]; [`COMPLETE_TOLERANCE`]).
+    pub complete_tolerance: Tolerance,
+    /// Smoothing of the matched border before completion ([`RIM_SMOOTHING`]).
+    pub rim_smoothing: RimSmoothing,
+}
+
+/// The coarsest level `k₀` of the solve (grid `2^k₀ + 1`): 6 (65²). Once the surfaces
+/// are aligned in space ([`Align::Shape`]), the coarser levels (σ ≥ 1/16 of the domain)
+/// mostly let the blurred energy drag φ away from a good start — measured on the ICT
+/// pairs, starting at level 3 lost 8–37 points of the fraction within 0.05 on whole
+/// faces, while a partial pair gained 8 (BENCHMARKS.md, "Matching").
+pub(crate) const COARSEST_LEVEL: usize = 6;
+
+impl Default for Tuning {
+    fn default() -> Self {
+        Self {
+            coarsest_level: COARSEST_LEVEL,
             alpha: (0.5, 0.5),
             soft: 0.1,
             ncg: NcgSettings::default(),
-            align: Align::Auto,
             align_rotations: 24,
-            similarity_search: SimilaritySearch::default(),
-            fill_holes: true,
-            crop_overlap: true,
-            hole_features: HoleFeatures::Auto,
-            split_hole_rims: SPLIT_HOLE_RIMS,
+            search: SimilaritySearch::default(),
             allow_scale: true,
             position_map: PositionMap::AffineNearSimilarity {
                 ridge: POSITION_AFFINE_RIDGE,
             },
+            snap_cells: SNAP_CELLS,
             sobolev_cells: 4.0,
             coarsest_sobolev_width: COARSEST_SOBOLEV_WIDTH,
-            features_in_space: true,
-            position_band: 0.0,
-            curvature_sigma: 0.0,
-            snap_cells: SNAP_CELLS,
-            position_scale: 0.0,
-            position_relief: POSITION_RELIEF,
-            drop_folds: true,
-            rim_fit_rings: RIM_FIT_RINGS,
-            complete_rings: COMPLETE_RINGS,
             complete_tolerance: COMPLETE_TOLERANCE,
             rim_smoothing: RIM_SMOOTHING,
-            pin_landmarks: true,
-            position_weight: PositionWeight::FromShapeResidual {
-                kappa: POSITION_KAPPA,
-                floor: POSITION_RESIDUAL_FLOOR,
-                cap: POSITION_RESIDUAL_CAP,
-            },
-            scale_b: ScaleB::Auto,
         }
     }
 }
@@ -414,7 +583,7 @@ pub enum HoleFeatures {
 
 /// Settings of one level's minimization.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct NcgSettings {
+pub(crate) struct NcgSettings {
     /// Stop when `(E_k − E_{k+1}) / E_k` is below this.
     pub tolerance: f64,
     /// The same on the finest level of the multiscale solve (unfiltered images): looser
@@ -459,13 +628,6 @@ impl NcgSettings {
     /// whole solve's cap ([`NcgSettings::total_evaluations`]) too, so that every level
     /// runs to its stopping rule (the thesis's). `surfmap match --budget` and the Python
     /// `match(..., budget=)`.
-    pub fn set_budget(&mut self, budget: usize) {
-        self.max_evaluations = budget;
-        if budget == 0 {
-            self.total_evaluations = 0;
-        }
-    }
-
     /// The evaluation cap of a level with `size` nodes per side when the finest level has
     /// `finest` (both `2^k + 1`): [`NcgSettings::max_evaluations`] × `((finest − 1)/(size − 1))²`,
     /// or `usize::MAX` without a cap.
@@ -514,7 +676,7 @@ pub enum SearchWhen {
 
 /// Settings of the similarity search (module docs).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct SimilaritySearch {
+pub(crate) struct SimilaritySearch {
     pub when: SearchWhen,
     /// The level `k` whose energy is searched (grid `2^k + 1`, images filtered with
     /// `σ = 2^−k`); at most the solve's coarsest level. φ there is the alignment's
@@ -574,7 +736,7 @@ pub const COMPLETE_RINGS: usize = 4;
 /// Largest distance from a predicted point to B's surface, as a fraction of the vertex's
 /// mean edge length (scaled to B), by where on B the closest point lies.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
-pub struct Tolerance {
+pub(crate) struct Tolerance {
     /// When the closest point is on the rim of one of B's holes (every boundary loop but
     /// the longest, which [`crate::mesh::repair`] fills for the flattening): the holes
     /// are matched to A's (eyes to eyes), so the vertices around A's hole have their
@@ -593,7 +755,10 @@ pub struct Tolerance {
     pub interior: f64,
 }
 
-pub const COMPLETE_TOLERANCE: Tolerance = Tolerance {
+/// The default [`Advanced::rim_tolerance`] (half an edge: `COMPLETE_TOLERANCE`).
+pub const RIM_TOLERANCE: f64 = COMPLETE_TOLERANCE.elsewhere;
+
+pub(crate) const COMPLETE_TOLERANCE: Tolerance = Tolerance {
     hole_rim: 1.5,
     elsewhere: 0.5,
     interior: 1.0,
@@ -621,7 +786,7 @@ pub const COMPLETE_TOLERANCE: Tolerance = Tolerance {
 /// fit, which keeps it; BENCHMARKS.md, "Matching"), at the price of a small bias where
 /// the offsets vary fast (a strong bend; see the tests).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
-pub struct RimSmoothing {
+pub(crate) struct RimSmoothing {
     /// Rings of matched vertices next to unmatched ones that are smoothed; 0 turns the
     /// smoothing off.
     pub rings: usize,
@@ -630,7 +795,7 @@ pub struct RimSmoothing {
 }
 
 /// Default rim smoothing: the two rings next to the unmatched region, ten sweeps.
-pub const RIM_SMOOTHING: RimSmoothing = RimSmoothing {
+pub(crate) const RIM_SMOOTHING: RimSmoothing = RimSmoothing {
     rings: 2,
     iterations: 10,
 };
@@ -642,7 +807,7 @@ pub const RIM_FIT_RINGS: usize = 8;
 
 /// Default elongation from which paired hole rims are split
 /// ([`super::MatchOptions::split_hole_rims`]).
-pub const SPLIT_HOLE_RIMS: f64 = 2.0;
+pub(crate) const SPLIT_HOLE_RIMS: f64 = 2.0;
 
 /// Points mapped within this many finest-grid cells of B's surface are snapped onto it
 /// (`crate::matching::post::fitted_correspondence`). Half a cell: a vertex of A one ring past B's crop
@@ -650,75 +815,99 @@ pub const SPLIT_HOLE_RIMS: f64 = 2.0;
 /// matched it falsely; the vertices on B's rim that φ carries farther than half a cell
 /// out are left to rim completion (`crate::matching::post::complete`), which tells the two apart by
 /// their neighbours (measured in BENCHMARKS.md, "Hole rims split at their corners").
-pub const SNAP_CELLS: f64 = 0.5;
+pub(crate) const SNAP_CELLS: f64 = 0.5;
 
 impl MatchOptions {
-    /// The energy weights β `[bending, regularization, features]` (thesis 2.16): three,
-    /// finite and ≥ 0.
-    pub fn set_betas(&mut self, b: &[f64], name: &str) -> Result<(), String> {
-        if b.len() != 3 {
-            return Err(format!(
-                "{name} takes three weights B,R,F (bending, regularization, features; default 1,0.01,5), got {}",
-                b.len()
-            ));
+    /// Checks every setting: the first that cannot be used is the error.
+    pub fn validate(&self) -> Result<(), OptionError> {
+        let k = crate::grid::grid_level(self.size).map_err(|_| OptionError::Size(self.size))?;
+        if (k as usize) < self.tuning.coarsest_level {
+            return Err(OptionError::Size(self.size));
         }
+        let w = self.weights;
+        let b = [w.bending, w.regularization, w.features];
         if b.iter().any(|x| !x.is_finite() || *x < 0.0) {
-            return Err(format!("{name}: weights must be finite and ≥ 0, got {b:?}"));
+            return Err(OptionError::Weights(b.to_vec()));
         }
-        (self.betas.bend, self.betas.reg, self.betas.features) = (b[0], b[1], b[2]);
+        if let PositionWeight::Fixed(w) = self.position_weight
+            && !(w.is_finite() && w >= 0.0)
+        {
+            return Err(OptionError::PositionWeight(w));
+        }
+        if let ScaleB::Factor(f) = self.scale_b
+            && !(f.is_finite() && f > 0.0)
+        {
+            return Err(OptionError::ScaleB(f));
+        }
+        let a = &self.advanced;
+        if !(a.rim_tolerance.is_finite() && a.rim_tolerance >= 0.0) {
+            return Err(OptionError::RimTolerance(a.rim_tolerance));
+        }
+        if !(a.relief.is_finite() && (0.0..=1.0).contains(&a.relief)) {
+            return Err(OptionError::Relief(a.relief));
+        }
+        if self.similarity_search != SearchWhen::Off
+            && !(1..=COARSEST_LEVEL).contains(&a.search_level)
+        {
+            return Err(OptionError::SearchLevel(a.search_level));
+        }
+        let [deg, scale] = a.search_candidates;
+        if !(deg.is_finite() && deg >= 0.0 && scale.is_finite() && (0.0..1.0).contains(&scale)) {
+            return Err(OptionError::SearchCandidates(a.search_candidates.to_vec()));
+        }
         Ok(())
     }
 
-    /// A fixed weight of the position term ([`PositionWeight::Fixed`]; 0: the thesis
-    /// energy alone), finite and ≥ 0.
-    pub fn set_position_weight(&mut self, w: f64, name: &str) -> Result<(), String> {
-        if !w.is_finite() || w < 0.0 {
-            return Err(format!("{name} must be finite and ≥ 0, got {w}"));
+    /// The energy's weights, the position term's to be set by the alignment
+    /// ([`PositionWeight`]).
+    pub(crate) fn betas(&self) -> Betas {
+        Betas {
+            bend: self.weights.bending,
+            reg: self.weights.regularization,
+            features: self.weights.features,
+            position: 0.0,
+            uncovered: 0.0,
         }
-        self.betas.position = w;
-        self.position_weight = PositionWeight::Fixed;
-        Ok(())
     }
 
-    /// The outer-rim tolerance of rim completion
-    /// ([`Tolerance::elsewhere`], in mean edges of the vertex): finite
-    /// and ≥ 0 (0 matches no vertex whose prediction misses B's outer rim).
-    pub fn set_rim_tolerance(&mut self, edges: f64, name: &str) -> Result<(), String> {
-        if !edges.is_finite() || edges < 0.0 {
-            return Err(format!(
-                "{name} must be a finite number of edges ≥ 0 (default {}), got {edges}",
-                COMPLETE_TOLERANCE.elsewhere
-            ));
+    /// One level's minimization, with the budget: [`MatchOptions::budget`] per level,
+    /// and (unless it is 0, which lifts both caps) the whole solve's cap.
+    pub(crate) fn ncg(&self) -> NcgSettings {
+        let mut ncg = self.tuning.ncg;
+        ncg.max_evaluations = self.budget;
+        if self.budget == 0 {
+            ncg.total_evaluations = 0;
         }
-        self.complete_tolerance.elsewhere = edges;
-        Ok(())
+        ncg
     }
 
-    /// The position term's relief width σ (ω units, [`POSITION_RELIEF`]):
-    /// finite, in `[0, 1]`; 0 turns it off.
-    pub fn set_position_relief(&mut self, width: f64, name: &str) -> Result<(), String> {
-        if !width.is_finite() || !(0.0..=1.0).contains(&width) {
-            return Err(format!(
-                "{name} must be a width in [0, 1] of the parameter square (0: off; {} is \
-                 what BENCHMARKS.md measured), got {width}",
-                POSITION_RELIEF
-            ));
+    /// The similarity search's settings.
+    pub(crate) fn search(&self) -> SimilaritySearch {
+        let [deg, scale] = self.advanced.search_candidates;
+        SimilaritySearch {
+            when: self.similarity_search,
+            level: self.advanced.search_level,
+            candidate_angle: deg.to_radians(),
+            candidate_log_scale: (1.0 + scale).ln(),
+            ..self.tuning.search
         }
-        self.position_relief = width;
-        Ok(())
     }
 
-    /// The similarity search's extra starts `[DEG, SCALE]`: rotated by ±DEG degrees and
-    /// scaled by (1 ± SCALE); degrees ≥ 0, the scale step in [0, 1).
-    pub fn set_search_candidates(&mut self, c: &[f64], name: &str) -> Result<(), String> {
-        if c.len() != 2 || c.iter().any(|x| !x.is_finite() || *x < 0.0) || c[1] >= 1.0 {
-            return Err(format!(
-                "{name} takes DEG,SCALE: degrees ≥ 0 and a scale step in [0, 1), got {c:?}"
-            ));
+    /// Rim completion's tolerances.
+    pub(crate) fn complete_tolerance(&self) -> Tolerance {
+        Tolerance {
+            elsewhere: self.advanced.rim_tolerance,
+            ..self.tuning.complete_tolerance
         }
-        self.similarity_search.candidate_angle = c[0].to_radians();
-        self.similarity_search.candidate_log_scale = (1.0 + c[1]).ln();
-        Ok(())
+    }
+
+    /// The elongation from which paired hole rims are split (0: never).
+    pub(crate) fn split_ratio(&self) -> f64 {
+        if self.split_hole_rims {
+            SPLIT_HOLE_RIMS
+        } else {
+            0.0
+        }
     }
 }
 
@@ -726,68 +915,87 @@ impl MatchOptions {
 mod tests {
     use super::*;
 
+    /// Each setting out of range is refused by name, with the value given, worded with
+    /// the front end's spelling; the defaults pass.
     #[test]
-    fn a_refused_value_leaves_the_options_as_they_were_and_names_the_argument() {
+    fn every_setting_out_of_range_is_named() {
+        assert_eq!(MatchOptions::default().validate(), Ok(()));
+        let refused = |set: &dyn Fn(&mut MatchOptions)| {
+            let mut o = MatchOptions::default();
+            set(&mut o);
+            o.validate().unwrap_err()
+        };
+        let cases: Vec<(OptionError, &str)> = vec![
+            (refused(&|o| o.size = 100), "size"),
+            (refused(&|o| o.size = 33), "size"),
+            (refused(&|o| o.weights.features = -1.0), "beta"),
+            (refused(&|o| o.weights.bending = f64::NAN), "beta"),
+            (
+                refused(&|o| o.position_weight = PositionWeight::Fixed(f64::INFINITY)),
+                "position_weight",
+            ),
+            (refused(&|o| o.scale_b = ScaleB::Factor(0.0)), "scale_b"),
+            (
+                refused(&|o| o.advanced.rim_tolerance = -0.1),
+                "rim_tolerance",
+            ),
+            (refused(&|o| o.advanced.relief = 1.5), "relief"),
+            (refused(&|o| o.advanced.search_level = 0), "search_level"),
+            (refused(&|o| o.advanced.search_level = 7), "search_level"),
+            (
+                refused(&|o| o.advanced.search_candidates = [5.0, 1.0]),
+                "search_candidates",
+            ),
+            (
+                refused(&|o| o.advanced.search_candidates = [-5.0, 0.1]),
+                "search_candidates",
+            ),
+        ];
+        for (e, setting) in cases {
+            assert_eq!(e.setting(), setting, "{e}");
+            assert!(e.to_string().starts_with(setting), "{e}");
+            let flag = format!("--{}", setting.replace('_', "-"));
+            assert!(e.worded(&flag).starts_with(&flag), "{e}");
+        }
+        assert!(
+            Weights::from_slice(&[1.0, 2.0])
+                .unwrap_err()
+                .to_string()
+                .starts_with("beta takes three weights")
+        );
+        // No search: its level is not used, so not checked.
         let mut o = MatchOptions::default();
-        let before = (
-            o.betas.bend,
-            o.betas.reg,
-            o.betas.features,
-            o.betas.position,
-        );
-        for bad in [&[1.0, 2.0][..], &[1.0, -1.0, 5.0], &[1.0, f64::NAN, 5.0]] {
-            let e = o.set_betas(bad, "--beta").unwrap_err();
-            assert!(e.starts_with("--beta"), "{e}");
-        }
-        for bad in [-1.0, f64::INFINITY] {
-            assert!(
-                o.set_position_weight(bad, "w")
-                    .unwrap_err()
-                    .starts_with("w ")
-            );
-        }
-        for bad in [&[5.0][..], &[5.0, 1.0], &[-5.0, 0.1]] {
-            assert!(o.set_search_candidates(bad, "c").is_err());
-        }
-        for bad in [-0.1, f64::NAN] {
-            assert!(o.set_rim_tolerance(bad, "r").unwrap_err().starts_with("r "));
-        }
-        assert_eq!(
-            o.complete_tolerance,
-            MatchOptions::default().complete_tolerance
-        );
-        let after = (
-            o.betas.bend,
-            o.betas.reg,
-            o.betas.features,
-            o.betas.position,
-        );
-        assert_eq!(format!("{before:?}"), format!("{after:?}"));
-        assert_eq!(o.position_weight, MatchOptions::default().position_weight);
+        (o.similarity_search, o.advanced.search_level) = (SearchWhen::Off, 0);
+        assert_eq!(o.validate(), Ok(()));
     }
 
+    /// The settings reach the solver in its units: the candidates in radians and log
+    /// scale, the outer-rim tolerance into completion's, a budget of 0 lifting the whole
+    /// solve's cap too.
     #[test]
-    fn accepted_values_are_set_in_the_solver_s_units() {
+    fn the_settings_reach_the_solver_in_its_units() {
         let mut o = MatchOptions::default();
-        o.set_betas(&[2.0, 0.02, 3.0], "beta").unwrap();
-        assert_eq!(
-            (o.betas.bend, o.betas.reg, o.betas.features),
-            (2.0, 0.02, 3.0)
-        );
-        o.set_position_weight(0.0, "w").unwrap();
-        assert_eq!(
-            (o.betas.position, o.position_weight),
-            (0.0, PositionWeight::Fixed)
-        );
-        o.set_search_candidates(&[90.0, 0.1], "c").unwrap();
-        let s = &o.similarity_search;
+        o.advanced.search_candidates = [90.0, 0.1];
+        let s = o.search();
         assert!((s.candidate_angle - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
         assert!((s.candidate_log_scale.exp() - 1.1).abs() < 1e-15);
-        o.set_rim_tolerance(3.0, "r").unwrap();
-        assert_eq!(o.complete_tolerance.elsewhere, 3.0);
+        o.advanced.rim_tolerance = 3.0;
+        let t = o.complete_tolerance();
         assert_eq!(
-            o.complete_tolerance.interior,
-            MatchOptions::default().complete_tolerance.interior
+            (t.elsewhere, t.interior),
+            (3.0, COMPLETE_TOLERANCE.interior)
         );
+        assert_eq!(o.ncg().max_evaluations, BUDGET);
+        assert!(o.ncg().total_evaluations > 0);
+        o.budget = 0;
+        assert_eq!((o.ncg().max_evaluations, o.ncg().total_evaluations), (0, 0));
+        assert_eq!(PositionWeight::Fixed(7.0).weight(Some(0.005)), 7.0);
+        let auto = PositionWeight::Auto.weight(Some(0.005));
+        assert!((auto - POSITION_KAPPA / 0.005f64.powi(2)).abs() < 1e-9 * auto);
+        assert_eq!(
+            PositionWeight::Auto.weight(Some(1.0)),
+            POSITION_KAPPA / POSITION_RESIDUAL_CAP.powi(2)
+        );
+        assert_eq!(PositionWeight::Auto.weight(None), POSITION_WEIGHT_UNALIGNED);
     }
 }

@@ -3,6 +3,7 @@
 //! misaligned start, and a crop found inside the whole. Every result must have
 //! min det Dφ > 0.
 
+use super::options::{COARSEST_SOBOLEV_WIDTH, NcgSettings, POSITION_AFFINE_RIDGE, PositionMap};
 use super::rigid::axis_angle_rotation as rotation;
 use super::*;
 use crate::mesh::generate::bumpy_disc;
@@ -311,15 +312,9 @@ fn other_proportions_match_closer_with_the_affine_position_map() {
         },
     ] {
         // The position weight these surfaces were measured with (below).
-        let o = MatchOptions {
-            position_map: map,
-            position_weight: PositionWeight::Fixed,
-            betas: Betas {
-                position: 1000.0,
-                ..options().betas
-            },
-            ..options()
-        };
+        let mut o = options();
+        o.tuning.position_map = map;
+        o.position_weight = PositionWeight::Fixed(1000.0);
         let (m, corr) = run(&a, &b, &Guidance::default(), &o);
         // Same connectivity: vertex i of B is the image of vertex i of A.
         let (e, matched) = errors(&a, &b, &corr, |v| Some(b.positions[v]));
@@ -358,19 +353,17 @@ fn other_proportions_match_closer_with_the_affine_position_map() {
 /// term: no alignment (φ starts as the identity of the planes), no bending, no positions,
 /// no hole features; from level 3.
 fn features_alone(features: f64) -> MatchOptions {
-    MatchOptions {
-        align: Align::None,
-        coarsest_level: 3,
-        hole_features: HoleFeatures::Off,
-        betas: Betas {
-            bend: 0.0,
-            reg: 0.01,
-            features,
-            position: 0.0,
-            uncovered: 0.0,
-        },
-        ..options()
-    }
+    let mut o = options();
+    o.align = Align::None;
+    o.tuning.coarsest_level = 3;
+    o.hole_features = HoleFeatures::Off;
+    o.weights = Weights {
+        bending: 0.0,
+        regularization: 0.01,
+        features,
+    };
+    o.position_weight = PositionWeight::Fixed(0.0);
+    o
 }
 
 #[test]
@@ -586,9 +579,9 @@ fn the_coarsest_level_never_converges_within_its_window() {
     let (a, b) = turned_pair();
     let mut o = options();
     // A loose tolerance, so that the per-step rule would stop the coarsest level early.
-    o.ncg.tolerance = 1e-3;
-    let window = o.ncg.coarsest_window;
-    assert!(window > 1 && o.ncg.window == 1);
+    o.tuning.ncg.tolerance = 1e-3;
+    let window = o.tuning.ncg.coarsest_window;
+    assert!(window > 1 && o.tuning.ncg.window == 1);
     let (windowed, _) = run(&a, &b, &Guidance::default(), &o);
     let coarse = &windowed.solved.levels[0];
     assert!(
@@ -597,7 +590,7 @@ fn the_coarsest_level_never_converges_within_its_window() {
         coarse.iterations
     );
     // The per-step rule stops that level sooner on the same start.
-    o.ncg.coarsest_window = 1;
+    o.tuning.ncg.coarsest_window = 1;
     let (plain, _) = run(&a, &b, &Guidance::default(), &o);
     assert!(
         plain.solved.levels[0].iterations < coarse.iterations,
@@ -611,7 +604,7 @@ fn the_coarsest_level_never_converges_within_its_window() {
 fn the_total_budget_bounds_the_whole_solve() {
     let (a, b) = turned_pair();
     let mut o = options();
-    o.ncg.total_evaluations = 0;
+    o.tuning.ncg.total_evaluations = 0;
     let (free, _) = run(&a, &b, &Guidance::default(), &o);
     // Cost of a level's evaluation in finest-level (129²) evaluations.
     let cost = |size: usize| ((size - 1) as f64 / 128.0).powi(2);
@@ -623,7 +616,7 @@ fn the_total_budget_bounds_the_whole_solve() {
             .sum()
     };
     let total = 0.5 * spent(&free);
-    o.ncg.total_evaluations = total as usize;
+    o.tuning.ncg.total_evaluations = total as usize;
     let (capped, _) = run(&a, &b, &Guidance::default(), &o);
     // Each level may overrun what is left by its last line search and a refit (42).
     let slack: f64 = capped
@@ -651,13 +644,13 @@ fn the_total_budget_bounds_the_whole_solve() {
 fn a_spent_budget_stops_every_level_fold_free() {
     let (a, b) = turned_pair();
     let mut o = options();
-    o.ncg.max_evaluations = 3;
+    o.budget = 3;
     // Only the per-level caps.
-    o.ncg.total_evaluations = 0;
+    o.tuning.ncg.total_evaluations = 0;
     let (m, _) = run(&a, &b, &Guidance::default(), &o);
     assert_eq!(m.solved.levels.len(), 2);
     for l in &m.solved.levels {
-        let cap = o.ncg.level_evaluations(l.size, 129);
+        let cap = o.ncg().level_evaluations(l.size, 129);
         // No iteration starts past the cap; the last one's line search (at most 40
         // trials) and a refit's evaluation may overrun it. (With the relief, the default,
         // the coarsest level's relief phase has a quarter of the cap of its own on top:
@@ -673,7 +666,7 @@ fn a_spent_budget_stops_every_level_fold_free() {
     }
     assert!(m.solved.levels.iter().any(|l| l.stop == StopReason::Budget));
     // Without a cap the same start runs further.
-    o.ncg.max_evaluations = 0;
+    o.budget = 0;
     let free = match_meshes(&a, &b, &Guidance::default(), &o).unwrap();
     assert!(free.solved.levels[1].evaluations > m.solved.levels[1].evaluations);
 }
@@ -766,10 +759,7 @@ fn the_position_weight_falls_as_the_shapes_disagree() {
     );
     for given in [321.0, 0.0] {
         let mut o = options();
-        o.betas.position = given;
-        if given != 0.0 {
-            o.position_weight = PositionWeight::Fixed;
-        }
+        o.position_weight = PositionWeight::Fixed(given);
         let m = match_meshes(&a, &fine, &Guidance::default(), &o).unwrap();
         assert_eq!(
             (m.report.position_weight, m.report.shape_residual),
@@ -799,12 +789,11 @@ fn the_wide_metric_grows_a_shrunken_start_into_place() {
         (COARSEST_SOBOLEV_WIDTH, POSITION_RELIEF),
     ] {
         let mut o = options();
-        o.similarity_search.when = SearchWhen::Off;
-        o.coarsest_sobolev_width = wide;
-        o.position_relief = relief;
+        o.similarity_search = SearchWhen::Off;
+        o.tuning.coarsest_sobolev_width = wide;
+        o.advanced.relief = relief;
         // The position weight this was measured with (below).
-        o.position_weight = PositionWeight::Fixed;
-        o.betas.position = 1000.0;
+        o.position_weight = PositionWeight::Fixed(1000.0);
         let (_, corr) = run(&a, &b, &Guidance::default(), &o);
         let (e, matched) = errors(&a, &b, &corr, truth);
         // Median error in B's grid cells.
@@ -855,7 +844,11 @@ fn landmarks_that_moved_with_the_surface_start_from_space() {
     let mut found = vec![];
     for in_space in [true, false] {
         let mut o = options();
-        o.features_in_space = in_space;
+        o.features_start = if in_space {
+            FeaturesStart::Both
+        } else {
+            FeaturesStart::Plane
+        };
         // Four landmarks are fewer than `auto` aligns by ([`FEATURES_TO_ALIGN`]).
         o.align = Align::Features;
         let (m, corr) = run(&a, &b, &guidance, &o);

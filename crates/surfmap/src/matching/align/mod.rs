@@ -16,7 +16,7 @@ use serde::Serialize;
 use super::MatchError;
 use super::energy::{Betas, epsilon};
 use super::options::{
-    Align, FEATURES_TO_ALIGN, HoleFeatures, MatchOptions, PositionWeight, SearchWhen,
+    Align, FEATURES_TO_ALIGN, FeaturesStart, HoleFeatures, MatchOptions, PositionWeight, SearchWhen,
 };
 use super::prepare::Prepared;
 use super::prepare::surface::MatchSurface;
@@ -56,18 +56,6 @@ pub(crate) struct Start {
 pub(crate) fn align(p: &mut Prepared<'_>, options: &MatchOptions) -> Result<Start, MatchError> {
     let (fa, fb) = (p.features_a.as_ref(), p.features_b.as_ref());
     let (sa, sb) = (&mut p.a, &mut p.b);
-    let top = sa.num_levels() - 1;
-    if options.coarsest_level > top {
-        return Err(MatchError::Option(format!(
-            "coarsest level {} is finer than the finest grid (level {top})",
-            options.coarsest_level
-        )));
-    }
-    if options.similarity_search.when != SearchWhen::Off && options.similarity_search.level == 0 {
-        return Err(MatchError::Option(
-            "search level must be at least 1 (the similarity search's grid 2^k + 1), got 0".into(),
-        ));
-    }
     if options.hole_features == HoleFeatures::On {
         let (ha, hb) = (sa.hole_rims().len(), sb.hole_rims().len());
         if ha != hb || ha == 0 {
@@ -109,9 +97,9 @@ pub(crate) fn align(p: &mut Prepared<'_>, options: &MatchOptions) -> Result<Star
     // With two features (no rigid motion in space from their centroids) that second start
     // is the shapes' own alignment.
     let in_space = match features_motion(sa, sb, fa, fb) {
-        _ if !(use_features && options.features_in_space) => None,
+        _ if !(use_features && options.features_start == FeaturesStart::Both) => None,
         Some(start) => shape_alignment(sa, sb, scale, 1, Some(start)).ok(),
-        None => shape_alignment(sa, sb, scale, options.align_rotations.max(1), None).ok(),
+        None => shape_alignment(sa, sb, scale, options.tuning.align_rotations.max(1), None).ok(),
     };
     let (s, similarity, mut alignment, residual) = if use_features {
         let pa = feature_centroids(sa, fa.unwrap());
@@ -167,7 +155,7 @@ pub(crate) fn align(p: &mut Prepared<'_>, options: &MatchOptions) -> Result<Star
         (s, Similarity3::identity(), report, None)
     } else {
         let (s, motion, mut report, residual) =
-            shape_alignment(sa, sb, scale, options.align_rotations.max(1), None)?;
+            shape_alignment(sa, sb, scale, options.tuning.align_rotations.max(1), None)?;
         if too_few_to_align && options.align == Align::Auto {
             report.method = format!(
                 "{} ({features_given} of the {FEATURES_TO_ALIGN} features or landmarks it \
@@ -180,23 +168,20 @@ pub(crate) fn align(p: &mut Prepared<'_>, options: &MatchOptions) -> Result<Star
     // The position term's weight from the surfaces' disagreement in space
     // ([`PositionWeight`]); the shape alignment measured it already.
     let shape_residual = match (options.position_weight, residual) {
-        (PositionWeight::Fixed, _) => None,
-        _ if options.betas.position == 0.0 => None,
+        (PositionWeight::Fixed(_), _) => None,
         (_, Some(r)) => Some(r),
         _ => shape_residual(sa, sb, fa, fb),
     };
     let betas = Betas {
-        position: options
-            .position_weight
-            .weight(options.betas.position, shape_residual),
-        ..options.betas
+        position: options.position_weight.weight(shape_residual),
+        ..options.betas()
     };
     if options.hole_features != HoleFeatures::Off {
         (alignment.hole_pairs, alignment.split_holes) =
-            add_hole_features(sa, sb, &s, options.hole_features, options.split_hole_rims)?;
+            add_hole_features(sa, sb, &s, options.hole_features, options.split_ratio())?;
     }
 
-    let search = match options.similarity_search.when {
+    let search = match options.similarity_search {
         SearchWhen::Off => false,
         SearchWhen::Shape => !use_features && options.align != Align::None,
         SearchWhen::Always => true,
@@ -231,7 +216,7 @@ pub struct AlignmentReport {
     /// from it.
     pub search: Option<SimilaritySearchLog>,
     /// With features: the second start from their alignment refined in space, and
-    /// which start the solve went on from ([`MatchOptions::features_in_space`]).
+    /// which start the solve went on from (`MatchOptions::features_in_space`).
     pub features_in_space: Option<FeatureStarts>,
 }
 

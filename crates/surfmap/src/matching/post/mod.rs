@@ -69,7 +69,7 @@ pub(crate) fn post(
     // point of B goes back to the face of B as given it lies on.
     let mut given = numbered_as_given(&matched, &r.copies_a, r.origins_b.as_ref());
     let mut dropped_as_given = 0;
-    if p.crops.is_some() && options.drop_folds {
+    if p.crops.is_some() && !options.keep_folds {
         // The collapse test scales each image's area by the surfaces' area ratio, which
         // the cut changes: the fold check once more on the meshes as given (the test an
         // independent referee applies to the files).
@@ -141,9 +141,9 @@ pub(crate) fn fitted_correspondence(
     solved: &Solved,
     options: &MatchOptions,
 ) -> Result<(Vec<Option<SurfacePoint>>, RimFit), MatchError> {
-    let map = PointMap::new(a, b, solved, options.snap_cells)?;
+    let map = PointMap::new(a, b, solved, options.tuning.snap_cells)?;
     let mut images: Vec<[f64; 2]> = a.uvs.par_iter().map(|&uv| map.image(uv)).collect();
-    let fit = rim_fit::fit_hole_rims(a, b, &mut images, options.rim_fit_rings);
+    let fit = rim_fit::fit_hole_rims(a, b, &mut images, options.advanced.rim_fit_rings);
     Ok((images.par_iter().map(|&y| map.locate(y)).collect(), fit))
 }
 
@@ -172,7 +172,7 @@ pub(crate) struct CheckedCorrespondence {
 /// triangles unmatched ([`drop_folds`]); the landmarks pinned
 /// ([`crate::matching::post::pin`], [`MatchOptions::pin_landmarks`]) and folds so made dropped
 /// again (never a landmark); then, unless
-/// [`MatchOptions::complete_rings`] is 0, unmatched vertices next to matched ones
+/// [`Advanced::complete_rings`](super::Advanced::complete_rings) is 0, unmatched vertices next to matched ones
 /// completed from their neighbours ([`complete_correspondence`]) and the fold check
 /// run again on the result.
 fn checked_correspondence(
@@ -180,7 +180,7 @@ fn checked_correspondence(
     solved: &Solved,
     options: &MatchOptions,
 ) -> Result<CheckedCorrespondence, MatchError> {
-    let (mesh_a, mesh_b, drop) = (&p.mesh_a, &p.mesh_b, options.drop_folds);
+    let (mesh_a, mesh_b, drop) = (&p.mesh_a, &p.mesh_b, !options.keep_folds);
     let pinned_landmarks = if options.pin_landmarks {
         p.landmark_pairs()
     } else {
@@ -212,9 +212,9 @@ fn checked_correspondence(
         mesh_a,
         mesh_b,
         &mut points,
-        options.complete_rings,
-        options.complete_tolerance,
-        options.rim_smoothing,
+        options.advanced.complete_rings,
+        options.complete_tolerance(),
+        options.tuning.rim_smoothing,
         &pinned,
     );
     if drop && completion.completed > 0 {

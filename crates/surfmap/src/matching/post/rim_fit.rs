@@ -411,7 +411,7 @@ mod tests {
         let disc = bumpy_disc(20, 0.3);
         let (mesh, _) = crop(&disc, |p| (p[0] - 0.15).hypot(p[1] - 0.05) > 0.3);
         let unit = mesh.area().sqrt();
-        let surface = MatchSurface::new(&mesh, None, 65, true, unit, 0.0).unwrap();
+        let surface = MatchSurface::new(&mesh, None, 65, true, unit).unwrap();
         let rim = &surface.hole_rims()[0];
         let centre = rim
             .iter()

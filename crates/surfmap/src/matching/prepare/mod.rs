@@ -162,7 +162,6 @@ pub(crate) fn prepare<'m>(
             options.size,
             options.fill_holes,
             unit,
-            options.curvature_sigma,
         )
     };
     let (sa, sb) = rayon::join(

@@ -5,7 +5,6 @@
 
 use super::super::MatchError;
 use super::super::energy::{B_CHANNELS, FeatureSet, LevelA, LevelB, TriangleA, chi, eta, theta};
-use crate::grid::pyramid::gaussian_filter;
 use crate::grid::{Grid, Pyramid, harmonic_extension};
 use crate::mesh::TriMesh;
 use crate::param::flatten::{Cut, FlattenOptions, flatten};
@@ -60,7 +59,6 @@ impl MatchSurface {
         size: usize,
         fill_holes: bool,
         length_unit: f64,
-        curvature_sigma: f64,
     ) -> Result<Self, MatchError> {
         let clock = std::time::Instant::now();
         // Geometry images need one UV per vertex over a disc: never cut.
@@ -85,14 +83,7 @@ impl MatchSurface {
         let unit = length_unit;
         let mut position = images.position.map(|p| p.map(|c| c / unit));
         harmonic_extension(&inside, &mut [&mut position])?;
-        // Mean curvature of a scan is noisy at the finest scale (the cotangent formula on
-        // an irregular triangulation); it is filtered with `curvature_sigma` cells.
-        let h_smooth = if curvature_sigma > 0.0 {
-            gaussian_filter(&images.mean_curvature_extended, curvature_sigma)
-        } else {
-            images.mean_curvature_extended.clone()
-        };
-        let h = h_smooth.as_slice();
+        let h = images.mean_curvature_extended.as_slice();
         let g = images.metric_extended.as_slice();
         let x = position.as_slice();
         let (hs, gs) = (unit, 1.0 / (unit * unit));

@@ -96,7 +96,7 @@ pub struct MatchReport {
     /// of the solve and after it (`super::feature_fit`); empty without features.
     pub feature_fit: Vec<super::FeatureFit>,
     /// The position term's map of ℝ³ at the end (a similarity, or an affine map near
-    /// one: [`super::PositionMap`]), A's length units to B's (both in the shared unit ℓ).
+    /// one: `super::PositionMap`), A's length units to B's (both in the shared unit ℓ).
     pub similarity: super::Similarity3,
     /// The position term's weight `β_pos` used, and the surfaces' RMS distance in space
     /// along B's normals (ℓ units) it was set from ([`super::PositionWeight`]; `null`

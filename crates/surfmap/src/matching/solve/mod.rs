@@ -9,7 +9,7 @@
 //! within the same cost ([`NcgSettings::max_evaluations`]: 40 evaluations at 257², 160
 //! at 129², …). Descent directions are taken in a Sobolev metric 4 cells of each level
 //! wide ([`precondition`]); the coarsest level takes the first half of its iterations
-//! in one a quarter of ω wide, which moves φ as a whole ([`COARSEST_SOBOLEV_WIDTH`](super::COARSEST_SOBOLEV_WIDTH)).
+//! in one a quarter of ω wide, which moves φ as a whole ([`COARSEST_SOBOLEV_WIDTH`](super::options::COARSEST_SOBOLEV_WIDTH)).
 //! From the alignment's start a search over similarities of φ on a coarse level may
 //! propose another start, which the coarsest level's solve then accepts or rejects
 //! ([`similarity_search`]); with features, the coarsest level is solved from their
@@ -23,7 +23,7 @@ use rayon::prelude::*;
 
 use super::align::{AlignmentReport, Start};
 use super::deformation::{Deformation, node};
-use super::energy::{B_SD, B_X, Betas, LevelEnergy, Workspace, chi, epsilon, robust};
+use super::energy::{B_SD, B_X, Betas, LevelEnergy, Workspace, chi, epsilon};
 use super::options::{
     MatchOptions, NcgSettings, PositionMap, RELIEF_MIDDLE_BUDGET, RELIEF_PHASE_FRACTION,
 };
@@ -79,7 +79,7 @@ pub(crate) fn solve(
         report: mut alignment,
     } = start;
     let top = a.num_levels() - 1;
-    let k0 = options.coarsest_level;
+    let k0 = options.tuning.coarsest_level;
     let features: Vec<usize> = (0..a.feature_curves.len()).collect();
     let solver = Solver {
         a,
@@ -147,15 +147,15 @@ impl Solver<'_> {
         let eps = epsilon(k);
         LevelEnergy {
             a: self.a.level_a(k, eps, self.features),
-            b: self.b.level_b(k, eps, self.options.soft, self.features),
+            b: self
+                .b
+                .level_b(k, eps, self.options.tuning.soft, self.features),
             epsilon: eps,
             betas: self.betas,
-            alpha: self.options.alpha,
+            alpha: self.options.tuning.alpha,
             similarity,
             position_offset: vec![],
             relief: false,
-            position_band: self.options.position_band,
-            position_scale: self.options.position_scale,
         }
     }
 
@@ -165,14 +165,14 @@ impl Solver<'_> {
             && let Some(s) = fit_position_map(e, phi, self.options)
         {
             e.similarity = s;
-            if self.options.position_relief > 0.0 && e.relief {
-                e.position_offset = relief_offsets(e, phi, self.options.position_relief);
+            if self.options.advanced.relief > 0.0 && e.relief {
+                e.position_offset = relief_offsets(e, phi, self.options.advanced.relief);
             }
         }
     }
 
     /// The coarsest level `k0` with the similarity search ([`crate::matching::solve::similarity_search`]):
-    /// the search runs on level [`SimilaritySearch::level`](super::SimilaritySearch::level) from the alignment's
+    /// the search runs on level [`Advanced::search_level`](super::Advanced::search_level) from the alignment's
     /// similarity `s`; when it finds a lower energy per matched area, level `k0` is
     /// solved from both starts, and the searched one is kept (in `phi` and
     /// `similarity`) only when its solve ends with a lower energy *and* at least the
@@ -186,7 +186,7 @@ impl Solver<'_> {
         phi: &mut Deformation,
         similarity: &mut Similarity3,
     ) -> (LevelLog, Option<SimilaritySearchLog>) {
-        let settings = &self.options.similarity_search;
+        let settings = &self.options.search();
         let ks = settings.level.min(k0);
         let mut searched_similarity = *similarity;
         let mut energy = self.energy(ks, searched_similarity);
@@ -312,7 +312,7 @@ impl Solver<'_> {
     /// absorbs the smooth part of a start's error along with the surfaces' difference.
     /// `None` when the relief is off (the solves' own final energies compare alike).
     fn plain_energy(&self, k: usize, phi: &Deformation, similarity: Similarity3) -> Option<f64> {
-        if self.options.position_relief <= 0.0 {
+        if self.options.advanced.relief <= 0.0 {
             return None;
         }
         let mut e = self.energy(k, similarity);
@@ -351,19 +351,19 @@ impl Solver<'_> {
         let n = phi.size;
         let metric =
             |width: f64| (width > 0.0).then(|| SobolevPreconditioner::new(n, width * width));
-        let local = metric(self.options.sobolev_cells / (n - 1) as f64);
-        let mut settings = self.options.ncg;
+        let local = metric(self.options.tuning.sobolev_cells / (n - 1) as f64);
+        let mut settings = self.options.ncg();
         if k == self.a.num_levels() - 1 {
             settings.tolerance = settings.finest_tolerance;
         }
-        let coarsest = k == self.options.coarsest_level;
+        let coarsest = k == self.options.tuning.coarsest_level;
         if coarsest {
             settings.window = settings.coarsest_window;
         }
         let finest = self.a.level_size(self.a.num_levels() - 1);
         let cost = ((n - 1) as f64 / (finest - 1) as f64).powi(2);
         let mut budget = settings.level_evaluations(n, finest);
-        let relief = self.options.position_relief > 0.0;
+        let relief = self.options.advanced.relief > 0.0;
         if relief && !coarsest && n < finest && budget != usize::MAX {
             budget = (budget as f64 * RELIEF_MIDDLE_BUDGET).ceil() as usize;
         }
@@ -382,10 +382,10 @@ impl Solver<'_> {
             energy.relief = relief;
             minimize(&mut energy, phi, &settings, budget, k, metric, &mut refit)
         };
-        let wide = self.options.coarsest_sobolev_width;
+        let wide = self.options.tuning.coarsest_sobolev_width;
         let log = if coarsest && wide > 0.0 {
             // First the wide metric, then the local one, half of the iterations and
-            // of the evaluations each ([`COARSEST_SOBOLEV_WIDTH`](super::COARSEST_SOBOLEV_WIDTH)).
+            // of the evaluations each ([`COARSEST_SOBOLEV_WIDTH`](super::options::COARSEST_SOBOLEV_WIDTH)).
             let first = run(
                 settings.max_iterations.div_ceil(2),
                 budget.div_ceil(2),
@@ -444,15 +444,12 @@ fn fit_position_map(
             continue;
         }
         let x = [s[B_X], s[B_X + 1], s[B_X + 2]];
-        // Iteratively reweighted: the robust penalty's weight at the current residual.
-        let y = e.similarity.apply(e.a.x[k]);
-        let r2 = (0..3).map(|i| (y[i] - x[i]).powi(2)).sum::<f64>();
         p.push(e.a.x[k]);
         q.push(x);
-        w.push(wa * c * robust(r2, e.position_scale).1);
+        w.push(wa * c);
     }
-    let similarity = fit_similarity_3d(&p, &q, &w, options.allow_scale)?;
-    match options.position_map {
+    let similarity = fit_similarity_3d(&p, &q, &w, options.tuning.allow_scale)?;
+    match options.tuning.position_map {
         PositionMap::Similarity => Some(similarity),
         PositionMap::AffineNearSimilarity { ridge } => {
             fit_affine_3d_near(&p, &q, &w, &similarity, ridge).or(Some(similarity))
@@ -584,7 +581,7 @@ mod tests {
             size: 129,
             ..Default::default()
         };
-        let surface = |m: &TriMesh| MatchSurface::new(m, None, 129, true, unit, 0.0).unwrap();
+        let surface = |m: &TriMesh| MatchSurface::new(m, None, 129, true, unit).unwrap();
         let (sa, sb) = (surface(&mesh_a), surface(&mesh_b));
         let closest = ClosestPoints::new(&sb.positions);
         let (pa, pb): (Vec<[f64; 2]>, Vec<[f64; 2]>) = (0..sa.positions.len())
@@ -602,10 +599,14 @@ mod tests {
             b: &sb,
             features: &[],
             options: &options,
-            betas: options.betas,
+            // The weight the test was measured with.
+            betas: Betas {
+                position: 1000.0,
+                ..options.betas()
+            },
             spent: Default::default(),
         };
-        let k0 = options.coarsest_level;
+        let k0 = options.tuning.coarsest_level;
         let mut phi = Deformation::from_map(sa.level_size(k0), |p| start.apply(p));
         let mut similarity = Similarity3::identity();
         let (_, found) = solver.level_with_search(k0, start, &mut phi, &mut similarity);

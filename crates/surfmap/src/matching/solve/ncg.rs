@@ -41,7 +41,7 @@ pub enum StopReason {
     /// No step along the direction lowered the energy enough.
     Locked,
     MaxIterations,
-    /// The level's evaluation budget ran out ([`NcgSettings::max_evaluations`]).
+    /// The level's evaluation budget ran out (`NcgSettings::max_evaluations`).
     Budget,
 }
 

@@ -93,7 +93,7 @@ pub struct SimilaritySearchLog {
     /// Energy per matched area `E/M` before and after (module docs).
     pub energy_start: f64,
     pub energy_end: f64,
-    /// Starts tried ([`SimilaritySearch::candidate_angle`]).
+    /// Starts tried (`SimilaritySearch::candidate_angle`).
     pub candidates: usize,
     pub evaluations: usize,
     pub seconds: f64,
