@@ -17,7 +17,7 @@ pub struct Args {
     #[arg(long, default_value_t = 60)]
     pub rings: usize,
     /// Height of the bumps relative to the disc radius.
-    #[arg(long, default_value_t = 0.6)]
+    #[arg(long, default_value_t = 0.6, allow_negative_numbers = true)]
     pub amplitude: f64,
 }
 

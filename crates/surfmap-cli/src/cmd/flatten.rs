@@ -186,7 +186,7 @@ pub struct Args {
     /// Dirichlet distortion (area-weighted mean of (σ1² + σ2² + σ1⁻² + σ2⁻²)/4 at equal
     /// UV and 3D area; 1 for an isometry) is at most D. Not met within --max-cut-rounds:
     /// the best map is written and the command fails, saying so.
-    #[arg(long, value_name = "D")]
+    #[arg(long, value_name = "D", allow_negative_numbers = true)]
     pub max_distortion: Option<f64>,
     /// Cut rounds at most for --max-distortion (each cuts up to four seam paths and
     /// flattens again).
@@ -203,13 +203,13 @@ pub struct SolverArgs {
     #[arg(long, value_enum, default_value = "balanced")]
     pub preset: PresetChoice,
     /// Custom α = L,A,C (length, area, angle weights; normalized to sum 1). Overrides --preset.
-    #[arg(long, value_parser = parse_alpha)]
+    #[arg(long, value_parser = parse_alpha, allow_hyphen_values = true)]
     pub alpha: Option<[f64; 3]>,
     /// Energy density.
     #[arg(long, value_enum, default_value = "litke")]
     pub energy: EnergyChoice,
     /// Continuation: minimize first at this α = L,A,C, then move to the target α in steps.
-    #[arg(long, value_parser = parse_alpha)]
+    #[arg(long, value_parser = parse_alpha, allow_hyphen_values = true)]
     pub from_alpha: Option<[f64; 3]>,
     /// Initial map (an explicit one is computed on the full mesh: no multilevel start).
     #[arg(long, value_enum, default_value = "auto")]
@@ -227,10 +227,10 @@ pub struct SolverArgs {
     #[arg(long, default_value_t = 200)]
     pub max_iters: usize,
     /// Stop when half the Newton decrement (energy per unit area) is below this.
-    #[arg(long, default_value_t = 1e-12)]
+    #[arg(long, default_value_t = 1e-12, allow_negative_numbers = true)]
     pub tolerance: f64,
     /// Armijo sufficient-decrease constant c (thesis: 0.5).
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     pub armijo_c: f64,
 }
 

@@ -3,8 +3,7 @@
 use super::options::OptionError;
 use crate::linsolve::SolveError;
 use crate::mesh::cut::CutError;
-use crate::mesh::disc::list_defects;
-use crate::mesh::validate::Defect;
+use crate::mesh::validate::{Defect, list_defects};
 use crate::mesh::{IndexError, NotADisc};
 use crate::param::InitialMapError;
 use crate::param::element::RestTriangleError;
