@@ -79,8 +79,19 @@ fn main() {
 /// is skipped, and a context that its cause quotes (such as "cannot write X" around an
 /// error that names X itself) gives way to the cause.
 fn error_message(e: &anyhow::Error) -> String {
-    let mut pieces = vec![e.to_string()];
-    for cause in e.chain().skip(1) {
+    chain_message(e.chain())
+}
+
+/// [`error_message`] of a library error and its sources.
+fn source_chain_message(e: &(dyn std::error::Error + 'static)) -> String {
+    chain_message(std::iter::successors(Some(e), |e| e.source()))
+}
+
+fn chain_message<'a>(
+    mut chain: impl Iterator<Item = &'a (dyn std::error::Error + 'static)>,
+) -> String {
+    let mut pieces = vec![chain.next().map_or_else(String::new, |e| e.to_string())];
+    for cause in chain {
         let c = cause.to_string();
         if pieces.join(": ").contains(&c) {
             continue;

@@ -651,3 +651,90 @@ fn max_distortion_cuts_a_cone_until_the_bound_holds_and_says_when_it_cannot() {
         "{stderr}"
     );
 }
+
+/// A repeated face is removed by `--repair` (as the refusal says), after which the mesh
+/// flattens flip-free with the repeat gone; without the repair it is refused as a repeat.
+#[test]
+fn a_repeated_face_is_removed_by_repair_and_the_mesh_flattens() {
+    let dir = temp_dir("repeated-face");
+    let damaged = damaged_inputs(&dir);
+    let repeated = damaged.iter().find(|d| d.name == "repeated face").unwrap();
+    let out = dir.join("flat.obj");
+    let refused = flatten(&repeated.path, &[], &out);
+    assert_eq!(refused.status.code(), Some(1));
+    let said = String::from_utf8_lossy(&refused.stderr);
+    assert!(said.contains("--drop-degenerate (or --repair)"), "{said}");
+    for repair in ["--repair", "--drop-degenerate"] {
+        let run = flatten(&repeated.path, &[repair], &out);
+        let err = String::from_utf8_lossy(&run.stderr);
+        assert!(run.status.success(), "{repair}: {err}");
+        assert!(
+            err.contains("dropped 1 degenerate or repeated faces"),
+            "{err}"
+        );
+        let (min_area, faces) = min_signed_uv_area(&out);
+        assert!(
+            min_area > 0.0,
+            "{repair}: a flipped or degenerate UV triangle"
+        );
+        assert_eq!(faces, 32, "{repair}: the repeat is gone, the rest kept");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Negative numbers work as the help writes them (`--alpha L,A,C`, `--tolerance X`):
+/// the answer is the library's reason, not the parser's "use -- -1" tip.
+#[test]
+fn negative_numbers_in_options_reach_their_checks() {
+    let dir = temp_dir("negative-options");
+    let input = dir.join("disc.obj");
+    surfmap::write_mesh(&input, &surfmap::mesh::generate::bumpy_disc(4, 0.3)).unwrap();
+    let out = dir.join("flat.obj");
+    for (options, reason) in [
+        (
+            &["--alpha", "-1,1,1"][..],
+            "invalid α: length weight αl = -1 must be > 0",
+        ),
+        (
+            &["--from-alpha", "1,-1,1"][..],
+            "invalid α: area weight αa = -1 must be > 0",
+        ),
+        (
+            &["--tolerance", "-1"][..],
+            "--tolerance must be positive, got -1",
+        ),
+        (
+            &["--armijo-c", "-0.5"][..],
+            "--armijo-c must be in (0, 1), got -0.5",
+        ),
+        (
+            &["--max-distortion", "-2"][..],
+            "--max-distortion must be at least 1",
+        ),
+        (
+            &["--weld", "-1"][..],
+            "--weld tolerance must be ≥ 0, got -1",
+        ),
+    ] {
+        let run = flatten(&input, options, &out);
+        let err = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(1), "{options:?}: {err}");
+        assert!(err.contains(reason), "{options:?}: {err}");
+        assert!(
+            !err.contains("-- -1") && !err.contains("unexpected argument"),
+            "{err}"
+        );
+    }
+    // A valid negative value is a value: a demo with its bumps turned inward.
+    let run = surfmap()
+        .args(["demo", "--rings", "6", "--amplitude", "-0.3", "-o"])
+        .arg(dir.join("demo"))
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

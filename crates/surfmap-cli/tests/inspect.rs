@@ -214,3 +214,75 @@ fn closed_stdout_is_not_a_panic() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// One verdict on damaged input: `inspect` lists the defect that `flatten` refuses the
+/// mesh for, in the same words, says the mesh is no disc and that flatten refuses it,
+/// and says how its numbers count; a file that is not a mesh is refused by both by name.
+#[test]
+fn inspect_and_flatten_give_one_verdict_on_damaged_input() {
+    let dir = temp_dir("one-verdict");
+    for d in damaged_inputs(&dir) {
+        let inspect = surfmap().arg("inspect").arg(&d.path).output().unwrap();
+        let flatten = surfmap()
+            .arg("flatten")
+            .arg(&d.path)
+            .arg("-o")
+            .arg(dir.join("out.obj"))
+            .output()
+            .unwrap();
+        let said = String::from_utf8_lossy(&inspect.stdout).into_owned()
+            + &String::from_utf8_lossy(&inspect.stderr);
+        let refused = String::from_utf8_lossy(&flatten.stderr);
+        assert_eq!(flatten.status.code(), Some(1), "{}: {refused}", d.name);
+        assert!(
+            refused.contains(d.words),
+            "{}: flatten said {refused}",
+            d.name
+        );
+        assert!(said.contains(d.words), "{}: inspect said {said}", d.name);
+        assert!(!dir.join("out.obj").exists(), "{}", d.name);
+        let Some(kind) = d.kind else {
+            // Not readable: both stop at reading, with the same error.
+            assert_eq!(inspect.status.code(), Some(1), "{}", d.name);
+            assert_eq!(said.trim(), refused.trim(), "{}", d.name);
+            continue;
+        };
+        assert!(inspect.status.success(), "{}: {said}", d.name);
+        assert!(said.contains(&format!("[{kind}]")), "{}: {said}", d.name);
+        assert!(said.contains("  disc       no"), "{}: {said}", d.name);
+        assert!(said.contains("  flatten    refused"), "{}: {said}", d.name);
+        assert!(!said.contains("defects    none"), "{}: {said}", d.name);
+        // A repeat is a repeat: not an orientation or manifold problem.
+        assert!(
+            !said.contains("inconsistent_orientation") && !said.contains("non_manifold"),
+            "{}: {said}",
+            d.name
+        );
+        for text in [&said[..], &refused[..]] {
+            assert!(
+                text.contains(surfmap::mesh::validate::NUMBERING),
+                "{}: {text}",
+                d.name
+            );
+        }
+        // The JSON agrees: the same kind, blocking, and no disc.
+        let json = surfmap()
+            .args(["inspect", "--json"])
+            .arg(&d.path)
+            .output()
+            .unwrap();
+        let r: serde_json::Value = serde_json::from_slice(&json.stdout).unwrap();
+        assert_eq!(r["disc"], false, "{}", d.name);
+        assert_eq!(r["flatten"], "refused", "{}", d.name);
+        assert!(
+            r["defects"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .any(|x| x["kind"] == kind && x["blocks_flattening"] == true),
+            "{}: {r}",
+            d.name
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -8,14 +8,23 @@ use surfmap::mesh::validate::{Defect, DefectKind};
 use surfmap::param::flatten::OptionError;
 use surfmap::report::{not_a_disc_message, with_remedy};
 
-/// The remedy of a defect kind as the Python call that applies it, where one does.
-fn python_remedy(kind: DefectKind) -> Option<&'static str> {
-    Some(match kind {
+/// The remedy of a defect as the Python call that applies it, where one does.
+fn python_remedy(d: &Defect) -> Option<&'static str> {
+    Some(match d.kind {
+        DefectKind::NonFiniteCoordinates if d.blocks_flattening => {
+            "Fix the exporter, or remove the faces that use them (rows of F)."
+        }
         DefectKind::NonFiniteCoordinates => {
-            "Fix the exporter, or drop them with surfmap.repair(V, F, drop_unreferenced=True) if no face uses them."
+            "Remove them with surfmap.repair(V, F, drop_unreferenced=True)."
+        }
+        DefectKind::OverflowingCoordinates => {
+            "Scale V down (e.g. V / 1e6); the UVs come out in the same unit."
         }
         DefectKind::RepeatedIndexFaces => {
             "Remove them with surfmap.repair(V, F, drop_degenerate=True)."
+        }
+        DefectKind::DuplicateFaces => {
+            "Remove the repeats with surfmap.repair(V, F, drop_degenerate=True)."
         }
         DefectKind::ZeroAreaFaces => {
             "Remove them with surfmap.repair(V, F, drop_degenerate=True) (this may open holes), or fix them in a mesh editor."
@@ -58,7 +67,7 @@ fn python_remedy(kind: DefectKind) -> Option<&'static str> {
 
 /// A defect's problem and remedy, the remedy as a Python call.
 pub fn defect_message(d: &Defect) -> String {
-    with_remedy(d, python_remedy(d.kind))
+    with_remedy(d, python_remedy(d))
 }
 
 /// A numeric option out of range, as the keyword that set it.
@@ -87,7 +96,7 @@ pub fn match_defect_message(d: &Defect) -> String {
             "match maps discs: cut the part to match out of it with surfmap.crop(V, F, \
              center=…, radius=…) (e.g. the face of a head scan), or open it in a mesh editor.",
         ),
-        kind => python_remedy(kind),
+        _ => python_remedy(d),
     };
     with_remedy(d, remedy)
 }

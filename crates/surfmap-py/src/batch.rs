@@ -4,12 +4,11 @@
 //! [`BatchRow`]s, the lines of `summary.csv`, as dictionaries.
 
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
-use surfmap::batch::{self, BatchRow};
-use surfmap::{FlattenOptions, FlattenReport, TriMesh};
+use surfmap::batch::{self, BatchOutput, BatchRow, FrontEnd};
+use surfmap::{FlattenOptions, UvLayout};
 
 use crate::advice::{defect_message, flatten_error_message};
 use crate::convert::{to_dict, to_python};
@@ -17,45 +16,31 @@ use crate::errors::os_error;
 use crate::flatten::FlattenArgs;
 
 /// Reads `input`, flattens it, writes `dir/name.obj` and the report `dir/name.json`:
-/// the row, or the failed row with the library's message.
+/// the row, or the failed row with the library's message ([`batch::flatten_file`]).
 fn flatten_one(
     input: &Path,
     dir: &Path,
     name: &str,
     options: &FlattenOptions,
-    normalize: bool,
+    layout: UvLayout,
 ) -> BatchRow {
-    let clock = Instant::now();
-    let result = (|| -> Result<BatchRow, String> {
-        let mesh = surfmap::read_mesh(input).map_err(|e| e.to_string())?.mesh;
-        let r = surfmap::flatten(&mesh, options).map_err(|e| {
-            format!(
-                "cannot flatten {}: {}",
-                input.display(),
-                flatten_error_message(&e)
-            )
-        })?;
-        let report = FlattenReport::measure(Some(input), &mesh, &r, defect_message)
-            .map_err(|e| format!("cannot measure {}: {e}", input.display()))?;
-        let json_path = dir.join(format!("{name}.json"));
-        let json = serde_json::to_vec_pretty(&report).map_err(|e| e.to_string())?;
-        surfmap::fsutil::write_atomically(&json_path, |w| w.write_all(&json))
-            .map_err(|e| format!("cannot write {}: {e}", json_path.display()))?;
-        let obj = dir.join(format!("{name}.obj"));
-        let out = TriMesh {
-            uvs: Some(r.texture_coordinates(normalize)),
-            ..mesh
-        };
-        surfmap::write_obj(&obj, &out, None).map_err(|e| e.to_string())?;
-        Ok(BatchRow::done(
-            input,
-            &obj,
-            &json_path,
-            &report,
-            clock.elapsed().as_secs_f64(),
-        ))
-    })();
-    result.unwrap_or_else(|e| BatchRow::failed(input, e, clock.elapsed().as_secs_f64()))
+    let read = |path: &Path| {
+        surfmap::read_mesh(path)
+            .map(|file| file.mesh)
+            .map_err(|e| e.to_string())
+    };
+    let output = BatchOutput {
+        dir,
+        layout,
+        material: None,
+        seams: None,
+    };
+    let front = FrontEnd {
+        read: &read,
+        flatten_error: flatten_error_message,
+        wording: defect_message,
+    };
+    batch::flatten_file(input, name, options, &output, &front)
 }
 
 fn create_dir(dir: &Path) -> PyResult<()> {
@@ -95,7 +80,7 @@ pub fn flatten_file<'py>(
     let opts = args.options()?;
     create_dir(&outdir)?;
     let name = name.unwrap_or_else(|| batch::output_names(std::slice::from_ref(&path)).remove(0));
-    let row = py.detach(|| flatten_one(&path, &outdir, &name, &opts, args.normalize));
+    let row = py.detach(|| flatten_one(&path, &outdir, &name, &opts, args.layout()));
     to_dict(py, &row)
 }
 
@@ -139,7 +124,7 @@ pub fn _flatten_many<'py>(
         batch::run(
             &paths,
             workers,
-            |i, input| flatten_one(input, &outdir, &names[i], &opts, args.normalize),
+            |i, input| flatten_one(input, &outdir, &names[i], &opts, args.layout()),
             |row| {
                 if let Some(cb) = &callback {
                     Python::attach(|py| {

@@ -7,8 +7,8 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 use surfmap::{
-    Alpha, CoarseLevel, Cut, Energy, FlattenOptions, FlattenReport, MaxDistortion, Multilevel,
-    Start, Uvs,
+    Cut, EnergyKind, FlattenOptions, FlattenSettings, MaxDistortion, MultilevelKind, Preset,
+    SettingsError, StartKind, UvLayout,
 };
 
 use crate::advice::{defect_message, option_message};
@@ -20,13 +20,8 @@ use crate::errors::flatten_error;
 /// the command line's defaults (`surfmap flatten --help` describes each).
 #[derive(Clone, Debug)]
 pub struct FlattenArgs {
-    pub preset: String,
-    pub alpha: Option<[f64; 3]>,
-    pub energy: String,
-    pub from_alpha: Option<[f64; 3]>,
-    pub start: String,
-    pub multilevel: String,
-    pub coarse_vertices: Option<usize>,
+    /// The solver's: preset or α, energy, continuation, start, Newton's numbers.
+    pub settings: FlattenSettings,
     /// `None`: filled when holes are not cut (`cut="auto"`), else not.
     pub fill_holes: Option<bool>,
     /// `"never"`, `"auto"` or `"holes"`; `None`: `"never"` unless `seams` or
@@ -36,51 +31,70 @@ pub struct FlattenArgs {
     pub seams: Option<Vec<[u32; 2]>>,
     pub max_distortion: Option<f64>,
     pub max_cut_rounds: usize,
-    pub max_iters: usize,
-    pub tolerance: f64,
-    pub armijo_c: f64,
     pub normalize: bool,
 }
 
 impl Default for FlattenArgs {
     fn default() -> Self {
         Self {
-            preset: "balanced".into(),
-            alpha: None,
-            energy: "litke".into(),
-            from_alpha: None,
-            start: "auto".into(),
-            multilevel: "auto".into(),
-            coarse_vertices: None,
+            settings: FlattenSettings::default(),
             fill_holes: None,
             cut: None,
             seams: None,
             max_distortion: None,
             max_cut_rounds: surfmap::param::optcuts::DEFAULT_MAX_ROUNDS,
-            max_iters: 200,
-            tolerance: 1e-12,
-            armijo_c: 0.5,
             normalize: false,
         }
     }
 }
 
-/// `name` must be one of `choices` (the error lists them).
-fn choice<'a>(what: &str, name: &str, choices: &[&'a str]) -> PyResult<&'a str> {
+/// `name` must name one of `choices` (`name_of` gives their names; the error lists
+/// them).
+fn choice<T: Copy>(
+    what: &str,
+    name: &str,
+    choices: &[T],
+    name_of: fn(T) -> &'static str,
+) -> PyResult<T> {
     choices
         .iter()
-        .find(|c| c.eq_ignore_ascii_case(name))
         .copied()
+        .find(|&c| name_of(c).eq_ignore_ascii_case(name))
         .ok_or_else(|| {
             PyValueError::new_err(format!(
                 "unknown {what} {name:?}; choose one of {}",
                 choices
                     .iter()
-                    .map(|c| format!("{c:?}"))
+                    .map(|&c| format!("{:?}", name_of(c)))
                     .collect::<Vec<_>>()
                     .join(", ")
             ))
         })
+}
+
+/// The preset named `name`.
+fn preset(name: &str) -> PyResult<Preset> {
+    choice("preset", name, &Preset::ALL, Preset::name)
+}
+
+/// The energy named `name`.
+fn energy(name: &str) -> PyResult<EnergyKind> {
+    choice("energy", name, &EnergyKind::ALL, EnergyKind::name)
+}
+
+/// The start named `name`.
+fn start(name: &str) -> PyResult<StartKind> {
+    choice("start", name, &StartKind::ALL, StartKind::name)
+}
+
+/// The multilevel choice named `name`.
+fn multilevel(name: &str) -> PyResult<MultilevelKind> {
+    choice(
+        "multilevel",
+        name,
+        &MultilevelKind::ALL,
+        MultilevelKind::name,
+    )
 }
 
 /// Weights `(L, A, C)` given as any sequence of three numbers, or None.
@@ -97,8 +111,15 @@ pub fn weights(name: &str, obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<[f
     }
 }
 
-fn alpha(what: &str, a: [f64; 3]) -> PyResult<Alpha> {
-    Alpha::new(a[0], a[1], a[2]).map_err(|e| PyValueError::new_err(format!("{what}: {e}")))
+/// Settings that make no options, as the keywords that set them.
+fn settings_message(e: SettingsError) -> PyErr {
+    PyValueError::new_err(match e {
+        SettingsError::Alpha(e) => format!("alpha: {e}"),
+        SettingsError::FromAlpha(e) => format!("from_alpha: {e}"),
+        SettingsError::Continuation(e) => format!("from_alpha: {e}"),
+        SettingsError::MultilevelNeedsAutoStart => "multilevel=\"on\" needs start=\"auto\" (an explicit start map is computed on the full mesh)".to_owned(),
+        SettingsError::Option(e) => option_message(&e),
+    })
 }
 
 impl FlattenArgs {
@@ -133,21 +154,23 @@ impl FlattenArgs {
             let key: String = key.extract()?;
             let bad = |e: PyErr| PyValueError::new_err(format!("option {key}: {e}"));
             match key.as_str() {
-                "preset" => a.preset = value.extract().map_err(bad)?,
-                "alpha" => a.alpha = weights("alpha", Some(&value))?,
-                "energy" => a.energy = value.extract().map_err(bad)?,
-                "from_alpha" => a.from_alpha = weights("from_alpha", Some(&value))?,
-                "start" => a.start = value.extract().map_err(bad)?,
-                "multilevel" => a.multilevel = value.extract().map_err(bad)?,
-                "coarse_vertices" => a.coarse_vertices = value.extract().map_err(bad)?,
+                "preset" => a.settings.preset = preset(&value.extract::<String>().map_err(bad)?)?,
+                "alpha" => a.settings.alpha = weights("alpha", Some(&value))?,
+                "energy" => a.settings.energy = energy(&value.extract::<String>().map_err(bad)?)?,
+                "from_alpha" => a.settings.from_alpha = weights("from_alpha", Some(&value))?,
+                "start" => a.settings.start = start(&value.extract::<String>().map_err(bad)?)?,
+                "multilevel" => {
+                    a.settings.multilevel = multilevel(&value.extract::<String>().map_err(bad)?)?
+                }
+                "coarse_vertices" => a.settings.coarse_vertices = value.extract().map_err(bad)?,
                 "fill_holes" => a.fill_holes = value.extract().map_err(bad)?,
                 "cut" => a.cut = value.extract().map_err(bad)?,
                 "seams" => a.seams = seams(Some(&value))?,
                 "max_distortion" => a.max_distortion = value.extract().map_err(bad)?,
                 "max_cut_rounds" => a.max_cut_rounds = value.extract().map_err(bad)?,
-                "max_iters" => a.max_iters = value.extract().map_err(bad)?,
-                "tolerance" => a.tolerance = value.extract().map_err(bad)?,
-                "armijo_c" => a.armijo_c = value.extract().map_err(bad)?,
+                "max_iters" => a.settings.max_iterations = value.extract().map_err(bad)?,
+                "tolerance" => a.settings.tolerance = value.extract().map_err(bad)?,
+                "armijo_c" => a.settings.armijo_c = value.extract().map_err(bad)?,
                 "normalize" => a.normalize = value.extract().map_err(bad)?,
                 other => {
                     return Err(PyValueError::new_err(format!(
@@ -160,67 +183,32 @@ impl FlattenArgs {
         Ok(a)
     }
 
-    /// The library options these keywords ask for (the same mapping as the command
-    /// line's flags), checked.
+    /// The library options these keywords ask for (the command line's flags map onto
+    /// the same [`FlattenSettings`]), checked; the cut and holes as [`Self::cut_mode`]
+    /// says.
     pub fn options(&self) -> PyResult<FlattenOptions> {
-        let target = match self.alpha {
-            Some(a) => alpha("alpha", a)?,
-            None => match choice(
-                "preset",
-                &self.preset,
-                &["conformal", "balanced", "area", "length"],
-            )? {
-                "conformal" => Alpha::conformal(),
-                "area" => Alpha::area(),
-                "length" => Alpha::length(),
-                _ => Alpha::balanced(),
-            },
-        };
-        let mut energy = match choice("energy", &self.energy, &["litke", "sd", "mips", "arap"])? {
-            "sd" => Energy::SymmetricDirichlet,
-            "mips" => Energy::Mips,
-            "arap" => Energy::Arap,
-            _ => Energy::litke(target),
-        };
-        if let Some(from) = self.from_alpha {
-            energy = energy
-                .with_continuation(alpha("from_alpha", from)?)
-                .map_err(|e| PyValueError::new_err(format!("from_alpha: {e}")))?;
-        }
-        let coarse = CoarseLevel {
-            vertices: self.coarse_vertices,
-            ..CoarseLevel::default()
-        };
-        let multilevel = match choice("multilevel", &self.multilevel, &["auto", "on", "off"])? {
-            "on" => Multilevel::Always(coarse),
-            "off" => Multilevel::Never,
-            _ => Multilevel::Auto(coarse),
-        };
-        let start = match choice("start", &self.start, &["auto", "lscm", "mean_value"])? {
-            "lscm" | "mean_value" if matches!(multilevel, Multilevel::Always(_)) => {
-                return Err(PyValueError::new_err(
-                    "multilevel=\"on\" needs start=\"auto\" (an explicit start map is computed on the full mesh)",
-                ));
-            }
-            "lscm" => Start::Lscm,
-            "mean_value" => Start::MeanValue,
-            _ => Start::Auto { multilevel },
-        };
         let (fill_holes, cut) = self.cut_and_fill()?;
-        let mut opts = FlattenOptions::new(energy)
-            .with_start(start)
+        let mut opts = self
+            .settings
+            .options()
+            .map_err(settings_message)?
             .with_fill_holes(fill_holes)
             .with_cut(cut);
         opts.max_distortion = self.max_distortion.map(|bound| MaxDistortion {
             bound,
             max_rounds: self.max_cut_rounds,
         });
-        opts.newton.max_iterations = self.max_iters;
-        opts.newton.tolerance = self.tolerance;
-        opts.newton.armijo_c = self.armijo_c;
         opts.validate()
             .map_err(|e| PyValueError::new_err(option_message(&e)))?;
         Ok(opts)
+    }
+
+    /// How the map is returned or written.
+    pub fn layout(&self) -> UvLayout {
+        UvLayout {
+            normalize: self.normalize,
+            uv_as_positions: false,
+        }
     }
 }
 
@@ -234,7 +222,7 @@ impl FlattenArgs {
         let Some(cut) = &self.cut else {
             return Ok(if asks_for_cuts { "auto" } else { "never" });
         };
-        let mode = choice("cut", cut, &["never", "auto", "holes"])?;
+        let mode = choice("cut", cut, &["never", "auto", "holes"], |c| c)?;
         if mode == "never" && asks_for_cuts {
             let what = if self.seams.is_some() {
                 "seams"
@@ -369,41 +357,40 @@ pub fn flatten<'py>(
     normalize: bool,
 ) -> PyResult<Bound<'py, PyTuple>> {
     let args = FlattenArgs {
-        preset: preset.into(),
-        alpha: weights("alpha", alpha)?,
-        energy: energy.into(),
-        from_alpha: weights("from_alpha", from_alpha)?,
-        start: start.into(),
-        multilevel: multilevel.into(),
-        coarse_vertices,
+        settings: FlattenSettings {
+            preset: self::preset(preset)?,
+            alpha: weights("alpha", alpha)?,
+            energy: self::energy(energy)?,
+            from_alpha: weights("from_alpha", from_alpha)?,
+            start: self::start(start)?,
+            multilevel: self::multilevel(multilevel)?,
+            coarse_vertices,
+            max_iterations: max_iters,
+            tolerance,
+            armijo_c,
+        },
         fill_holes,
         cut,
         seams: self::seams(seams)?,
         max_distortion,
         max_cut_rounds,
-        max_iters,
-        tolerance,
-        armijo_c,
         normalize,
     };
     let options = args.options()?;
     let mesh = arrays::mesh(V, F)?;
-    let r = py
-        .detach(|| surfmap::flatten(&mesh, &options))
+    let flat = py
+        .detach(|| surfmap::flatten_to_mesh(mesh, &options, args.layout(), &mut |_| {}))
         .map_err(flatten_error)?;
     let report = {
         let report = py
-            .detach(|| FlattenReport::measure(None, &mesh, &r, defect_message))
+            .detach(|| flat.report(None, defect_message))
             .map_err(crate::errors::measure_error)?;
         to_dict(py, &report)?
     };
-    let (uv, fuv) = match r.texture_coordinates(normalize) {
-        Uvs::PerVertex(coords) => (coords, mesh.triangles),
-        Uvs::PerCorner { coords, indices } => (coords, indices),
-    };
-    let uv = arrays::array(py, uv).into_any();
+    let (uv, fuv) = flat.uv_arrays();
+    let uv = arrays::array(py, uv.to_vec()).into_any();
     if args.per_corner()? {
-        let fuv = arrays::triangle_array(py, &fuv).into_any();
+        let fuv = arrays::triangle_array(py, fuv).into_any();
         PyTuple::new(py, [uv, fuv, report.into_any()])
     } else {
         PyTuple::new(py, [uv, report.into_any()])

@@ -166,7 +166,7 @@ pub fn write_obj(
 /// Opt-in repairs of a mesh, the ones the defects of ``inspect`` and ``MeshError`` name,
 /// applied in the order of the command line's repair flags: ``weld`` (merge vertices
 /// closer than this tolerance; 0.0: exactly coincident ones), ``drop_degenerate`` (faces
-/// with a repeated vertex or zero area), ``reorient`` (flip faces for a consistent
+/// with a repeated vertex or zero area, and faces repeating another face), ``reorient`` (flip faces for a consistent
 /// orientation), ``fix_non_manifold`` (cut every edge shared by more than two faces
 /// apart into sheets, faces paired by how smoothly they continue each other, a fin cut
 /// loose; split a vertex that joins separate fans of faces into one copy per fan,

@@ -186,6 +186,37 @@ def test_non_finite_positions_are_mesh_errors(grid):
     assert e.value.defects[0]["examples"] == [[3]]
 
 
+def test_damaged_input_gets_one_verdict_from_inspect_and_flatten(grid, tmp_path):
+    """The damaged inputs of issue 50: a NaN on a face, coordinates whose areas overflow,
+    a face given twice. inspect names the defect that flatten raises for, in the same
+    words, and does not call the mesh a disc; the repair the message names makes it
+    flattenable; a binary file named .obj is refused as binary."""
+    V, F = grid
+    nan = V.copy()
+    nan[7, 0] = np.nan
+    cases = [
+        (nan, F, "non_finite_coordinates", "NaN or infinite coordinates (first: 7)"),
+        (V * 1e300, F, "overflowing_coordinates", "overflow to infinity"),
+        (V, np.r_[F, F[[1]][:, [0, 2, 1]]], "duplicate_faces", f"(repeat and first: ({len(F)}, 1))"),
+    ]
+    for W, G, kind, words in cases:
+        report = surfmap.inspect(W, G)
+        assert not report["disc"] and report["flatten"] == "refused", kind
+        said = [d for d in report["defects"] if d["kind"] == kind]
+        assert said and said[0]["blocks_flattening"] and words in said[0]["message"], report
+        with pytest.raises(surfmap.MeshError) as e:
+            surfmap.flatten(W, G)
+        assert [d["kind"] for d in e.value.defects] == [kind]
+        assert words in str(e.value) and "count from 0" in str(e.value)
+    W, G, done = surfmap.repair(V, cases[2][1], drop_degenerate=True)
+    assert done == {"dropped_degenerate": 1} and np.array_equal(G, F)
+    assert surfmap.flatten(W, G)[1]["flipped_triangles"] == 0
+    binary = tmp_path / "binary.obj"
+    binary.write_bytes(bytes(range(256)) * 4)
+    with pytest.raises(surfmap.MeshError, match="byte 0x00 is not text, but a .obj file is text"):
+        surfmap.read_mesh(binary)
+
+
 @pytest.mark.parametrize(
     "options,needle",
     [

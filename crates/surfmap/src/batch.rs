@@ -1,7 +1,8 @@
 //! Many meshes at once: a thread pool that runs one job per input file and never lets
-//! one bad mesh stop the others ([`run`]), unique output names for the inputs
-//! ([`output_names`]), and the summary table, one [`BatchRow`] per mesh, written as CSV
-//! ([`write_csv`]).
+//! one bad mesh stop the others ([`run`]), the job itself — read, flatten, write the
+//! mesh, its seams and its report ([`flatten_file`]) —, unique output names for the
+//! inputs ([`output_names`]), and the summary table, one [`BatchRow`] per mesh, written
+//! as CSV ([`write_csv`]).
 //!
 //! The command line's `surfmap flatten a.obj b.obj … -o DIR/` and the Python package's
 //! `flatten_many` and `flatten_file` (also the unit of work on a Dask or Ray cluster)
@@ -13,7 +14,11 @@ use std::path::{Path, PathBuf};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::report::FlattenReport;
+use crate::mesh::TriMesh;
+use crate::mesh::io::ObjMaterial;
+use crate::output::{UvLayout, flatten_to_mesh};
+use crate::param::flatten::{FlattenError, FlattenOptions};
+use crate::report::{DefectWording, FlattenReport};
 
 /// One mesh of a batch: what was written, what was done to it, and the headline numbers
 /// of its report (the same values as in its `NAME.json`), or why it failed. Numbers are
@@ -304,6 +309,73 @@ pub fn output_names(inputs: &[PathBuf]) -> Vec<String> {
             }
         })
         .collect()
+}
+
+/// Where a batch writes each mesh: `dir/NAME.obj` (laid out as `layout` asks, with the
+/// `material`), `dir/NAME.json` (its report) and, for a surface cut open, with `seams`
+/// a folder, `seams/NAME.seams.obj`.
+#[derive(Clone, Copy, Debug)]
+pub struct BatchOutput<'a> {
+    pub dir: &'a Path,
+    pub layout: UvLayout,
+    pub material: Option<&'a ObjMaterial>,
+    pub seams: Option<&'a Path>,
+}
+
+/// How a front end reads a mesh and words what went wrong.
+#[derive(Clone, Copy)]
+pub struct FrontEnd<'a> {
+    /// Reads a mesh file (and repairs it, if the front end was asked to); the error is
+    /// the message for the row.
+    pub read: &'a (dyn Fn(&Path) -> Result<TriMesh, String> + Sync),
+    /// A flattening error's message, its remedy in the front end's terms.
+    pub flatten_error: fn(&FlattenError) -> String,
+    /// A defect's message in the report.
+    pub wording: DefectWording,
+}
+
+/// One mesh of a batch: reads `input`, flattens it with `options` and writes it as
+/// `output` says under the name `name`. Returns its row, or the failed row with the
+/// message (a failure never stops the batch).
+pub fn flatten_file(
+    input: &Path,
+    name: &str,
+    options: &FlattenOptions,
+    output: &BatchOutput<'_>,
+    front: &FrontEnd<'_>,
+) -> BatchRow {
+    let clock = std::time::Instant::now();
+    let row = || -> Result<BatchRow, String> {
+        let mesh = (front.read)(input)?;
+        let flat = flatten_to_mesh(mesh, options, output.layout, &mut |_| {}).map_err(|e| {
+            format!(
+                "cannot flatten {}: {}",
+                input.display(),
+                (front.flatten_error)(&e)
+            )
+        })?;
+        let obj = output.dir.join(format!("{name}.obj"));
+        crate::write_obj(&obj, &flat.output, output.material).map_err(|e| e.to_string())?;
+        if let Some(folder) = output.seams {
+            let path = folder.join(format!("{name}.seams.obj"));
+            flat.write_seams(&path)
+                .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+        }
+        let report = flat
+            .report(Some(input), front.wording)
+            .map_err(|e| format!("cannot measure {}: {e}", input.display()))?;
+        let json = output.dir.join(format!("{name}.json"));
+        crate::fsutil::write_json(&json, &report)
+            .map_err(|e| format!("cannot write {}: {e}", json.display()))?;
+        Ok(BatchRow::done(
+            input,
+            &obj,
+            &json,
+            &report,
+            clock.elapsed().as_secs_f64(),
+        ))
+    };
+    row().unwrap_or_else(|e| BatchRow::failed(input, e, clock.elapsed().as_secs_f64()))
 }
 
 /// Why a batch could not start.

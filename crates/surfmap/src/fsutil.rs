@@ -37,6 +37,12 @@ where
     result
 }
 
+/// Writes `value` as pretty JSON, atomically ([`write_atomically`]).
+pub fn write_json(path: &Path, value: &impl serde::Serialize) -> io::Result<()> {
+    let json = serde_json::to_vec_pretty(value).map_err(io::Error::other)?;
+    write_atomically(path, |w| w.write_all(&json))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

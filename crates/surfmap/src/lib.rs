@@ -84,6 +84,7 @@
 //! | [`matching`] | surface matching: alignment in space, the matching energy (2.16) over deformations of the grid, the multiscale solve, fold checks, point maps, the match folder |
 //! | [`apps`] | thesis ch. 5 on matches and maps: transfer, baking, morphs, rigs, glTF |
 //! | [`report`] | the documents of a run: [`InspectReport`], [`FlattenReport`] (the CLI's JSON, the Python package's dictionaries) |
+//! | [`output`] | what a flattening writes: [`flatten_to_mesh`] gives the mesh to write (per-vertex or per-corner UVs, or the flat layout), its seams and its report, for every front end |
 //! | [`batch`] | many mesh files on a thread pool, one bad mesh never stopping the rest, and their summary table |
 //!
 //! Internal building blocks are public for benchmarks and probes but hidden from these
@@ -103,6 +104,7 @@ pub mod linsolve;
 pub mod matching;
 pub mod measure;
 pub mod mesh;
+pub mod output;
 pub mod param;
 pub mod raster;
 pub mod render;
@@ -119,9 +121,11 @@ pub use mesh::io::{MeshFile, read_mesh, write_mesh, write_obj};
 pub use mesh::{
     BoundaryLoop, Disc, IndexError, NotADisc, PointLocator, SurfacePoint, Topology, TriMesh, Uvs,
 };
+pub use output::{FlatMesh, UvLayout, flatten_to_mesh};
 pub use param::flatten::{
-    Bijective, CoarseLevel, Cut, CutStop, DistortionCuts, FlattenError, FlattenOptions, Flattening,
-    Guarantee, IterationLog, MaxDistortion, Multilevel, NewtonSettings, Seams, Start, StartMap,
+    Bijective, CoarseLevel, Cut, CutStop, DistortionCuts, EnergyKind, FlattenError, FlattenOptions,
+    FlattenSettings, Flattening, Guarantee, IterationLog, MaxDistortion, Multilevel,
+    MultilevelKind, NewtonSettings, Preset, Seams, SettingsError, Start, StartKind, StartMap,
     StopReason, flatten, flatten_with_progress,
 };
 pub use param::normalize_uvs;

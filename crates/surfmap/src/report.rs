@@ -13,7 +13,7 @@ use std::path::Path;
 use serde::Serialize;
 
 use crate::measure::{DistortionReport, MeasureError, MeasureOptions};
-use crate::mesh::validate::{Defect, DefectKind, validate};
+use crate::mesh::validate::{Defect, DefectKind, list_defects_worded, validate};
 use crate::param::flatten::{MultilevelReport, StartMap};
 use crate::{
     FlattenOptions, Flattening, Guarantee, IterationLog, Seams, StopReason, Topology, TriMesh,
@@ -38,27 +38,21 @@ pub fn with_remedy(d: &Defect, remedy: Option<&str>) -> String {
 /// match` has one remedy for the two).
 pub fn not_a_disc_message(defects: &[Defect], wording: DefectWording) -> String {
     let mut given: Vec<String> = vec![];
-    let lines: Vec<String> = defects
-        .iter()
-        .map(|d| {
-            let text = wording(d);
-            let remedy = text.strip_prefix(d.problem.as_str()).map(str::trim);
-            match remedy {
-                Some(r) if !r.is_empty() && given.iter().any(|g| g == r) => {
-                    format!("  - {} (remedy as above)", d.problem)
-                }
-                Some(r) if !r.is_empty() => {
-                    given.push(r.to_string());
-                    format!("  - {text}")
-                }
-                _ => format!("  - {text}"),
+    let list = list_defects_worded(defects, |d| {
+        let text = wording(d);
+        let remedy = text.strip_prefix(d.problem.as_str()).map(str::trim);
+        match remedy {
+            Some(r) if !r.is_empty() && given.iter().any(|g| g == r) => {
+                format!("{} (remedy as above)", d.problem)
             }
-        })
-        .collect();
-    format!(
-        "the mesh cannot be flattened as a disc:\n{}",
-        lines.join("\n")
-    )
+            Some(r) if !r.is_empty() => {
+                given.push(r.to_string());
+                text
+            }
+            _ => text,
+        }
+    });
+    format!("the mesh cannot be flattened as a disc:\n{list}")
 }
 
 /// A defect as reports list it: the library's [`Defect`] with its problem and remedy
@@ -116,6 +110,8 @@ pub struct InspectReport {
     pub genus: Option<u32>,
     pub manifold: bool,
     pub orientable: bool,
+    /// A disc the flattening maps as it is: one boundary loop, genus 0, manifold and
+    /// consistently oriented, with usable geometry (no blocking defect).
     pub disc: bool,
     /// What [`crate::flatten`] does with the mesh by default ([`crate::plan`]): `disc
     /// as is`, `fill N holes`, `cut open along seams (why)`, or `refused` (see the
@@ -175,8 +171,7 @@ impl InspectReport {
             .collect();
         loop_lengths.sort_unstable_by(|a, b| b.cmp(a));
         let bbox = mesh.bounding_box();
-        let plan =
-            crate::param::plan::plan_with_topology(mesh, &topo, &FlattenOptions::default()).ok();
+        let plan = crate::param::plan::plan_with_topology(mesh, &topo, &FlattenOptions::default());
         Self {
             file: source.file.map(|p| p.display().to_string()),
             format: source.format.map(|f| format!("{f:?}")),
@@ -191,12 +186,12 @@ impl InspectReport {
             genus: topo.genus(),
             manifold: topo.is_manifold(),
             orientable: topo.orientable,
-            disc: topo.is_disc(),
+            disc: plan.as_ref().is_ok_and(|p| p.is_disc_as_is()),
             flatten: plan
                 .as_ref()
-                .map_or_else(|| "refused".to_string(), |p| p.describe()),
+                .map_or_else(|_| "refused".to_string(), |p| p.describe()),
             flatten_fills_holes: plan.as_ref().map_or(0, |p| p.holes_to_fill),
-            flatten_cuts: plan.as_ref().is_some_and(|p| p.cut.is_some()),
+            flatten_cuts: plan.as_ref().is_ok_and(|p| p.cut.is_some()),
             has_uvs: mesh.uvs.is_some(),
             bbox_min: bbox.map(|b| b.0),
             bbox_max: bbox.map(|b| b.1),

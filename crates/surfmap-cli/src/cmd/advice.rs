@@ -7,13 +7,15 @@ use surfmap::mesh::validate::{Defect, DefectKind};
 use surfmap::param::flatten::OptionError;
 use surfmap::report::{not_a_disc_message, with_remedy};
 
-/// The remedy of a defect kind as the flags that apply it, where a flag does.
-fn flag_remedy(kind: DefectKind) -> Option<&'static str> {
-    Some(match kind {
-        DefectKind::NonFiniteCoordinates => {
-            "Fix the exporter, or drop them with --drop-unreferenced if no face uses them."
-        }
+/// The remedy of a defect as the flags that apply it, where a flag does.
+fn flag_remedy(d: &Defect) -> Option<&'static str> {
+    Some(match d.kind {
+        // On faces: no flag helps (the library's words say what does).
+        DefectKind::NonFiniteCoordinates if d.blocks_flattening => return None,
+        DefectKind::NonFiniteCoordinates => "Use --drop-unreferenced to remove them.",
+        DefectKind::OverflowingCoordinates => return None,
         DefectKind::RepeatedIndexFaces => "Use --drop-degenerate to remove them.",
+        DefectKind::DuplicateFaces => "Use --drop-degenerate (or --repair) to remove the repeats.",
         DefectKind::ZeroAreaFaces => {
             "Use --drop-degenerate to remove them (this may open holes), or fix them in a mesh editor."
         }
@@ -45,7 +47,7 @@ fn flag_remedy(kind: DefectKind) -> Option<&'static str> {
 
 /// A defect's problem and remedy, the remedy as flags.
 pub fn defect_message(d: &Defect) -> String {
-    with_remedy(d, flag_remedy(d.kind))
+    with_remedy(d, flag_remedy(d))
 }
 
 /// A defect that stops `surfmap match`, worded for that command: it fills holes itself
@@ -62,7 +64,7 @@ pub fn match_defect_message(d: &Defect) -> String {
              (e.g. the face of a head scan: --center X,Y,Z --radius R), or open it in a mesh \
              editor.",
         ),
-        kind => flag_remedy(kind),
+        _ => flag_remedy(d),
     };
     with_remedy(d, remedy)
 }
@@ -147,7 +149,7 @@ mod tests {
             let text = defect_message(d);
             assert!(!text.contains("repair::") && !text.contains('`'), "{text}");
             assert!(text.starts_with(&d.problem), "{text}");
-            if flag_remedy(d.kind).is_some() {
+            if flag_remedy(d).is_some() {
                 assert!(text.contains(" --"), "{text}");
             }
         }

@@ -10,11 +10,11 @@ use std::time::Instant;
 
 use anyhow::bail;
 use indicatif::{ProgressBar, ProgressStyle};
-use surfmap::batch::{self, BatchRow};
-use surfmap::{FlattenOptions, FlattenReport, flatten_with_progress};
+use surfmap::FlattenError;
+use surfmap::batch::{self, BatchOutput, FrontEnd};
 
-use super::advice::{defect_message, flatten_error};
-use super::flatten::{Args, flatten_options, write_json, write_output, write_seams};
+use super::advice::defect_message;
+use super::flatten::{Args, flatten_options, layout, material};
 use super::load_mesh;
 
 /// Whether the command is a batch: several inputs, or an output folder (ending in `/`
@@ -66,11 +66,29 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
                 .expect("valid template"),
         )
     };
+    let material = material(args);
+    let output = BatchOutput {
+        dir,
+        layout: layout(args),
+        material: material.as_ref(),
+        seams: args.seams.as_deref(),
+    };
+    // Repairs are not narrated per mesh; the report's counts show their effect.
+    let read = |input: &Path| {
+        load_mesh(input)
+            .and_then(|file| args.repair.apply(file.mesh, true))
+            .map_err(|e| crate::error_message(&e))
+    };
+    let front = FrontEnd {
+        read: &read,
+        flatten_error: flatten_error_message,
+        wording: defect_message,
+    };
     let clock = Instant::now();
     let rows = batch::run(
         &args.inputs,
         args.jobs,
-        |i, input| flatten_one(args, &opts, input, dir, &names[i]),
+        |i, input| batch::flatten_file(input, &names[i], &opts, &output, &front),
         |row| {
             if let Some(e) = &row.error {
                 let line = format!("error: {e}");
@@ -110,44 +128,8 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// One mesh of the batch, written as `dir/name.obj` and `dir/name.json`: its row, or
-/// the failed row with the message the single-mesh command would print.
-fn flatten_one(
-    args: &Args,
-    opts: &FlattenOptions,
-    input: &Path,
-    dir: &Path,
-    name: &str,
-) -> BatchRow {
-    let clock = Instant::now();
-    let result = (|| -> anyhow::Result<BatchRow> {
-        let file = load_mesh(input)?;
-        // Repairs are not narrated per mesh; the report's counts show their effect.
-        let mesh = args.repair.apply(file.mesh, true)?;
-        let r = flatten_with_progress(&mesh, opts, &mut |_| {})
-            .map_err(flatten_error)
-            .map_err(|e| e.context(format!("cannot flatten {}", input.display())))?;
-        let obj = dir.join(format!("{name}.obj"));
-        write_output(args, &obj, &mesh, &r)?;
-        if let (Some(folder), Some(seams)) = (&args.seams, &r.seams) {
-            write_seams(&folder.join(format!("{name}.seams.obj")), &mesh, seams)?;
-        }
-        let report = FlattenReport::measure(Some(input), &mesh, &r, defect_message)?;
-        let json = dir.join(format!("{name}.json"));
-        write_json(&json, &report)?;
-        Ok(BatchRow::done(
-            input,
-            &obj,
-            &json,
-            &report,
-            clock.elapsed().as_secs_f64(),
-        ))
-    })();
-    result.unwrap_or_else(|e| {
-        BatchRow::failed(
-            input,
-            crate::error_message(&e),
-            clock.elapsed().as_secs_f64(),
-        )
-    })
+/// A flattening error as the single-mesh command words it (its remedy as flags).
+fn flatten_error_message(e: &FlattenError) -> String {
+    let worded = super::advice::flatten_error_message(e);
+    worded.unwrap_or_else(|| crate::source_chain_message(e))
 }

@@ -6,7 +6,7 @@ use anyhow::Context;
 use std::path::PathBuf;
 use surfmap::mesh::generate::bumpy_disc;
 use surfmap::render::{TradeoffPanel, save_png, tradeoff_sheet};
-use surfmap::{Alpha, FlattenOptions, FlattenReport, write_mesh, write_obj};
+use surfmap::{FlattenOptions, Preset, UvLayout, write_mesh, write_obj};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -17,7 +17,7 @@ pub struct Args {
     #[arg(long, default_value_t = 60)]
     pub rings: usize,
     /// Height of the bumps relative to the disc radius.
-    #[arg(long, default_value_t = 0.6)]
+    #[arg(long, default_value_t = 0.6, allow_negative_numbers = true)]
     pub amplitude: f64,
 }
 
@@ -42,27 +42,24 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         args.amplitude
     );
     let mut maps = Vec::new();
-    for (name, alpha) in [
-        ("conformal", Alpha::conformal()),
-        ("balanced", Alpha::balanced()),
-    ] {
-        let opts = FlattenOptions::new(alpha);
-        let r = super::flatten::flatten_mesh(&mesh, &opts, false)?;
-        let out = super::flatten::output_mesh(&mesh, &r, false, false);
+    for preset in [Preset::Conformal, Preset::Balanced] {
+        let name = preset.name();
+        let opts = FlattenOptions::new(preset.alpha());
+        let flat =
+            super::flatten::flatten_for_writing(mesh.clone(), &opts, UvLayout::default(), false)?;
         let obj = dir.join(format!("{name}.obj"));
-        write_obj(&obj, &out, None)?;
+        write_obj(&obj, &flat.output, None)?;
         written.push(obj);
-        let report = FlattenReport::measure(
+        let report = flat.report(
             Some(&dir.join("surface.obj")),
-            &mesh,
-            &r,
             super::advice::defect_message,
         )?;
         let report_path = dir.join(format!("{name}.json"));
         super::flatten::write_json(&report_path, &report)?;
         written.push(report_path);
         let measures = &report.measures;
-        written.extend(super::flatten::write_pictures(&dir.join(name), &mesh, &r)?);
+        let r = &flat.flattening;
+        written.extend(super::flatten::write_pictures(&dir.join(name), &mesh, r)?);
         outln!(
             "{name:>9}: start {}, {} iterations, {}, energy {:.5}, flipped triangles {}, angle distortion mean {:.4} max {:.4}, {:.3} s",
             r.start_description(),
@@ -74,7 +71,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             measures.measures.angle.max,
             r.time_total
         );
-        maps.push((name, r.uvs));
+        maps.push((name, r.uvs.clone()));
     }
     let panels: Vec<TradeoffPanel> = maps
         .iter()

@@ -11,17 +11,17 @@ use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::Path;
 use std::path::PathBuf;
-use surfmap::fsutil::write_atomically;
 use surfmap::measure::{Measure, per_triangle_measure};
+use surfmap::mesh::io::ObjMaterial;
 use surfmap::render;
 use surfmap::{
-    Alpha, Bijective, CoarseLevel, Cut, DistortionCuts, Energy, FlattenOptions, FlattenReport,
-    Flattening, Guarantee, MaxDistortion, Multilevel, Seams, Start, TriMesh, Uvs,
-    flatten_with_progress, write_obj,
+    Alpha, Bijective, Cut, DistortionCuts, EnergyKind, FlatMesh, FlattenOptions, FlattenSettings,
+    Flattening, Guarantee, IterationLog, MaxDistortion, MultilevelKind, Preset, SettingsError,
+    StartKind, TriMesh, UvLayout, flatten_to_mesh, flatten_with_progress, write_obj,
 };
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
-pub enum Preset {
+pub enum PresetChoice {
     /// α = (0.005, 0.005, 0.99): nearly conformal (angle-preserving).
     Conformal,
     /// α = (1/3, 1/3, 1/3): length, area and angle weighted equally.
@@ -30,6 +30,17 @@ pub enum Preset {
     Area,
     /// Length-preserving emphasis.
     Length,
+}
+
+impl From<PresetChoice> for Preset {
+    fn from(choice: PresetChoice) -> Self {
+        match choice {
+            PresetChoice::Conformal => Preset::Conformal,
+            PresetChoice::Balanced => Preset::Balanced,
+            PresetChoice::Area => Preset::Area,
+            PresetChoice::Length => Preset::Length,
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
@@ -44,6 +55,17 @@ pub enum EnergyChoice {
     Arap,
 }
 
+impl From<EnergyChoice> for EnergyKind {
+    fn from(choice: EnergyChoice) -> Self {
+        match choice {
+            EnergyChoice::Litke => EnergyKind::Litke,
+            EnergyChoice::Sd => EnergyKind::SymmetricDirichlet,
+            EnergyChoice::Mips => EnergyKind::Mips,
+            EnergyChoice::Arap => EnergyKind::Arap,
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 pub enum StartChoice {
     /// LSCM, or mean-value coordinates if LSCM flips a triangle; multilevel for large
@@ -51,6 +73,16 @@ pub enum StartChoice {
     Auto,
     Lscm,
     MeanValue,
+}
+
+impl From<StartChoice> for StartKind {
+    fn from(choice: StartChoice) -> Self {
+        match choice {
+            StartChoice::Auto => StartKind::Auto,
+            StartChoice::Lscm => StartKind::Lscm,
+            StartChoice::MeanValue => StartKind::MeanValue,
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
@@ -63,12 +95,32 @@ pub enum BijectiveChoice {
     Off,
 }
 
+impl From<BijectiveChoice> for Bijective {
+    fn from(choice: BijectiveChoice) -> Self {
+        match choice {
+            BijectiveChoice::Auto => Bijective::WhenOverlapping,
+            BijectiveChoice::Always => Bijective::Always,
+            BijectiveChoice::Off => Bijective::Off,
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 pub enum MultilevelChoice {
     /// For meshes of 15k faces and more.
     Auto,
     On,
     Off,
+}
+
+impl From<MultilevelChoice> for MultilevelKind {
+    fn from(choice: MultilevelChoice) -> Self {
+        match choice {
+            MultilevelChoice::Auto => MultilevelKind::Auto,
+            MultilevelChoice::On => MultilevelKind::On,
+            MultilevelChoice::Off => MultilevelKind::Off,
+        }
+    }
 }
 
 #[derive(clap::Args)]
@@ -134,7 +186,7 @@ pub struct Args {
     /// Dirichlet distortion (area-weighted mean of (σ1² + σ2² + σ1⁻² + σ2⁻²)/4 at equal
     /// UV and 3D area; 1 for an isometry) is at most D. Not met within --max-cut-rounds:
     /// the best map is written and the command fails, saying so.
-    #[arg(long, value_name = "D")]
+    #[arg(long, value_name = "D", allow_negative_numbers = true)]
     pub max_distortion: Option<f64>,
     /// Cut rounds at most for --max-distortion (each cuts up to four seam paths and
     /// flattens again).
@@ -149,15 +201,15 @@ pub struct Args {
 pub struct SolverArgs {
     /// Distortion trade-off preset.
     #[arg(long, value_enum, default_value = "balanced")]
-    pub preset: Preset,
+    pub preset: PresetChoice,
     /// Custom α = L,A,C (length, area, angle weights; normalized to sum 1). Overrides --preset.
-    #[arg(long, value_parser = parse_alpha)]
+    #[arg(long, value_parser = parse_alpha, allow_hyphen_values = true)]
     pub alpha: Option<[f64; 3]>,
     /// Energy density.
     #[arg(long, value_enum, default_value = "litke")]
     pub energy: EnergyChoice,
     /// Continuation: minimize first at this α = L,A,C, then move to the target α in steps.
-    #[arg(long, value_parser = parse_alpha)]
+    #[arg(long, value_parser = parse_alpha, allow_hyphen_values = true)]
     pub from_alpha: Option<[f64; 3]>,
     /// Initial map (an explicit one is computed on the full mesh: no multilevel start).
     #[arg(long, value_enum, default_value = "auto")]
@@ -175,10 +227,10 @@ pub struct SolverArgs {
     #[arg(long, default_value_t = 200)]
     pub max_iters: usize,
     /// Stop when half the Newton decrement (energy per unit area) is below this.
-    #[arg(long, default_value_t = 1e-12)]
+    #[arg(long, default_value_t = 1e-12, allow_negative_numbers = true)]
     pub tolerance: f64,
     /// Armijo sufficient-decrease constant c (thesis: 0.5).
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     pub armijo_c: f64,
 }
 
@@ -202,57 +254,40 @@ pub fn alpha(a: [f64; 3]) -> anyhow::Result<Alpha> {
     Alpha::new(a[0], a[1], a[2]).context("invalid α")
 }
 
-/// The library options the command line asks for (parsing only: the library checks them).
+/// The library options the command line asks for (the library resolves and checks
+/// them, [`FlattenSettings::options`]).
 pub fn options(args: &SolverArgs, fill_holes: bool) -> anyhow::Result<FlattenOptions> {
-    let target = match (args.alpha, args.preset) {
-        (Some(a), _) => alpha(a)?,
-        (None, Preset::Conformal) => Alpha::conformal(),
-        (None, Preset::Balanced) => Alpha::balanced(),
-        (None, Preset::Area) => Alpha::area(),
-        (None, Preset::Length) => Alpha::length(),
+    let settings = FlattenSettings {
+        preset: args.preset.into(),
+        alpha: args.alpha,
+        energy: args.energy.into(),
+        from_alpha: args.from_alpha,
+        start: args.start.into(),
+        multilevel: args.multilevel.into(),
+        coarse_vertices: args.coarse_vertices,
+        max_iterations: args.max_iters,
+        tolerance: args.tolerance,
+        armijo_c: args.armijo_c,
     };
-    let mut energy = match args.energy {
-        EnergyChoice::Litke => Energy::litke(target),
-        EnergyChoice::Sd => Energy::SymmetricDirichlet,
-        EnergyChoice::Mips => Energy::Mips,
-        EnergyChoice::Arap => Energy::Arap,
-    };
-    if let Some(from) = args.from_alpha {
-        energy = energy.with_continuation(alpha(from)?).map_err(|_| {
-            anyhow::anyhow!("--from-alpha is a continuation in Litke's α; it needs --energy litke")
-        })?;
-    }
-    let coarse = CoarseLevel {
-        vertices: args.coarse_vertices,
-        ..CoarseLevel::default()
-    };
-    let start = match (args.start, args.multilevel) {
-        (StartChoice::Auto, choice) => Start::Auto {
-            multilevel: match choice {
-                MultilevelChoice::Auto => Multilevel::Auto(coarse),
-                MultilevelChoice::On => Multilevel::Always(coarse),
-                MultilevelChoice::Off => Multilevel::Never,
-            },
-        },
-        (_, MultilevelChoice::On) => {
-            bail!(
-                "--multilevel on needs --start auto (an explicit start map is computed on the full mesh)"
-            )
+    let opts = settings.options().map_err(settings_message)?;
+    // One UV per vertex for every command but `flatten` (`flatten_options`).
+    Ok(opts.with_fill_holes(fill_holes).with_cut(Cut::Never))
+}
+
+/// Settings that make no options, as the flags that set them.
+fn settings_message(e: SettingsError) -> anyhow::Error {
+    match e {
+        SettingsError::Alpha(e) | SettingsError::FromAlpha(e) => {
+            anyhow::Error::new(e).context("invalid α")
         }
-        (StartChoice::Lscm, _) => Start::Lscm,
-        (StartChoice::MeanValue, _) => Start::MeanValue,
-    };
-    let mut opts = FlattenOptions::new(energy)
-        .with_start(start)
-        .with_fill_holes(fill_holes)
-        // One UV per vertex for every command but `flatten` (`flatten_options`).
-        .with_cut(Cut::Never);
-    opts.newton.max_iterations = args.max_iters;
-    opts.newton.tolerance = args.tolerance;
-    opts.newton.armijo_c = args.armijo_c;
-    opts.validate()
-        .map_err(|e| anyhow::anyhow!(option_message(&e)))?;
-    Ok(opts)
+        SettingsError::Continuation(_) => {
+            anyhow::anyhow!("--from-alpha is a continuation in Litke's α; it needs --energy litke")
+        }
+        SettingsError::MultilevelNeedsAutoStart => anyhow::anyhow!(
+            "--multilevel on needs --start auto (an explicit start map is computed on the full mesh)"
+        ),
+        SettingsError::Option(e) => anyhow::anyhow!(option_message(&e)),
+    }
 }
 
 /// The options of `surfmap flatten` (one mesh or a batch): the solver's, with the holes
@@ -270,33 +305,36 @@ pub fn flatten_options(args: &Args) -> anyhow::Result<FlattenOptions> {
         }),
         ..options(&args.solver, !args.cut_holes)?
             .with_cut(cut)
-            .with_bijective(match args.bijective {
-                BijectiveChoice::Auto => Bijective::WhenOverlapping,
-                BijectiveChoice::Always => Bijective::Always,
-                BijectiveChoice::Off => Bijective::Off,
-            })
+            .with_bijective(args.bijective.into())
     };
     opts.validate()
         .map_err(|e| anyhow::anyhow!(option_message(&e)))?;
     Ok(opts)
 }
 
-/// Runs the flattening with a progress spinner on a terminal; errors name the flags
-/// that fix them.
-pub fn flatten_mesh(
-    mesh: &TriMesh,
-    opts: &FlattenOptions,
+/// The layout `--normalize` and `--uv-as-positions` ask for.
+pub fn layout(args: &Args) -> UvLayout {
+    UvLayout {
+        normalize: args.normalize,
+        uv_as_positions: args.uv_as_positions,
+    }
+}
+
+/// Runs `solve` with a progress spinner on a terminal for meshes of more than 20k
+/// faces (`faces`), unless `quiet`.
+fn with_progress<T>(
+    faces: usize,
     quiet: bool,
-) -> anyhow::Result<Flattening> {
-    let bar =
-        (!quiet && std::io::stderr().is_terminal() && mesh.triangles.len() > 20_000).then(|| {
-            let b = ProgressBar::new_spinner();
-            b.set_style(
-                ProgressStyle::with_template("{spinner} {elapsed} {msg}").expect("valid template"),
-            );
-            b
-        });
-    let result = flatten_with_progress(mesh, opts, &mut |it| {
+    solve: impl FnOnce(&mut dyn FnMut(&IterationLog)) -> T,
+) -> T {
+    let bar = (!quiet && std::io::stderr().is_terminal() && faces > 20_000).then(|| {
+        let b = ProgressBar::new_spinner();
+        b.set_style(
+            ProgressStyle::with_template("{spinner} {elapsed} {msg}").expect("valid template"),
+        );
+        b
+    });
+    let result = solve(&mut |it| {
         if let Some(b) = &bar {
             b.set_message(format!(
                 "stage {} iteration {}: energy {:.6}",
@@ -308,40 +346,47 @@ pub fn flatten_mesh(
     if let Some(b) = bar {
         b.finish_and_clear();
     }
-    let result = result.map_err(flatten_error)?;
+    result
+}
+
+/// Says on stderr that holes were filled (unless `quiet`).
+fn note_filled_holes(result: &Flattening, quiet: bool) {
     if !quiet && result.holes_filled > 0 {
         eprintln!(
             "repair: filled {} holes for the flattening (the output keeps them open)",
             result.holes_filled
         );
     }
+}
+
+/// Runs the flattening with a progress spinner on a terminal; errors name the flags
+/// that fix them.
+pub fn flatten_mesh(
+    mesh: &TriMesh,
+    opts: &FlattenOptions,
+    quiet: bool,
+) -> anyhow::Result<Flattening> {
+    let result = with_progress(mesh.triangles.len(), quiet, |progress| {
+        flatten_with_progress(mesh, opts, progress)
+    })
+    .map_err(flatten_error)?;
+    note_filled_holes(&result, quiet);
     Ok(result)
 }
 
-/// The mesh to write: the input with its texture coordinates (per vertex, or per corner
-/// when it was cut), or the flat mesh itself (cut open along the seams).
-pub fn output_mesh(
-    mesh: &TriMesh,
-    result: &Flattening,
-    normalize: bool,
-    uv_as_positions: bool,
-) -> TriMesh {
-    let uvs = result.texture_coordinates(normalize);
-    if !uv_as_positions {
-        return TriMesh {
-            uvs: Some(uvs),
-            ..TriMesh::new(mesh.positions.clone(), mesh.triangles.clone())
-        };
-    }
-    let (coords, triangles) = match uvs {
-        Uvs::PerVertex(coords) => (coords, mesh.triangles.clone()),
-        Uvs::PerCorner { coords, indices } => (coords, indices),
-    };
-    TriMesh {
-        positions: coords.iter().map(|p| [p[0], p[1], 0.0]).collect(),
-        triangles,
-        uvs: Some(Uvs::PerVertex(coords)),
-    }
+/// [`flatten_mesh`] giving the mesh to write too ([`surfmap::flatten_to_mesh`]).
+pub fn flatten_for_writing(
+    mesh: TriMesh,
+    opts: &FlattenOptions,
+    layout: UvLayout,
+    quiet: bool,
+) -> anyhow::Result<FlatMesh> {
+    let flat = with_progress(mesh.triangles.len(), quiet, |progress| {
+        flatten_to_mesh(mesh, opts, layout, progress)
+    })
+    .map_err(flatten_error)?;
+    note_filled_holes(&flat.flattening, quiet);
+    Ok(flat)
 }
 
 /// Reads seams for `--cut-along`: OBJ `l` lines (1-based, consecutive pairs of a
@@ -391,41 +436,11 @@ pub fn read_seams(path: &Path) -> anyhow::Result<Vec<[u32; 2]>> {
     Ok(seams)
 }
 
-/// Writes the seams as an OBJ: every vertex of the input, one `l` line per seam edge.
-pub fn write_seams(path: &Path, mesh: &TriMesh, seams: &Seams) -> anyhow::Result<()> {
-    write_atomically(path, |w| {
-        writeln!(
-            w,
-            "# seams of surfmap flatten: {} edges, length {}",
-            seams.edges.len(),
-            seams.length
-        )?;
-        for p in &mesh.positions {
-            writeln!(w, "v {} {} {}", p[0], p[1], p[2])?;
-        }
-        for [a, b] in &seams.edges {
-            writeln!(w, "l {} {}", a + 1, b + 1)?;
-        }
-        Ok(())
-    })
-    .with_context(|| format!("cannot write {}", path.display()))
-}
-
-/// The map written: the UVs (in `[0, 1]²` with `--normalize`) on the mesh, or the flat
-/// mesh itself with `--uv-as-positions`; with the `--texture` material.
-pub fn write_output(
-    args: &Args,
-    path: &Path,
-    mesh: &TriMesh,
-    r: &Flattening,
-) -> anyhow::Result<()> {
-    let out = output_mesh(mesh, r, args.normalize, args.uv_as_positions);
-    let material = args
-        .texture
+/// The `--texture` material of the OBJ written.
+pub fn material(args: &Args) -> Option<ObjMaterial> {
+    args.texture
         .as_ref()
-        .map(|t| surfmap::mesh::io::ObjMaterial { texture: t.clone() });
-    // The writer's error names the file already.
-    Ok(write_obj(path, &out, material.as_ref())?)
+        .map(|t| ObjMaterial { texture: t.clone() })
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
@@ -436,19 +451,21 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let file = load_mesh(input)?;
     let opts = flatten_options(&args)?;
     let mesh = args.repair.apply(file.mesh, args.quiet)?;
-    let result = flatten_mesh(&mesh, &opts, args.quiet)
+    let flat = flatten_for_writing(mesh, &opts, layout(&args), args.quiet)
         .with_context(|| format!("cannot flatten {}", input.display()))?;
-    write_output(&args, &args.output, &mesh, &result)?;
+    // The writer's error names the file already.
+    write_obj(&args.output, &flat.output, material(&args).as_ref())?;
     if let Some(path) = &args.report {
         // Measured on the written map (its own scale; the measures normalize area).
-        let report = FlattenReport::measure(Some(input), &mesh, &result, defect_message)?;
-        write_json(path, &report)?;
+        write_json(path, &flat.report(Some(input), defect_message)?)?;
     }
-    if let (Some(path), Some(seams)) = (&args.seams, &result.seams) {
-        write_seams(path, &mesh, seams)?;
+    if let Some(path) = &args.seams {
+        flat.write_seams(path)
+            .with_context(|| format!("cannot write {}", path.display()))?;
     }
+    let result = &flat.flattening;
     if let Some(dir) = &args.pictures {
-        let written = write_pictures(dir, &mesh, &result)?;
+        let written = write_pictures(dir, &flat.input, result)?;
         if !args.quiet {
             for p in written {
                 eprintln!("wrote {}", p.display());
@@ -463,51 +480,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         {
             eprintln!("note: multilevel start abandoned ({reason}); used the single-level start");
         }
-        outln!(
-            "{}: {}{}start {}{}, {} iterations, {}, energy {:.6}, flipped triangles {}{}, {:.3} s → {}",
-            input.display(),
-            match &result.seams {
-                None => String::new(),
-                Some(s) => format!(
-                    "{} ({} seam edges, length {:.4}), ",
-                    result.describe_plan(),
-                    s.edges.len(),
-                    s.length
-                ),
-            },
-            result
-                .distortion_cuts
-                .as_ref()
-                .map_or_else(String::new, distortion_summary),
-            result.start_description(),
-            match result.warm_start_iterations {
-                0 => String::new(),
-                n => format!(" + {n} ARAP steps"),
-            },
-            result.iterations,
-            if result.stop_reason == surfmap::StopReason::Stalled {
-                "stopped near the minimum (scaffold: energy decrease below 1e-3 per step)"
-            } else {
-                convergence(result.converged)
-            },
-            result.energy,
-            result.flipped_triangles,
-            match (result.guarantee, result.barrier) {
-                (Guarantee::LocallyInjective, _) => format!(
-                    ", boundary overlaps itself ({} crossings; see --bijective)",
-                    result.boundary_crossings
-                ),
-                (Guarantee::Bijective, true)
-                    if result.stop_reason == surfmap::StopReason::Stalled =>
-                {
-                    ", no overlap (scaffold)".to_string()
-                }
-                (Guarantee::Bijective, true) => ", no overlap (boundary barrier)".to_string(),
-                (Guarantee::Bijective, false) => String::new(),
-            },
-            result.time_total,
-            args.output.display()
-        );
+        outln!("{}", summary_line(input, result, &args.output));
     }
     if let Some(cuts) = result.distortion_cuts.as_ref().filter(|c| !c.met) {
         bail!(
@@ -521,6 +494,54 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// The line `surfmap flatten` prints for one mesh: what was done, the start, the
+/// iterations, the energy, the guarantee, the time and the output.
+fn summary_line(input: &Path, result: &Flattening, output: &Path) -> String {
+    format!(
+        "{}: {}{}start {}{}, {} iterations, {}, energy {:.6}, flipped triangles {}{}, {:.3} s → {}",
+        input.display(),
+        match &result.seams {
+            None => String::new(),
+            Some(s) => format!(
+                "{} ({} seam edges, length {:.4}), ",
+                result.describe_plan(),
+                s.edges.len(),
+                s.length
+            ),
+        },
+        result
+            .distortion_cuts
+            .as_ref()
+            .map_or_else(String::new, distortion_summary),
+        result.start_description(),
+        match result.warm_start_iterations {
+            0 => String::new(),
+            n => format!(" + {n} ARAP steps"),
+        },
+        result.iterations,
+        if result.stop_reason == surfmap::StopReason::Stalled {
+            "stopped near the minimum (scaffold: energy decrease below 1e-3 per step)"
+        } else {
+            convergence(result.converged)
+        },
+        result.energy,
+        result.flipped_triangles,
+        match (result.guarantee, result.barrier) {
+            (Guarantee::LocallyInjective, _) => format!(
+                ", boundary overlaps itself ({} crossings; see --bijective)",
+                result.boundary_crossings
+            ),
+            (Guarantee::Bijective, true) if result.stop_reason == surfmap::StopReason::Stalled => {
+                ", no overlap (scaffold)".to_string()
+            }
+            (Guarantee::Bijective, true) => ", no overlap (boundary barrier)".to_string(),
+            (Guarantee::Bijective, false) => String::new(),
+        },
+        result.time_total,
+        output.display()
+    )
 }
 
 /// `distortion 1.3160 → 1.0416 ≤ 1.05 (2 cut rounds, 6 seam edges added, length
@@ -552,8 +573,7 @@ fn cut_stop_words(stop: &surfmap::CutStop) -> String {
 
 /// Writes `value` as pretty JSON (atomically).
 pub fn write_json(path: &Path, value: &impl serde::Serialize) -> anyhow::Result<()> {
-    let json = serde_json::to_vec_pretty(value)?;
-    write_atomically(path, |w| w.write_all(&json))
+    surfmap::fsutil::write_json(path, value)
         .with_context(|| format!("cannot write {}", path.display()))
 }
 

@@ -93,6 +93,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 d.message
             );
         }
+        if r.defects.iter().any(|d| !d.examples.is_empty()) {
+            outln!("    ({})", surfmap::mesh::validate::NUMBERING);
+        }
     }
     Ok(())
 }

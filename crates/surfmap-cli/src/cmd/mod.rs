@@ -27,9 +27,16 @@ pub fn load_mesh(path: &Path) -> anyhow::Result<MeshFile> {
 #[derive(clap::Args, Clone, Default)]
 pub struct RepairArgs {
     /// Weld vertices closer than TOL (0 = exactly coincident) before anything else.
-    #[arg(long, value_name = "TOL", num_args = 0..=1, default_missing_value = "0")]
+    #[arg(
+        long,
+        value_name = "TOL",
+        num_args = 0..=1,
+        default_missing_value = "0",
+        allow_negative_numbers = true
+    )]
     pub weld: Option<f64>,
-    /// Remove faces with a repeated vertex or zero area.
+    /// Remove faces with a repeated vertex or zero area, and faces that repeat another
+    /// face (the same three vertices).
     #[arg(long)]
     pub drop_degenerate: bool,
     /// Flip faces to make the orientation consistent.
@@ -146,7 +153,7 @@ impl RepairArgs {
             say_if(
                 self.drop_degenerate,
                 n,
-                format!("dropped {n} degenerate faces"),
+                format!("dropped {n} degenerate or repeated faces"),
             );
             mesh = m;
         }

@@ -29,7 +29,7 @@ pub struct Args {
     #[arg(short, long)]
     pub output: PathBuf,
     /// Length of the animation in seconds.
-    #[arg(long, default_value_t = 2.0)]
+    #[arg(long, default_value_t = 2.0, allow_negative_numbers = true)]
     pub seconds: f64,
     /// Also write N frames t = 0, 1/(N−1), …, 1 as OBJ into --frames-dir.
     #[arg(long, value_name = "N")]

@@ -49,7 +49,7 @@ pub struct Args {
     #[arg(long, value_name = "DIR")]
     pub keys_dir: Option<PathBuf>,
     /// Seconds each key takes in the animation (weight 0 → 1 → 0).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     pub seconds_per_key: f64,
     /// Write a stills sheet: the neutral and every key from one view.
     #[arg(long, value_name = "SHEET.png")]

@@ -16,7 +16,7 @@ pub struct Args {
     #[arg(short, long)]
     pub output: PathBuf,
     /// α values to compare, each L,A,C; default: conformal, length, balanced, area presets.
-    #[arg(long = "alpha", value_parser = super::flatten::parse_alpha)]
+    #[arg(long = "alpha", value_parser = super::flatten::parse_alpha, allow_hyphen_values = true)]
     pub alphas: Vec<[f64; 3]>,
     /// Sheet size in pixels, WIDTHxHEIGHT.
     #[arg(long, default_value = "1600x700", value_parser = super::measure::parse_size)]

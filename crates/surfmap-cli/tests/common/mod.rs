@@ -120,3 +120,84 @@ pub fn read_npy_f64(path: &std::path::Path) -> (Vec<usize>, Vec<f64>) {
         .collect();
     (shape, data)
 }
+
+/// A damaged input made here: its file, the defect kind `inspect` must list (`None`: the
+/// file cannot be read at all) and the words both `inspect` and `flatten` must say.
+pub struct Damaged {
+    pub name: &'static str,
+    pub path: PathBuf,
+    pub kind: Option<&'static str>,
+    pub words: &'static str,
+}
+
+/// A 4×4 grid disc (25 vertices, 32 faces) as OBJ text, with `edit` applied to its
+/// vertex coordinates and face list first.
+fn grid_obj(edit: impl FnOnce(&mut Vec<[f64; 3]>, &mut Vec<[u32; 3]>)) -> String {
+    let n = 4;
+    let mut v: Vec<[f64; 3]> = (0..=n)
+        .flat_map(|j| {
+            (0..=n).map(move |i| [i as f64 / 4.0, j as f64 / 4.0, 0.1 * ((i * j) % 3) as f64])
+        })
+        .collect();
+    let mut f = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            let a = j * (n + 1) + i;
+            f.push([a, a + 1, a + n + 2]);
+            f.push([a, a + n + 2, a + n + 1]);
+        }
+    }
+    edit(&mut v, &mut f);
+    let mut text = String::new();
+    for p in &v {
+        text += &format!("v {} {} {}\n", p[0], p[1], p[2]);
+    }
+    for t in &f {
+        text += &format!("f {} {} {}\n", t[0] + 1, t[1] + 1, t[2] + 1);
+    }
+    text
+}
+
+/// The damaged inputs of issue 50, written into `dir`: a binary file named `.obj`, a
+/// NaN coordinate on a face, coordinates of 1e300 (finite, but every area overflows),
+/// and a face given twice.
+pub fn damaged_inputs(dir: &std::path::Path) -> Vec<Damaged> {
+    let write = |name: &str, bytes: &[u8]| {
+        let path = dir.join(name);
+        std::fs::write(&path, bytes).unwrap();
+        path
+    };
+    let binary: Vec<u8> = (0..=255u8).cycle().take(4096).collect();
+    vec![
+        Damaged {
+            name: "binary",
+            path: write("binary.obj", &binary),
+            kind: None,
+            words: "byte 0x00 is not text, but a .obj file is text",
+        },
+        Damaged {
+            name: "nan",
+            path: write("nan.obj", grid_obj(|v, _| v[7][0] = f64::NAN).as_bytes()),
+            kind: Some("non_finite_coordinates"),
+            words: "1 vertex has NaN or infinite coordinates (first: 7) and is used by faces",
+        },
+        Damaged {
+            name: "huge",
+            path: write(
+                "huge.obj",
+                grid_obj(|v, _| v.iter_mut().flatten().for_each(|x| *x *= 1e300)).as_bytes(),
+            ),
+            kind: Some("overflowing_coordinates"),
+            words: "32 faces have edge lengths or areas that overflow to infinity",
+        },
+        Damaged {
+            name: "repeated face",
+            path: write(
+                "repeated.obj",
+                grid_obj(|_, f| f.push([f[1][0], f[1][2], f[1][1]])).as_bytes(),
+            ),
+            kind: Some("duplicate_faces"),
+            words: "1 face repeats an earlier face with the same three vertices (repeat and first: (32, 1))",
+        },
+    ]
+}

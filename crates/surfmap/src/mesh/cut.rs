@@ -75,7 +75,7 @@ pub enum CutError {
     /// Defects no cut can fix (several components, non-manifold edges or vertices,
     /// non-orientable or inconsistently oriented faces, degenerate faces, non-finite
     /// coordinates), each with its remedy.
-    #[error("the mesh cannot be cut into a disc:\n{}", super::disc::list_defects(.0))]
+    #[error("the mesh cannot be cut into a disc:\n{}", super::validate::list_defects(.0))]
     Defects(Vec<Defect>),
     #[error(
         "seam {index} ({a}, {b}) is not an edge of the mesh; seams are pairs of vertices joined by an edge (vertex indices from 0)"

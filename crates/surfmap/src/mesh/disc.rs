@@ -13,7 +13,7 @@
 //! surface. Vertices used by no triangle are allowed (they are harmless, and
 //! [`crate::flatten`] puts them aside); the initial maps refuse them.
 
-use super::validate::{Defect, validate};
+use super::validate::{Defect, list_defects, validate};
 use super::{IndexError, Topology, TriMesh};
 
 /// A mesh checked to be a disc (module docs), with its topology and its boundary loop.
@@ -43,17 +43,8 @@ pub enum PositionError {
         "{positions} positions for a disc of {vertices} vertices; give one position per vertex"
     )]
     Count { positions: usize, vertices: usize },
-    #[error("position of vertex {vertex} is not finite; fix or remove it")]
+    #[error("position of vertex {vertex} (0-based) is not finite; fix or remove it")]
     NonFinite { vertex: u32 },
-}
-
-/// Defects as an indented list, one `  - message` line each.
-pub(crate) fn list_defects(defects: &[Defect]) -> String {
-    defects
-        .iter()
-        .map(|d| format!("  - {}", d.message()))
-        .collect::<Vec<_>>()
-        .join("\n")
 }
 
 impl<'m> Disc<'m> {

@@ -29,7 +29,7 @@ use crate::vec3::{cross3, norm3, sub3};
 /// function taking `(positions, triangles)` returns for it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
 #[error(
-    "triangle {triangle} uses vertex {vertex} (corner {corner}), but the mesh has only {num_vertices} vertices; the triangles do not belong to these positions"
+    "triangle {triangle} uses vertex {vertex} (corner {corner}), but the mesh has only {num_vertices} vertices (numbers count from 0); the triangles do not belong to these positions"
 )]
 pub struct IndexError {
     pub triangle: usize,
@@ -158,15 +158,13 @@ impl TriMesh {
         check_indices(&self.triangles, self.positions.len())
     }
 
-    /// Every position is finite and no triangle repeats a vertex.
+    /// Every position a triangle uses is finite and no triangle repeats a vertex (a
+    /// vertex no triangle uses may be anything: it gets no UV).
     pub fn finite_and_proper(&self) -> bool {
-        self.positions
+        let finite = |v: u32| self.positions[v as usize].iter().all(|x| x.is_finite());
+        self.triangles
             .iter()
-            .all(|p| p.iter().all(|x| x.is_finite()))
-            && self
-                .triangles
-                .iter()
-                .all(|&[a, b, c]| a != b && b != c && a != c)
+            .all(|&[a, b, c]| a != b && b != c && a != c && finite(a) && finite(b) && finite(c))
     }
 
     /// Per-vertex UVs, when the mesh carries them per vertex (or per corner with

@@ -74,12 +74,16 @@ pub fn drop_unreferenced(mesh: &TriMesh) -> (TriMesh, usize) {
 }
 
 /// Removes faces with a repeated vertex or zero area (see
-/// [`super::validate::zero_area_faces`]). Returns the mesh and how many were removed.
+/// [`super::validate::zero_area_faces`]) and faces that repeat an earlier face (the same
+/// three vertices, [`super::validate::duplicate_faces`]; the first is kept). Returns the
+/// mesh and how many were removed.
 pub fn drop_degenerate(mesh: &TriMesh) -> (TriMesh, usize) {
     let mut bad = vec![false; mesh.triangles.len()];
+    let repeats = super::validate::duplicate_faces(mesh);
     for t in super::validate::repeated_index_faces(mesh)
         .into_iter()
         .chain(super::validate::zero_area_faces(mesh))
+        .chain(repeats.into_iter().map(|(repeat, _)| repeat))
     {
         bad[t as usize] = true;
     }

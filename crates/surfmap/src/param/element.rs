@@ -21,8 +21,9 @@
 //! [`gradient_and_projected_hessian`] uses to clamp negative eigenvalues to zero.
 
 use crate::energy::Density;
+use crate::mesh::validate::TriangleShape;
 use crate::mesh::{IndexError, check_indices};
-use crate::vec3::{cross3, dot3, sub3};
+use crate::vec3::dot3;
 use rayon::prelude::*;
 use thiserror::Error;
 
@@ -49,15 +50,12 @@ impl RestTriangle {
     /// Returns `None` for a degenerate triangle: non-finite corners, or an area at
     /// rounding level (`|n| ≤ ε · ℓ²_max`, ℓ the longest edge), including zero.
     pub fn new(p1: [f64; 3], p2: [f64; 3], p3: [f64; 3]) -> Option<Self> {
-        let e = sub3(p2, p1);
-        let f = sub3(p3, p1);
-        let g = sub3(p3, p2);
-        let n = cross3(e, f);
-        let n_len = dot3(n, n).sqrt();
-        let l_max2 = dot3(e, e).max(dot3(f, f)).max(dot3(g, g));
-        if !(n_len.is_finite() && l_max2.is_finite()) || n_len <= f64::EPSILON * l_max2 {
+        // The same test as validation's ([`TriangleShape`]): what it names, this refuses.
+        let shape = TriangleShape::new(p1, p2, p3);
+        if shape.overflows() || shape.is_flat() {
             return None;
         }
+        let (e, f, n_len) = (shape.e, shape.f, shape.normal_length);
         let e_len = dot3(e, e).sqrt();
         // x3 in the frame: x3.x = f·e/|e|, x3.y = |e × f|/|e|.
         let x3x = dot3(f, e) / e_len;
@@ -78,7 +76,7 @@ pub enum RestTriangleError {
     #[error(transparent)]
     Index(#[from] IndexError),
     #[error(
-        "{count} triangle(s) have (nearly) zero area or non-finite corners, the first is triangle {first}; their distortion is undefined — remove or repair them (collapse zero-area triangles) before flattening"
+        "{count} face(s) have (nearly) zero area, or corners, lengths or areas that are not finite numbers (0-based face ids, first: {first}); their distortion is undefined — remove or repair them (collapse zero-area faces) before flattening"
     )]
     Degenerate { first: usize, count: usize },
 }
@@ -465,6 +463,7 @@ fn pull_back_hessian(rest: &RestTriangle, hj: &[[f64; 4]; 4], out: &mut [[f64; 6
 mod tests {
     use super::*;
     use crate::energy::{Alpha, Arap, Mips, SymmetricDirichlet};
+    use crate::vec3::{cross3, sub3};
 
     use crate::testing::Rng;
 

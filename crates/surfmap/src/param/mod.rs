@@ -48,13 +48,13 @@ pub enum InitialMapError {
     #[error(transparent)]
     Positions(#[from] PositionError),
     #[error(
-        "vertex {vertex} is used by no triangle; remove unreferenced vertices first (`repair::drop_unreferenced`)"
+        "vertex {vertex} (0-based) is used by no triangle; remove unreferenced vertices first (`repair::drop_unreferenced`)"
     )]
     UnreferencedVertex { vertex: u32 },
     #[error("the boundary loop has zero length (all boundary vertices coincide)")]
     DegenerateBoundary,
     #[error(
-        "triangle {triangle} is degenerate (zero area or a zero-length edge); remove or repair it"
+        "triangle {triangle} (0-based) is degenerate (zero area or a zero-length edge); remove or repair it"
     )]
     DegenerateTriangle { triangle: usize },
     #[error("expected {expected} boundary UV positions, got {got}")]

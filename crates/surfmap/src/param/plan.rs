@@ -6,12 +6,14 @@
 //! map has one UV per corner, split along the seams.
 //!
 //! [`plan`] says which, and why, without solving (the command line's `inspect` prints
-//! it); a mesh no fill or cut can help (several components, non-manifold, non-orientable
-//! or inconsistently oriented) is refused with every blocking defect and its remedy.
+//! it); a mesh no fill or cut can help (coordinates that are not finite or overflow,
+//! degenerate or repeated faces, several components, non-manifold, non-orientable or
+//! inconsistently oriented) is refused with every blocking defect and its remedy, as
+//! [`crate::mesh::validate`] names them.
 
 use super::flatten::{FlattenError, FlattenOptions};
 use crate::mesh::cut::{OpenedMesh, fixed_by_cutting, open_along};
-use crate::mesh::validate::{DefectKind, validate};
+use crate::mesh::validate::{DefectKind, blocks_geometry, validate};
 use crate::mesh::{Topology, TriMesh};
 use serde::Serialize;
 
@@ -136,7 +138,9 @@ pub(crate) fn plan_with_topology(
         }),
         Cut::Auto | Cut::Never => None,
     };
-    if !cuttable || (cut.is_none() && !is_disc) {
+    // The geometry first: coordinates and faces no fill or cut can make usable
+    // (validation's verdict, the same that `inspect` reports).
+    if blocks_geometry(mesh, topology) || !cuttable || (cut.is_none() && !is_disc) {
         // What is left for the caller to fix: everything that blocks a disc, but what
         // the options fill or cut.
         // (A cut or fill that the other defects prevent today counts as fixing: it

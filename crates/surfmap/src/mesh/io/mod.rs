@@ -155,6 +155,18 @@ pub enum ReadError {
         feature: String,
     },
     #[error(
+        "{}: {at}: byte 0x{byte:02x} is not text, but a .{format} file is text: this one holds binary data (another format under a .{format} name, or a damaged file); export the mesh again as text {upper}, or as PLY",
+        shown(.path),
+        upper = .format.extension().to_uppercase()
+    )]
+    NotText {
+        path: PathBuf,
+        at: Location,
+        /// The first byte that is not text.
+        byte: u8,
+        format: Format,
+    },
+    #[error(
         "{}: {at}: {count} {what} are more than the 4294967295 a mesh can index",
         shown(.path)
     )]
@@ -202,6 +214,7 @@ impl ReadError {
             | ReadError::FaceTooSmall { at, .. }
             | ReadError::Truncated { at, .. }
             | ReadError::Unsupported { at, .. }
+            | ReadError::NotText { at, .. }
             | ReadError::TooMany { at, .. } => Some(*at),
         }
     }
@@ -215,6 +228,7 @@ impl ReadError {
             | ReadError::FaceTooSmall { path, .. }
             | ReadError::Truncated { path, .. }
             | ReadError::Unsupported { path, .. }
+            | ReadError::NotText { path, .. }
             | ReadError::TooMany { path, .. } => *path = file.to_path_buf(),
         }
         self
@@ -337,9 +351,27 @@ pub fn read_mesh_from_bytes(bytes: &[u8], format: Format) -> Result<MeshFile, Re
 
 fn parse(bytes: &[u8], format: Format) -> Result<Parsed, ReadError> {
     match format {
-        Format::Obj => obj::parse(bytes),
-        Format::Off => off::parse(bytes),
+        Format::Obj => check_text(bytes, format).and_then(|()| obj::parse(bytes)),
+        Format::Off => check_text(bytes, format).and_then(|()| off::parse(bytes)),
         Format::Ply => ply::parse(bytes),
+    }
+}
+
+/// A text format's bytes must be text: the first control byte other than tab, line
+/// breaks, form feed and a DOS end-of-file mark (0x1A) is an error naming it, so that a
+/// binary file under a text format's name is refused as such instead of read as a file
+/// of unknown lines (an empty mesh).
+fn check_text(bytes: &[u8], format: Format) -> Result<(), ReadError> {
+    let binary =
+        |b: u8| (b < 0x20 && !matches!(b, b'\t' | b'\n' | b'\r' | 0x0b | 0x0c | 0x1a)) || b == 0x7f;
+    match bytes.iter().position(|&b| binary(b)) {
+        None => Ok(()),
+        Some(offset) => Err(ReadError::NotText {
+            path: PathBuf::new(),
+            at: Location::Byte(offset as u64),
+            byte: bytes[offset],
+            format,
+        }),
     }
 }
 
@@ -608,6 +640,43 @@ mod tests {
                 assert!(!path.exists());
             }
         }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A binary file under a text format's name is refused as binary, at its first
+    /// byte that is not text; a PLY written as binary and renamed `.obj` is the case met
+    /// in practice. A DOS end-of-file mark and tabs are text.
+    #[test]
+    fn binary_data_in_a_text_format_is_refused_by_name() {
+        let dir = temp_dir("not-text");
+        let ply = dir.join("m.ply");
+        write_mesh(&ply, &awkward_mesh()).unwrap();
+        let bytes = std::fs::read(&ply).unwrap();
+        let first = bytes
+            .iter()
+            .position(|&b| b < 0x20 && !b"\t\n\r".contains(&b))
+            .expect("a binary PLY body");
+        for ext in ["obj", "off"] {
+            let renamed = dir.join(format!("m.{ext}"));
+            std::fs::write(&renamed, &bytes).unwrap();
+            let err = read_mesh(&renamed).unwrap_err();
+            assert!(
+                matches!(err, ReadError::NotText { at: Location::Byte(b), .. } if b == first as u64),
+                "{err}"
+            );
+            let message = err.to_string();
+            assert!(
+                message.starts_with(&renamed.display().to_string()),
+                "{message}"
+            );
+            assert!(
+                message.contains(&format!("a .{ext} file is text")),
+                "{message}"
+            );
+        }
+        let dos = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf\t1 2 3\r\n\x1a";
+        let m = read_mesh_from_bytes(dos, Format::Obj).unwrap();
+        assert_eq!(m.mesh.triangles, [[0, 1, 2]]);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -1,0 +1,64 @@
+//! Why a flattening failed: [`FlattenError`].
+
+use super::options::OptionError;
+use crate::linsolve::SolveError;
+use crate::mesh::cut::CutError;
+use crate::mesh::validate::{Defect, list_defects};
+use crate::mesh::{IndexError, NotADisc};
+use crate::param::InitialMapError;
+use crate::param::element::RestTriangleError;
+
+/// Why a flattening failed. The messages name the problem and the remedy in the
+/// library's terms (options, `mesh::repair` functions).
+#[derive(Debug, thiserror::Error)]
+pub enum FlattenError {
+    #[error(transparent)]
+    Index(#[from] IndexError),
+    #[error("the mesh cannot be flattened as a disc:\n{}", list_defects(.0))]
+    NotADisc(Vec<Defect>),
+    #[error("{0}; `repair::drop_degenerate` removes them")]
+    Degenerate(#[from] RestTriangleError),
+    #[error("invalid option: {0}")]
+    Option(#[from] OptionError),
+    #[error("linear solve failed: {0}")]
+    Solve(#[from] SolveError),
+    #[error("initial map: {0}")]
+    InitialMap(#[from] InitialMapError),
+    #[error(
+        "both initial maps flipped triangles (LSCM: {lscm}, mean-value: {mean_value}); the mesh geometry is probably broken (non-finite or coincident vertices)"
+    )]
+    NoAdmissibleStart { lscm: usize, mean_value: usize },
+    #[error(
+        "the LSCM start flips or degenerates {0} triangles; use `Start::Auto` (falls back to mean-value coordinates, injective by construction)"
+    )]
+    LscmFlipped(usize),
+    #[error("the given initial map has {uvs} UVs, but the mesh has {vertices} vertices")]
+    GivenStartLength { uvs: usize, vertices: usize },
+    #[error(
+        "the given initial map flips or degenerates {0} triangles; a start map must be injective"
+    )]
+    GivenStartFlipped(usize),
+    #[error(
+        "a given start map has no UVs for the {0} filled holes; fill them yourself (`repair::fill_holes`) and give UVs for the filled mesh, or use `Start::Auto`"
+    )]
+    GivenStartWithFilledHoles(usize),
+    #[error(
+        "a given start map has one UV per vertex, but the surface is cut open along seams ({0}); cut it yourself (`mesh::cut`) and give UVs for the opened mesh, or use `Start::Auto`"
+    )]
+    GivenStartWithCut(String),
+    #[error(transparent)]
+    Cut(#[from] CutError),
+    #[error("internal error: the result has {0} flipped triangles; please report this mesh")]
+    FlippedResult(usize),
+    #[error("measuring the distortion for the distortion bound: {0}")]
+    Distortion(#[from] crate::measure::MeasureError),
+}
+
+impl From<NotADisc> for FlattenError {
+    fn from(e: NotADisc) -> Self {
+        match e {
+            NotADisc::Index(e) => FlattenError::Index(e),
+            NotADisc::Defects(d) => FlattenError::NotADisc(d),
+        }
+    }
+}
