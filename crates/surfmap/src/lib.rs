@@ -84,6 +84,7 @@
 //! | [`matching`] | surface matching: alignment in space, the matching energy (2.16) over deformations of the grid, the multiscale solve, fold checks, point maps, the match folder |
 //! | [`apps`] | thesis ch. 5 on matches and maps: transfer, baking, morphs, rigs, glTF |
 //! | [`report`] | the documents of a run: [`InspectReport`], [`FlattenReport`] (the CLI's JSON, the Python package's dictionaries) |
+//! | [`view`] | one self-contained interactive HTML page of a flattening, a match, a morph or rig, or a folder of results |
 //! | [`batch`] | many mesh files on a thread pool, one bad mesh never stopping the rest, and their summary table |
 //!
 //! Internal building blocks are public for benchmarks and probes but hidden from these
@@ -110,6 +111,7 @@ pub mod report;
 #[doc(hidden)]
 pub mod testing;
 pub(crate) mod vec3;
+pub mod view;
 
 pub use energy::{Alpha, Energy};
 pub use measure::{
