@@ -63,13 +63,16 @@ async function launch() {
   });
   return { browser, profile };
 }
+// Screenshots are taken with multisampling, which the page leaves out on a software
+// renderer unless asked (#antialias).
+let hash = "";
 async function open(browser, file, problems) {
   const page = await browser.newPage();
   await page.setViewport({ width: 1400, height: 800 });
   page.on("console", (m) => { if (m.type() === "error") problems.push(`console error: ${m.text()}`); });
   page.on("pageerror", (e) => problems.push(`uncaught: ${e.message}`));
   page.on("request", (r) => { if (!r.url().startsWith("file:") && !r.url().startsWith("data:")) problems.push(`network request: ${r.url()}`); });
-  await page.goto("file://" + path.resolve(file));
+  await page.goto("file://" + path.resolve(file) + hash);
   await page.waitForFunction("window.surfmapView && window.surfmapView.ready", { timeout: 60000 });
   return page;
 }
@@ -128,7 +131,13 @@ async function flatteningPage(browser, work, shots) {
   const problems = [], what = "flattening";
   const page = await open(browser, path.join(work, "flat.html"), problems);
   await commonChecks(page, what, problems);
-  await numbersEqualReport(page, what, JSON.parse(fs.readFileSync(path.join(work, "flat.json"), "utf8")));
+  const report = JSON.parse(fs.readFileSync(path.join(work, "flat.json"), "utf8"));
+  await numbersEqualReport(page, what, report);
+  // The page finds the seams where the texture coordinates jump; the report lists the
+  // edges cut. Each seam edge is drawn from both of its sides.
+  const seams = await page.evaluate(() => surfmapView.data.arrays["surface.seams"].length);
+  check(`${what}: both sides of each of the report's seam edges are drawn`, seams === 2 * report.seams.edges.length,
+    `${seams} half-edges, ${report.seams.edges.length} seam edges`);
   await dragChanges(page, what, "surface");
   const before = (await snapshot(page)).hash;
   await page.select("#colour", "angle");
@@ -231,17 +240,36 @@ async function tablePage(browser, work, shots) {
 // ---------------------------------------------------------------- bench
 async function bench(browser, files) {
   for (const file of files) {
-    const times = [], decode = [];
+    const times = [], decode = [], redraw = [], slide = [];
     for (let i = 0; i < 5; i++) {
       const problems = [];
       const page = await open(browser, file, problems);
-      const t = await page.evaluate(() => ({ first: surfmapView.firstFrameMs, decode: surfmapView.decodeMs }));
+      const t = await page.evaluate(() => ({ first: surfmapView.firstFrameMs, decode: surfmapView.decodeMs, renderer: surfmapView.renderer }));
+      if (i === 0) console.log(`${path.basename(file)}: WebGL renderer ${t.renderer}`);
       times.push(t.first); decode.push(t.decode);
+      // A redraw waited for (pixels read back), as after a drag or a slider.
+      redraw.push(await page.evaluate(() => {
+        const r = document.getElementById("gl").getBoundingClientRect();
+        const [x, y] = [r.left + r.width / 2, r.top + r.height / 2];
+        const t0 = performance.now();
+        for (let i = 0; i < 5; i++) surfmapView.pixelAt(x, y);
+        return (performance.now() - t0) / 5;
+      }));
+      // The morph slider moved (vertices, normals and buffers refilled) and drawn.
+      slide.push(await page.evaluate(() => {
+        const s = document.getElementById("morph");
+        if (!s) return NaN;
+        const r = document.getElementById("gl").getBoundingClientRect();
+        const [x, y] = [r.left + r.width / 2, r.top + r.height / 2];
+        const t0 = performance.now();
+        for (let i = 1; i <= 5; i++) { s.value = String(i / 5); s.dispatchEvent(new Event("input")); surfmapView.pixelAt(x, y); }
+        return (performance.now() - t0) / 5;
+      }));
       if (problems.length) console.log(`${file}: ${problems.join(" | ")}`);
       await page.close();
     }
     const median = (a) => a.slice().sort((x, y) => x - y)[Math.floor(a.length / 2)];
-    console.log(`${path.basename(file)}\t${(fs.statSync(file).size / 1e6).toFixed(2)} MB\tfirst frame ${median(times).toFixed(0)} ms (median of 5, from navigation start)\tdecode + build ${median(decode).toFixed(0)} ms`);
+    console.log(`${path.basename(file)}\t${(fs.statSync(file).size / 1e6).toFixed(2)} MB\tfirst frame ${median(times).toFixed(0)} ms (median of 5, from navigation start)\tdecode + build ${median(decode).toFixed(0)} ms\tredraw ${median(redraw).toFixed(0)} ms${isNaN(slide[0]) ? "" : `\tmorph slider step ${median(slide).toFixed(0)} ms`}`);
   }
 }
 
@@ -252,7 +280,7 @@ try {
     const work = args[0];
     const s = args.indexOf("--screenshots");
     const shots = s >= 0 ? args[s + 1] : null;
-    if (shots) fs.mkdirSync(shots, { recursive: true });
+    if (shots) { fs.mkdirSync(shots, { recursive: true }); hash = "#antialias"; }
     // The generated match's closed form (surfmap::apps::inputs): A's (x, y) goes to f(x, y)
     // on B, a graph z = h(x, y).
     const closedForm = {

@@ -44,8 +44,10 @@ cargo build --release --quiet -p surfmap-cli
 surfmap="$(realpath "${CARGO_TARGET_DIR:-target}/release/surfmap")"
 (
   cd "$work"
-  # A flattening with its report (found beside the mesh as flat.json).
-  "$surfmap" flatten in/scan.obj -o flat.obj --report flat.json -q
+  # A flattening cut along a slit (B is a 47 × 47 grid: 24 edges of row 24 from the
+  # border inwards), with its report (found beside the mesh as flat.json).
+  for c in $(seq 0 23); do echo "$((24 * 48 + c)) $((24 * 48 + c + 1))"; done > slit.txt
+  "$surfmap" flatten in/b.obj -o flat.obj --report flat.json --cut-along slit.txt -q
   "$surfmap" view flat.obj -o flat.html -q
   # The generated match (closed form; match.json names a.obj and b.obj) and one made
   # by the CLI, whose surfaces are given.

@@ -113,7 +113,7 @@
   }
 
   // ---------------------------------------------------------------- GL set-up
-  const canvas = document.getElementById("gl");
+  let canvas = document.getElementById("gl");
   const overlay = document.getElementById("overlay");
   const stage = document.getElementById("stage");
   let gl = null;
@@ -221,8 +221,19 @@ void main() { vec2 q = gl_PointCoord * 2.0 - 1.0; float r = dot(q, q); if (r > 1
   }
   let P = null;
   function initGL() {
-    gl = canvas.getContext("webgl2", { antialias: true, preserveDrawingBuffer: true });
+    gl = canvas.getContext("webgl2", { antialias: true });
     if (!gl) return false;
+    // A software renderer (no GPU) pays twice for multisampling: draw without it there
+    // (unless the address ends in #antialias).
+    const info = gl.getExtension("WEBGL_debug_renderer_info");
+    api.renderer = String(gl.getParameter(info ? info.UNMASKED_RENDERER_WEBGL : gl.RENDERER));
+    if (/swiftshader|llvmpipe|software/i.test(api.renderer) && location.hash !== "#antialias") {
+      const plain = canvas.cloneNode(false);
+      canvas.replaceWith(plain);
+      canvas = plain;
+      gl = canvas.getContext("webgl2", { antialias: false });
+      if (!gl) return false;
+    }
     P = {
       surface: program(SURFACE_VS, SURFACE_FS), pick: program(PICK_VS, PICK_FS),
       line: program(LINE_VS, LINE_FS), point: program(POINT_VS, POINT_FS),
@@ -807,6 +818,16 @@ void main() { vec2 q = gl_PointCoord * 2.0 - 1.0; float r = dot(q, q); if (r > 1
     return { applyMode };
   }
 
+  // The planar checkerboard of a surface: coordinates (x − centre)·axes / cell in its
+  // camera frame (right, up), so that it is seen square from the first view.
+  function checkerMatrix(ax, c0, cell) {
+    const s = 1 / cell;
+    const m = new Float32Array([ax[0][0] * s, ax[1][0] * s, ax[2][0] * s, 0, ax[0][1] * s, ax[1][1] * s, ax[2][1] * s, 0,
+      ax[0][2] * s, ax[1][2] * s, ax[2][2] * s, 0, 0, 0, 0, 1]);
+    for (let i = 0; i < 3; i++) m[12 + i] = -(m[i] * c0[0] + m[4 + i] * c0[1] + m[8 + i] * c0[2]);
+    return m;
+  }
+
   function matchPage() {
     const A = DATA.a, B = DATA.b;
     const aPos = arr(A.positions), aTri = arr(A.triangles), bPos = arr(B.positions), bTri = arr(B.triangles);
@@ -820,10 +841,7 @@ void main() { vec2 q = gl_PointCoord * 2.0 - 1.0; float r = dot(q, q); if (r > 1
     const pa = addPanel("a", { kind: "3d", x: 0, w: 0.5, camera: cam, frame: frameA, title: "A" });
     const pb = addPanel("b", { kind: "3d", x: 0.5, w: 0.5, camera: cam, frame: frameB, title: "B" });
     // The checkerboard of A: its own frame, carried along by the reference coordinates.
-    const ch = DATA.checker, ax = ch.axes, s = 1 / ch.cell, c0 = ch.center;
-    const checker = new Float32Array([ax[0][0] * s, ax[1][0] * s, ax[2][0] * s, 0, ax[0][1] * s, ax[1][1] * s, ax[2][1] * s, 0,
-      ax[0][2] * s, ax[1][2] * s, ax[2][2] * s, 0, 0, 0, 0, 1]);
-    for (let i = 0; i < 3; i++) checker[12 + i] = -(checker[i] * c0[0] + checker[4 + i] * c0[1] + checker[8 + i] * c0[2]);
+    const checker = checkerMatrix(DATA.checker.axes, DATA.checker.center, DATA.checker.cell);
     const unmatched = new Float32Array(na);
     for (let v = 0; v < na; v++) unmatched[v] = corrT[v] < 0 ? 1 : 0;
     const current = new Float32Array(aPos.length);
@@ -979,9 +997,16 @@ void main() { vec2 q = gl_PointCoord * 2.0 - 1.0; float r = dot(q, q); if (r > 1
       surf.setPositions(current);
     }
     update();
+    // Coloured by its texture, or by a checkerboard fixed to the base mesh that follows
+    // the targets (it shows how the surface stretches).
     let tex = null;
-    if (DATA.texture && arr("uv.coords")) { tex = imageTexture(DATA.texture, redraw); surf.setRef(arr("uv.coords"), tri, 2); }
-    p.items.push(surfaceItem(surf, tex ? { mode: 4, tex } : { color: [0.8, 0.78, 0.74] }));
+    const look = { mode: 2, checker: checkerMatrix(S.camera.axes, S.camera.center, S.camera.radius / 8) };
+    if (DATA.texture && arr("uv.coords")) {
+      tex = imageTexture(DATA.texture, redraw);
+      surf.setRef(arr("uv.coords"), tri, 2);
+      Object.assign(look, { mode: 4, tex });
+    } else surf.setRef(base, tri, 3);
+    p.items.push(surfaceItem(surf, look));
     const sliders = targets.map((t, k) => slider("target-" + k, t.name + " ", 0, (w) => { t.w = w; update(); }));
     const anim = DATA.animation;
     const rows = [...sliders.map((s) => s.row)];
