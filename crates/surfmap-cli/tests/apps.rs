@@ -3,22 +3,13 @@
 //! is read back with the `gltf` crate.
 
 mod common;
+use common::run_in as run;
 use common::*;
 use std::path::Path;
 use surfmap::apps::Texture;
 use surfmap::apps::match_folder::read_match_folder;
 use surfmap::apps::texture::corner_uvs;
 use surfmap::raster::npy::read_npy_f64;
-
-fn run(dir: &Path, args: &[&str]) -> String {
-    let out = surfmap().current_dir(dir).args(args).output().unwrap();
-    assert!(
-        out.status.success(),
-        "surfmap {args:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).into_owned()
-}
 
 fn inputs(name: &str) -> std::path::PathBuf {
     let dir = temp_dir(name);

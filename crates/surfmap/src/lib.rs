@@ -85,6 +85,7 @@
 //! | [`apps`] | thesis ch. 5 on matches and maps: transfer, baking, morphs, rigs, glTF |
 //! | [`report`] | the documents of a run: [`InspectReport`], [`FlattenReport`] (the CLI's JSON, the Python package's dictionaries) |
 //! | [`output`] | what a flattening writes: [`flatten_to_mesh`] gives the mesh to write (per-vertex or per-corner UVs, or the flat layout), its seams and its report, for every front end |
+//! | [`view`] | one self-contained interactive HTML page of a flattening, a match, a morph or rig, or a folder of results |
 //! | [`batch`] | many mesh files on a thread pool, one bad mesh never stopping the rest, and their summary table |
 //!
 //! Internal building blocks are public for benchmarks and probes but hidden from these
@@ -112,6 +113,7 @@ pub mod report;
 #[doc(hidden)]
 pub mod testing;
 pub(crate) mod vec3;
+pub mod view;
 
 pub use energy::{Alpha, Energy};
 pub use measure::{

@@ -13,6 +13,7 @@ pub mod morph;
 pub mod rig;
 pub mod tradeoff;
 pub mod transfer;
+pub mod view;
 
 use std::path::Path;
 use surfmap::mesh::io::{MeshFile, read_mesh};

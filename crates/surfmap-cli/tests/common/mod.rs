@@ -39,6 +39,17 @@ pub fn temp_dir(name: &str) -> PathBuf {
     d
 }
 
+/// Runs `surfmap ARGS` in `dir`, asserting that it succeeded; returns its stdout.
+pub fn run_in(dir: &std::path::Path, args: &[&str]) -> String {
+    let out = surfmap().current_dir(dir).args(args).output().unwrap();
+    assert!(
+        out.status.success(),
+        "surfmap {args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
 /// Runs `command`, asserting that it succeeded (its stderr in the message otherwise).
 pub fn run_ok(command: &mut Command) -> std::process::Output {
     let out = command.output().unwrap();

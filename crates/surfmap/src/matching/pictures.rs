@@ -14,7 +14,8 @@ use super::solve::Solved;
 use super::solve::ncg::LevelLog;
 use crate::mesh::{SurfacePoint, TriMesh};
 use crate::render::canvas::{Canvas, rgb, to_rgb8};
-use crate::render::colormap::ColorScale;
+use crate::render::colormap::{ColorScale, Colormap};
+use crate::render::font::{draw_text, format_number, text_height, text_width};
 use crate::render::plot::{PlotPanel, Series, line_plot};
 use crate::render::sheet::contact_sheet;
 use crate::render::surface::checker_render;
@@ -148,8 +149,8 @@ impl View {
 }
 
 /// B's mean-curvature image (grey outside B's surface) on a `pixels`-wide square
-/// canvas showing `view` of ω; returns the canvas and its width.
-fn curvature_canvas(matched: &MatchView, pixels: u32, view: View) -> (Canvas, f64) {
+/// canvas showing `view` of ω; returns the canvas, its width and the colour scale.
+fn curvature_canvas(matched: &MatchView, pixels: u32, view: View) -> (Canvas, f64, ColorScale) {
     let b = &matched.b.images;
     let n = b.size;
     let h = b.mean_curvature_extended.as_slice();
@@ -178,13 +179,88 @@ fn curvature_canvas(matched: &MatchView, pixels: u32, view: View) -> (Canvas, f6
         w / view.size,
         &background,
     );
-    (canvas, w)
+    (canvas, w, scale)
+}
+
+/// A sample drawn in a legend: a line of a colour and width (a pale one on a white
+/// halo, as B's features are drawn), or a square marker.
+#[derive(Clone, Copy)]
+enum Key {
+    Line([f32; 3], f64),
+    Halo([f32; 3], f64),
+    Square([f32; 3]),
+}
+
+/// `picture` with a legend band under it: B's mean-curvature colour bar (blue–white–red
+/// over `±r`, values beyond it in the end colours), the grey of ω outside B's surface,
+/// and the `keys` of what is drawn over them.
+fn with_legend(picture: RgbImage, scale: &ColorScale, keys: &[(Key, &str)]) -> RgbImage {
+    let w = picture.width();
+    let font = if w >= 1000 { 2 } else { 1 };
+    let th = text_height(font) as f64;
+    let row = th + 10.0;
+    let rows = 2 + keys.len();
+    let band = (rows as f64 * row + 12.0) as u32;
+    let mut canvas = Canvas::new(w, picture.height() + band, 2, [1.0; 3]);
+    canvas.draw_image(0.0, 0.0, w as f64, picture.height() as f64, &picture);
+    let (x0, mut y) = (12.0, picture.height() as f64 + 8.0);
+    let bar_w = 160.0 * font as f64;
+    let mut texts: Vec<(f64, f64, String)> = vec![];
+    // Row 1: the colour bar, its ends and its middle.
+    for i in 0..128 {
+        let t = (i as f64 + 0.5) / 128.0;
+        let x = x0 + bar_w * i as f64 / 128.0;
+        canvas.fill_rect(
+            x,
+            y,
+            x + bar_w / 128.0 + 0.3,
+            y + th,
+            Colormap::BlueWhiteRed.at(t),
+        );
+    }
+    let ends = format!(
+        "{} .. 0 .. {}: B'S MEAN CURVATURE (CLIPPED BEYOND)",
+        format_number(scale.lo),
+        format_number(scale.hi)
+    );
+    texts.push((x0 + bar_w + 10.0, y, ends));
+    y += row;
+    // Row 2: outside B.
+    canvas.fill_rect(x0, y, x0 + 3.0 * th, y + th, rgb(200, 200, 200));
+    texts.push((x0 + 3.0 * th + 10.0, y, "OUTSIDE B'S SURFACE".into()));
+    for (key, text) in keys {
+        y += row;
+        let mid = y + 0.5 * th;
+        let (a, b) = ([x0, mid], [x0 + 3.0 * th, mid]);
+        match *key {
+            Key::Line(c, width) => canvas.line(a, b, width, c),
+            Key::Halo(c, width) => {
+                canvas.line(a, b, width + 2.5, rgb(255, 255, 255));
+                canvas.line(a, b, width, c);
+            }
+            Key::Square(c) => canvas.marker([x0 + 1.5 * th, mid], 0.5 * th, c),
+        }
+        texts.push((x0 + 3.0 * th + 10.0, y, text.to_string()));
+    }
+    let mut img = canvas.into_image();
+    for (x, y, text) in texts {
+        let fits = x as u32 + text_width(&text, font) <= w;
+        let shown = if fits {
+            text
+        } else {
+            text.chars()
+                .take(((w as f64 - x) / (6.0 * font as f64)) as usize)
+                .collect()
+        };
+        draw_text(&mut img, x as i64, y as i64, &shown, font, [20, 20, 20]);
+    }
+    img
 }
 
 /// φ's grid lines (every `n/32`-th node line, where A's surface is) drawn in ω_B over
 /// B's mean-curvature image (grey outside B's surface), y up.
 fn deformed_grid(matched: &MatchView, pixels: u32) -> RgbImage {
-    let (mut canvas, w) = curvature_canvas(matched, pixels, View::WHOLE);
+    let (mut canvas, w, scale) = curvature_canvas(matched, pixels, View::WHOLE);
     let phi = matched.deformation;
     let m = phi.size;
     let step = ((m - 1) / 32).max(1);
@@ -210,7 +286,13 @@ fn deformed_grid(matched: &MatchView, pixels: u32) -> RgbImage {
             }
         }
     }
-    canvas.into_image()
+    let text =
+        format!("THE DEFORMATION'S GRID LINES (EVERY {step}TH OF {m}) OVER A, IN B'S DOMAIN");
+    with_legend(
+        canvas.into_image(),
+        &scale,
+        &[(Key::Line(line, 1.2), &text)],
+    )
 }
 
 /// Colours of the paired features, in turn (dark and saturated: they must stand out on
@@ -251,8 +333,10 @@ fn features_carried(matched: &MatchView, tile: u32) -> Option<RgbImage> {
             .chain(&after)
             .flat_map(|f| f.a.iter().chain(&f.b).copied()),
     );
-    let panel = |features: &[CarriedFeature]| {
-        let (mut canvas, w) = curvature_canvas(matched, tile, view);
+    let mut scale = None;
+    let mut panel = |features: &[CarriedFeature]| {
+        let (mut canvas, w, s) = curvature_canvas(matched, tile, view);
+        scale = Some(s);
         let px = |p: [f64; 2]| view.pixel(p, w);
         let pale = |c: [u8; 3]| {
             let [r, g, b] = c.map(|x| (x as u16 + 2 * 255) / 3);
@@ -288,13 +372,36 @@ fn features_carried(matched: &MatchView, tile: u32) -> Option<RgbImage> {
         }
         canvas.into_image()
     };
-    Some(contact_sheet(
+    let sheet = contact_sheet(
         &[
             ("FEATURES AT THE START".to_string(), panel(&before)),
             ("AFTER THE SOLVE".to_string(), panel(&after)),
         ],
         2,
         tile,
+    );
+    let c = FEATURE_COLORS[0];
+    let (full, pale) = (rgb(c[0], c[1], c[2]), {
+        let [r, g, b] = c.map(|x| ((x as u16 + 2 * 255) / 3) as u8);
+        rgb(r, g, b)
+    });
+    Some(with_legend(
+        sheet,
+        &scale.expect("two panels drawn"),
+        &[
+            (
+                Key::Halo(pale, 4.5),
+                "B'S FEATURE: THICK AND PALE (ONE COLOUR PER FEATURE)",
+            ),
+            (
+                Key::Line(full, 1.6),
+                "A'S SAME FEATURE CARRIED INTO B'S DOMAIN: THIN, FULL COLOUR",
+            ),
+            (
+                Key::Square(full),
+                "LANDMARKS (ONE VERTEX): SQUARES, B'S LARGE AND PALE",
+            ),
+        ],
     ))
 }
 

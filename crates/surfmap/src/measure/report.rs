@@ -340,18 +340,24 @@ pub fn per_triangle_measure(
     measure: Measure,
 ) -> Result<Vec<f64>, MeasureError> {
     let sv = triangle_singular_values(positions, triangles, corner_uvs, true)?;
-    Ok(sv
-        .sigma
-        .iter()
-        .zip(&sv.used)
-        .map(|(s, &u)| {
-            if u {
-                measure.value(s[0], s[1])
-            } else {
-                f64::NAN
-            }
-        })
-        .collect())
+    Ok(sv.values(measure))
+}
+
+impl TriangleSingularValues {
+    /// One value of `measure` per triangle, `NaN` for triangles left out.
+    pub fn values(&self, measure: Measure) -> Vec<f64> {
+        self.sigma
+            .iter()
+            .zip(&self.used)
+            .map(|(s, &u)| {
+                if u {
+                    measure.value(s[0], s[1])
+                } else {
+                    f64::NAN
+                }
+            })
+            .collect()
+    }
 }
 
 /// Running min / weighted-sum / max; a weighted mean is `∞` as soon as one weighted

@@ -159,19 +159,57 @@ pub fn color_bar(canvas: &mut Canvas, map: Colormap, x: f64, y: f64, w: f64, h: 
     }
 }
 
+/// What the values drawn with a scale reach beyond it: their minimum and maximum, when
+/// they fall below `lo` or rise above `hi` (those values get the end colours).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Clipping {
+    pub below: Option<f64>,
+    pub above: Option<f64>,
+}
+
+impl Clipping {
+    /// Where the finite `values` leave `scale`'s range.
+    pub fn of(scale: &ColorScale, values: &[f64]) -> Self {
+        let finite = values.iter().copied().filter(|x| x.is_finite());
+        let (min, max) = finite.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+            (a.min(x), b.max(x))
+        });
+        Self {
+            below: (min < scale.lo).then_some(min),
+            above: (max > scale.hi).then_some(max),
+        }
+    }
+
+    /// Lines of text under a colour bar that say so (`CLIPPED`, `MAX x`, `MIN y`);
+    /// none when nothing is clipped.
+    pub fn note(&self) -> Vec<String> {
+        if self.below.is_none() && self.above.is_none() {
+            return vec![];
+        }
+        let mut lines = vec!["CLIPPED".to_string()];
+        lines.extend(self.above.map(|x| format!("MAX {}", format_number(x))));
+        lines.extend(self.below.map(|x| format!("MIN {}", format_number(x))));
+        lines
+    }
+}
+
 /// Labels a colour bar drawn at `bar = [x, y, w, h]`: the range ends beside it, and
-/// `title` above it.
+/// `title` above it. Where the values reach beyond the range (`clipping`), the end's
+/// label gets a `+` (top) or `-` (bottom) and the lines of [`Clipping::note`] go under
+/// the bar (the caller leaves [`note_height`] free there).
 pub fn label_color_bar(
     img: &mut RgbImage,
     scale: &ColorScale,
     bar: [f64; 4],
     title: &str,
     font: u32,
+    clipping: Clipping,
 ) {
     let [x, y, w, h] = bar;
     let black = [20, 20, 20];
     let tx = (x + w) as i64 + 4;
-    draw_text(img, tx, y as i64, &format_number(scale.hi), font, black);
+    let top = format_number(scale.hi) + if clipping.above.is_some() { "+" } else { "" };
+    draw_text(img, tx, y as i64, &top, font, black);
     let mid = if scale.log {
         (scale.lo * scale.hi).sqrt()
     } else {
@@ -185,11 +223,12 @@ pub fn label_color_bar(
         font,
         black,
     );
+    let bottom = format_number(scale.lo) + if clipping.below.is_some() { "-" } else { "" };
     draw_text(
         img,
         tx,
         (y + h) as i64 - text_height(font) as i64,
-        &format_number(scale.lo),
+        &bottom,
         font,
         black,
     );
@@ -201,6 +240,27 @@ pub fn label_color_bar(
         font,
         black,
     );
+    let line = text_height(font) as i64 + 3;
+    for (i, text) in clipping.note().iter().enumerate() {
+        draw_text(
+            img,
+            x as i64,
+            (y + h) as i64 + 6 + i as i64 * line,
+            text,
+            font,
+            [150, 20, 20],
+        );
+    }
+}
+
+/// Height in pixels that [`Clipping::note`]'s lines take under a colour bar.
+pub fn note_height(clipping: &Clipping, font: u32) -> f64 {
+    let lines = clipping.note().len();
+    if lines == 0 {
+        0.0
+    } else {
+        6.0 + lines as f64 * (text_height(font) as f64 + 3.0)
+    }
 }
 
 #[cfg(test)]
@@ -284,6 +344,25 @@ mod tests {
             assert_eq!(img.get_pixel(2, 50).0, [255; 3]);
             assert_eq!(img.get_pixel(10, 2).0, [255; 3]);
         }
+    }
+
+    #[test]
+    fn clipping_names_the_values_beyond_the_range() {
+        let s = ColorScale {
+            lo: 1.0,
+            hi: 2.0,
+            log: false,
+            map: Colormap::Viridis,
+        };
+        assert_eq!(
+            Clipping::of(&s, &[1.0, 1.5, 2.0, f64::NAN]),
+            Clipping::default()
+        );
+        assert!(Clipping::default().note().is_empty());
+        let c = Clipping::of(&s, &[0.5, 1.5, 7.25, f64::INFINITY]);
+        assert_eq!(c.below, Some(0.5));
+        assert_eq!(c.above, Some(7.25));
+        assert_eq!(c.note(), ["CLIPPED", "MAX 7.250", "MIN 0.5000"]);
     }
 
     #[test]

@@ -40,7 +40,8 @@ pub struct Series<'a> {
     pub values: &'a [f64],
     pub color: [f32; 3],
     /// Samples with a square marker: `None` marks every sample; `Some(&[i, j, …])` only
-    /// those (e.g. the first iteration of each level of a multiscale solve).
+    /// those (e.g. the first iteration of each level of a multiscale solve), each with
+    /// a pale vertical guide across the panel and a marker of at least 4 pixels.
     pub marks: Option<&'a [usize]>,
     /// Draw a staircase (from each sample horizontally to the next `x`, then
     /// vertically) instead of straight segments between samples.
@@ -178,7 +179,18 @@ fn draw_panel(
         ));
         i += xstep;
     }
-    let r = if n > 60 { 1.5 } else { 3.0 };
+    let r: f64 = if n > 60 { 1.5 } else { 3.0 };
+    // Samples marked by choice (not every sample) get a pale vertical guide across the
+    // panel and a marker large enough to see among hundreds of samples.
+    for s in &panel.series {
+        let pale = s.color.map(|c| c + 0.65 * (1.0 - c));
+        for &i in s.marks.unwrap_or(&[]) {
+            if i < s.values.len() {
+                let x = sx(i as f64);
+                canvas.line([x, rect.y], [x, rect.y + rect.h], 1.0, pale);
+            }
+        }
+    }
     for s in &panel.series {
         let pts: Vec<[f64; 2]> = s
             .values
@@ -201,9 +213,10 @@ fn draw_panel(
             canvas.polyline(&gaps, 2.0, s.color);
         }
         let marked = |i: usize| s.marks.is_none_or(|m| m.contains(&i));
+        let radius = if s.marks.is_some() { r.max(4.0) } else { r };
         for (i, p) in pts.iter().enumerate() {
             if p[1].is_finite() && marked(i) {
-                canvas.marker(*p, r, s.color);
+                canvas.marker(*p, radius, s.color);
             }
         }
     }
@@ -404,6 +417,43 @@ mod tests {
             let want = x_at0 + (x_at6 - x_at0) * i / 6.0;
             assert!((c - want).abs() <= 1.5, "marker {i} at {c}, want {want}");
         }
+    }
+
+    /// Among hundreds of samples (where every-sample markers shrink to 1.5 px), chosen
+    /// marks stay visible: 8 px markers and a pale guide from the top of the panel to
+    /// its bottom, at the marked samples only.
+    #[test]
+    fn chosen_marks_show_among_many_samples() {
+        let v: Vec<f64> = (0..400).map(|i| 1.0 + i as f64 * 0.001).collect();
+        let s = Series {
+            marks: Some(&[100, 300]),
+            ..Series::new("", &v, rgb(0, 200, 0))
+        };
+        let img = line_plot("", "", &[panel(false, vec![s])], (800, 300));
+        let green = pixels_of(&img, [0, 200, 0]);
+        let tall: Vec<u32> = (0..img.width())
+            .filter(|&x| green.iter().filter(|p| p.0 == x).count() >= 7)
+            .collect();
+        let clusters = tall.chunk_by(|a, b| b - a == 1).count();
+        assert_eq!(clusters, 2, "tall columns {tall:?}");
+        // Pale guides: columns where pale green (the guide's colour, blended with the
+        // white behind it: red and blue alike and well above 0, green above them) runs
+        // most of the image's height.
+        let pale =
+            |p: [u8; 3]| p[0] > 120 && p[1] as i32 > p[0] as i32 + 25 && p[0].abs_diff(p[2]) < 10;
+        let guides: Vec<u32> = (0..img.width())
+            .filter(|&x| {
+                (0..img.height())
+                    .filter(|&y| pale(img.get_pixel(x, y).0))
+                    .count()
+                    > 150
+            })
+            .collect();
+        assert_eq!(
+            guides.chunk_by(|a, b| b - a == 1).count(),
+            2,
+            "guides {guides:?}"
+        );
     }
 
     #[test]

@@ -3,10 +3,16 @@
 //! software rasterizer: orthographic projection, z-buffer, smooth vertex normals,
 //! supersampling.
 //!
-//! **View**: along the area-weighted mean normal `Σ_T n_T` when it is at least 15 % of
-//! `Σ_T |n_T|` (a patch is seen from the side its normals face); otherwise along the
-//! axis of least spread of the triangle centroids (principal axes). **Up** is the world
-//! axis (Y, then Z, then X) most perpendicular to the view direction.
+//! **View**: from the surface's principal axes `e1, e2, e3` (eigenvectors of its second
+//! moment `∫ (x − c)(x − c)ᵀ dA` about its centroid `c`, spreads `σ1 ≤ σ2 ≤ σ3`). A
+//! patch (`σ1 < σ2 / 2`) is seen along `e1`, its depth. A bulky surface (a head, a
+//! closed shape) is seen along whichever of `e1`, `e2` has the larger skewness: a head
+//! is mirror-symmetric left to right but not front to back, so it is seen from the
+//! front, never from above the skull (as the mean normal of a scan open at the neck
+//! would have it) nor in profile. The side: the one the normals face when their sum
+//! `Σ_T n_T` along the axis is at least 15 % of `Σ_T |n_T|`, else the side of the long
+//! tail of the spread (a face's nose). **Up** is the world axis (Y, then Z, then X) most
+//! perpendicular to the view direction.
 
 use image::RgbImage;
 
@@ -30,9 +36,10 @@ fn valid_triangle(positions: &[[f64; 3]], t: &[u32; 3]) -> bool {
     })
 }
 
-/// Eigenvector of the smallest eigenvalue of a symmetric 3×3 matrix (cyclic Jacobi).
+/// Eigenvalues and unit eigenvectors of a symmetric 3×3 matrix (cyclic Jacobi), the
+/// smallest eigenvalue first.
 #[allow(clippy::needless_range_loop)]
-fn smallest_eigenvector(mut a: [[f64; 3]; 3]) -> [f64; 3] {
+fn eigen_sorted(mut a: [[f64; 3]; 3]) -> [(f64, [f64; 3]); 3] {
     let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
     for _ in 0..50 {
         let off = a[0][1].abs() + a[0][2].abs() + a[1][2].abs();
@@ -65,48 +72,44 @@ fn smallest_eigenvector(mut a: [[f64; 3]; 3]) -> [f64; 3] {
             }
         }
     }
-    let i = (0..3).min_by(|&i, &j| a[i][i].total_cmp(&a[j][j])).unwrap();
-    [v[0][i], v[1][i], v[2][i]]
+    let mut order = [0, 1, 2];
+    order.sort_by(|&i, &j| a[i][i].total_cmp(&a[j][j]));
+    order.map(|i| (a[i][i], normalize([v[0][i], v[1][i], v[2][i]])))
 }
 
 /// Camera basis `(right, up, towards_viewer)` chosen as in the module docs.
 pub fn automatic_view(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> [[f64; 3]; 3] {
-    let mut sum = [0.0; 3];
-    let mut total = 0.0;
-    let mut centroid = [0.0; 3];
-    let mut cov = [[0.0; 3]; 3];
-    let tris: Vec<&[u32; 3]> = triangles
+    let tris: Vec<[[f64; 3]; 3]> = triangles
         .iter()
         .filter(|t| valid_triangle(positions, t))
+        .map(|t| t.map(|v| positions[v as usize]))
         .collect();
-    for t in &tris {
-        let p = t.map(|v| positions[v as usize]);
+    // The surface's centroid and second moment ∫ (x − c)(x − c)ᵀ dA (exact per triangle:
+    // A/12 · (Σ dᵢdᵢᵀ + (Σ dᵢ)(Σ dᵢ)ᵀ), dᵢ = pᵢ − c), and the sum of the normals.
+    let (mut area, mut centroid, mut normal) = (0.0, [0.0; 3], [0.0; 3]);
+    for p in &tris {
         let n = cross3(sub3(p[1], p[0]), sub3(p[2], p[0]));
-        sum = [sum[0] + n[0], sum[1] + n[1], sum[2] + n[2]];
-        total += norm3(n);
+        let a = 0.5 * norm3(n);
+        area += a;
+        for k in 0..3 {
+            centroid[k] += a * (p[0][k] + p[1][k] + p[2][k]) / 3.0;
+            normal[k] += n[k];
+        }
     }
-    let d = if total > 0.0 && norm3(sum) >= 0.15 * total {
-        normalize(sum)
-    } else {
-        for t in &tris {
-            for k in 0..3 {
-                centroid[k] += t.iter().map(|&v| positions[v as usize][k]).sum::<f64>() / 3.0;
+    let centroid = centroid.map(|c| if area > 0.0 { c / area } else { 0.0 });
+    let mut cov = [[0.0; 3]; 3];
+    for p in &tris {
+        let a = 0.5 * norm3(cross3(sub3(p[1], p[0]), sub3(p[2], p[0])));
+        let d = p.map(|q| sub3(q, centroid));
+        let s: [f64; 3] = [0, 1, 2].map(|k| d[0][k] + d[1][k] + d[2][k]);
+        for i in 0..3 {
+            for j in 0..3 {
+                let corners: f64 = d.iter().map(|q| q[i] * q[j]).sum();
+                cov[i][j] += a / 12.0 * (corners + s[i] * s[j]);
             }
         }
-        let n = tris.len().max(1) as f64;
-        centroid = centroid.map(|x| x / n);
-        for t in &tris {
-            let c: [f64; 3] = [0, 1, 2].map(|k| {
-                t.iter().map(|&v| positions[v as usize][k]).sum::<f64>() / 3.0 - centroid[k]
-            });
-            for i in 0..3 {
-                for j in 0..3 {
-                    cov[i][j] += c[i] * c[j];
-                }
-            }
-        }
-        normalize(smallest_eigenvector(cov))
-    };
+    }
+    let d = view_direction(&tris, centroid, eigen_sorted(cov), normal);
     let axes = [[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]];
     let up0 = axes
         .iter()
@@ -117,6 +120,55 @@ pub fn automatic_view(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> [[f64; 
     let right = normalize(cross3(up_perp, d));
     let up = cross3(d, right);
     [right, up, d]
+}
+
+/// The direction towards the viewer (see the module docs), from the principal axes
+/// `(λ, e)` of the surface's second moment (smallest first) and its normal sum.
+fn view_direction(
+    tris: &[[[f64; 3]; 3]],
+    centroid: [f64; 3],
+    axes: [(f64, [f64; 3]); 3],
+    normal: [f64; 3],
+) -> [f64; 3] {
+    // Area-weighted skewness of the triangle centroids along e: E[x³] / E[x²]^{3/2}.
+    let skew = |e: [f64; 3], lambda: f64| {
+        let (mut m3, mut area) = (0.0, 0.0);
+        for p in tris {
+            let a = 0.5 * norm3(cross3(sub3(p[1], p[0]), sub3(p[2], p[0])));
+            let c: [f64; 3] = [0, 1, 2].map(|k| (p[0][k] + p[1][k] + p[2][k]) / 3.0);
+            m3 += a * dot3(sub3(c, centroid), e).powi(3);
+            area += a;
+        }
+        if area > 0.0 && lambda > 0.0 {
+            m3 / area / lambda.powf(1.5)
+        } else {
+            0.0
+        }
+    };
+    let [(l1, e1), (l2, e2), _] = axes;
+    let (s1, s2) = (skew(e1, l1), skew(e2, l2));
+    // A patch (half as deep as wide, or less) is seen along its depth; a bulky surface
+    // along the more skewed of its two shorter axes: a head is mirror-symmetric left to
+    // right, and not front to back.
+    let patch = l1 < 0.25 * l2;
+    let (e, s) = if patch || s1.abs() >= s2.abs() {
+        (e1, s1)
+    } else {
+        (e2, s2)
+    };
+    let total: f64 = tris
+        .iter()
+        .map(|p| norm3(cross3(sub3(p[1], p[0]), sub3(p[2], p[0]))))
+        .sum();
+    let facing = dot3(normal, e);
+    // From the side the normals face when they clearly face one (15 % of their total
+    // length), else from the side of the long tail (a face's nose).
+    let positive = if facing.abs() >= 0.15 * total {
+        facing > 0.0
+    } else {
+        s >= 0.0
+    };
+    if positive { e } else { e.map(|x| -x) }
 }
 
 /// A fixed orthographic view: camera axes `(right, up, towards_viewer)` and the
@@ -396,6 +448,95 @@ mod tests {
         assert!((dot3(towards_viewer, d) - tilt.cos()).abs() < 1e-12);
         assert!((dot3(up, d) + tilt.sin()).abs() < 1e-12);
         assert!(dot3(up, towards_viewer).abs() < 1e-12);
+    }
+
+    /// A quarter of an ellipsoid, x²/a² + y²/b² + z²/c² = 1 with y ≥ 0 and z ≥ 0 (the
+    /// upper front of a head, shallow in depth: c < a < b): its mean normal leans 45°
+    /// up, but it is seen from the front, within 15° of +z (its axis of least spread
+    /// leans a little, as the shape does).
+    #[test]
+    fn the_front_of_a_head_is_seen_from_the_front() {
+        let (a, b, c) = (1.0, 1.4, 0.6);
+        let n = 24;
+        let mut pos = vec![];
+        for i in 0..=n {
+            // Polar angle from +y down to the equator, azimuth across the front half.
+            let theta = std::f64::consts::FRAC_PI_2 * i as f64 / n as f64;
+            for j in 0..=n {
+                let phi = std::f64::consts::PI * j as f64 / n as f64;
+                pos.push([
+                    a * theta.sin() * phi.cos(),
+                    b * theta.cos(),
+                    c * theta.sin() * phi.sin(),
+                ]);
+            }
+        }
+        let mut tris = vec![];
+        for i in 0..n as u32 {
+            for j in 0..n as u32 {
+                let v = i * (n as u32 + 1) + j;
+                let w = v + n as u32 + 1;
+                tris.push([v, v + 1, w + 1]);
+                tris.push([v, w + 1, w]);
+            }
+        }
+        // Orient the triangles outwards (their normals away from the centre).
+        let outward = tris.iter().fold(0.0, |s, t| {
+            let p = t.map(|v| pos[v as usize]);
+            let g: [f64; 3] = [0, 1, 2].map(|k| p[0][k] + p[1][k] + p[2][k]);
+            s + dot3(cross3(sub3(p[1], p[0]), sub3(p[2], p[0])), g)
+        });
+        if outward < 0.0 {
+            tris.iter_mut().for_each(|t| t.swap(1, 2));
+        }
+        let [_, up, d] = automatic_view(&pos, &tris);
+        assert!(
+            d[2] > 15f64.to_radians().cos(),
+            "seen along {d:?}, not from the front"
+        );
+        assert!(
+            d[0].abs() < 1e-9 && up[0].abs() < 1e-9,
+            "left–right symmetric: {d:?} {up:?}"
+        );
+        assert!(up[1] > 0.95, "up {up:?}");
+    }
+
+    /// A head: an ellipsoid narrower left to right (x) than front to back (z) and tall
+    /// (y), open at the neck (y < −0.8·b), with a nose on its front (+z). It is seen
+    /// from the front, along +z: not in profile (x, its least spread) nor from above
+    /// (y, where its normals add up, through the neck's opening).
+    #[test]
+    fn a_head_open_at_the_neck_is_seen_from_the_front() {
+        let (a, b, c) = (0.75, 1.5, 0.95);
+        let (rings, segments) = (40u32, 64u32);
+        let theta_max = (-0.8f64).acos();
+        let mut pos = vec![];
+        for i in 0..=rings {
+            let theta = theta_max * i as f64 / rings as f64;
+            for j in 0..segments {
+                let phi = std::f64::consts::TAU * j as f64 / segments as f64;
+                let (x, y, z) = (
+                    a * theta.sin() * phi.sin(),
+                    b * theta.cos(),
+                    c * theta.sin() * phi.cos(),
+                );
+                let nose = 0.3 * (-(x * x + y * y) / 0.03).exp() * (z > 0.0) as u8 as f64;
+                pos.push([x, y, z + nose]);
+            }
+        }
+        let mut tris = vec![];
+        for i in 0..rings {
+            for j in 0..segments {
+                let at = |i: u32, j: u32| i * segments + j % segments;
+                let (v, w) = (at(i, j), at(i + 1, j));
+                let (v1, w1) = (at(i, j + 1), at(i + 1, j + 1));
+                tris.push([v, w, w1]);
+                tris.push([v, w1, v1]);
+            }
+        }
+        let [_, up, d] = automatic_view(&pos, &tris);
+        assert!(d[2] > 0.99, "seen along {d:?}, not from the front");
+        assert!(up[1] > 0.99, "up {up:?}");
     }
 
     #[test]

@@ -1,7 +1,8 @@
 //! Picture (d): the trade-off sheet of thesis Fig. 4.4: several flattenings of one
 //! mesh (different α) side by side, each as a checkered surface over its parameter
 //! domain, with the min / mean / max of the thesis's angle, area and length distortion
-//! under each, and a strip of graphs of those numbers across the panels.
+//! under each, and a strip of graphs of those numbers across the panels (log axes,
+//! the panels' numbers under their points, a legend of the min / mean / max lines).
 
 use image::RgbImage;
 
@@ -59,7 +60,7 @@ pub fn tradeoff_sheet(panels: &[TradeoffPanel], size: (u32, u32)) -> RgbImage {
     for (i, p) in panels.iter().enumerate() {
         let x0 = i as f64 * col_w;
         let cx = (x0 + col_w / 2.0) as i64;
-        labels.push((cx, 6, p.title.clone(), true));
+        labels.push((cx, 6, format!("{}: {}", i + 1, p.title), true));
         let pad = 0.04 * col_w;
         let Ok(corners) = corner_uvs_from_vertex_uvs(p.triangles, p.uvs) else {
             continue;
@@ -178,12 +179,31 @@ pub fn tradeoff_sheet(panels: &[TradeoffPanel], size: (u32, u32)) -> RgbImage {
                 canvas.marker(*p, 2.5, colors[k]);
             }
         }
+        // Axis labels: the measure on a log axis (title), the number of the panel each
+        // point belongs to under it; the legend of the three lines at the title's right.
         labels.push((
             rect.x as i64,
             (rect.y - th - 4.0) as i64,
-            format!("{name}: MIN/MEAN/MAX"),
+            format!("{name} (LOG AXIS)"),
             false,
         ));
+        for i in 0..panels.len() {
+            labels.push((
+                sx(i) as i64,
+                (rect.y + rect.h + 4.0) as i64,
+                format!("{}", i + 1),
+                true,
+            ));
+        }
+        let mut right = rect.x + rect.w;
+        for (k, key) in ["MIN", "MEAN", "MAX"].iter().enumerate() {
+            let tw = text_width(key, font) as f64;
+            let x = right - tw;
+            let mid = rect.y - 4.0 - 0.5 * th;
+            canvas.line([x - 18.0, mid], [x - 4.0, mid], 1.6, colors[k]);
+            labels.push((x as i64, (rect.y - th - 4.0) as i64, key.to_string(), false));
+            right = x - 26.0;
+        }
         let hi_t = format_number(10f64.powf(hi));
         let lo_t = format_number(10f64.powf(lo));
         labels.push((

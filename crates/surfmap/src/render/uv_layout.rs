@@ -4,7 +4,7 @@
 use image::RgbImage;
 
 use super::canvas::{Canvas, rgb};
-use super::colormap::{ColorScale, color_bar, label_color_bar};
+use super::colormap::{Clipping, ColorScale, color_bar, label_color_bar, note_height};
 use super::font::{draw_text, text_height};
 use crate::measure::jacobian::signed_uv_area;
 use crate::measure::overlap::boundary_segments;
@@ -103,7 +103,8 @@ pub(crate) fn orientation_fill(corner_uvs: &[[[f64; 2]; 3]]) -> impl Fn(usize) -
 ///
 /// With `values = Some((per_triangle_values, label))` triangles are coloured by the
 /// values (viridis, range from [`ColorScale::auto`]) and a labelled colour bar is
-/// drawn; without, triangles are light grey and flipped ones (negative signed UV area
+/// drawn, which says where the values reach beyond its range (`CLIPPED`, the maximum
+/// and minimum, `+`/`-` on the clipped ends); without, triangles are light grey and flipped ones (negative signed UV area
 /// while most of the area is positive) red. Triangles with bad indices or non-finite
 /// UVs are skipped, never a panic.
 pub fn uv_layout(
@@ -152,18 +153,31 @@ pub fn uv_layout(
             orientation_fill(corner_uvs),
         ),
     }
+    // The range drawn stops at the 1st and 99th percentile: the values beyond it are
+    // said under the bar.
+    let clipping = match (scale, values) {
+        (Some(sc), Some((v, _))) => Clipping::of(&sc, v),
+        _ => Clipping::default(),
+    };
     let bar = Rect {
         x: w as f64 - bar_space + 10.0,
         y: rect.y + 10.0 * font as f64,
         w: 16.0,
-        h: rect.h - 20.0 * font as f64,
+        h: rect.h - 20.0 * font as f64 - note_height(&clipping, font),
     };
     if let Some(sc) = scale {
         color_bar(&mut canvas, sc.map, bar.x, bar.y, bar.w, bar.h);
     }
     let mut img = canvas.into_image();
     if let (Some(sc), Some((_, label))) = (scale, values) {
-        label_color_bar(&mut img, &sc, [bar.x, bar.y, bar.w, bar.h], label, font);
+        label_color_bar(
+            &mut img,
+            &sc,
+            [bar.x, bar.y, bar.w, bar.h],
+            label,
+            font,
+            clipping,
+        );
     }
     draw_text(&mut img, margin as i64, 8, title, font, [20, 20, 20]);
     img

@@ -1,0 +1,246 @@
+//! How far a match can be trusted, from what the matcher knows without ground truth.
+//!
+//! A match that went wrong — a start turned or shifted so that the solve settled on the
+//! wrong region, a surface squeezed into part of the other — is written like any
+//! other; a user who registers a hundred scans cannot look at each. The measures below
+//! see such failures in what the match computed:
+//!
+//! - **residual**: the correspondence against the best similarity of space carrying
+//!   A's matched vertices onto their points on B (`T = s·R·x + t`, a proper rotation:
+//!   [`fit_similarity_3d`]), `√(Σ aᵥ |T(x_A(v)) − y(v)|² / Σ aᵥ)` over the matched
+//!   vertices with their areas `aᵥ`, in units of `√area(B)`. Two faces matched where
+//!   they correspond differ from a similarity by their difference in shape (a few
+//!   hundredths); a match turned or shifted on the face, or folded over itself, cannot be
+//!   explained by one.
+//! - **residual_ratio**: that residual over the surfaces' own distance in space after
+//!   their rigid alignment (the trimmed ICP's RMS along B's normals, the shape residual
+//!   the position weight was set from), where it was measured.
+//! - **energy**: the finest level's final energy (thesis 2.16 plus the position term),
+//!   per unit of A's area matched.
+//! - the matched fraction of A, the covered fraction of B and the area ratio
+//!   ([`super::MatchReport`]).
+
+use serde::Serialize;
+
+use super::super::similarity::fit_similarity_3d;
+use crate::mesh::SurfacePoint;
+use crate::vec3::{cross3 as cross, norm3 as norm, sub3 as sub};
+
+/// The verdict on a match ([`Confidence`]), from best to worst.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    Ok,
+    Doubtful,
+    Failed,
+}
+
+/// A verdict on a match, why, and what it was drawn from.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Confidence {
+    pub verdict: Verdict,
+    /// Each reason the verdict is not `ok`, worded for the user.
+    pub reasons: Vec<String>,
+    pub measures: Measures,
+    /// When the first start's verdict was not `ok`: the other starts tried
+    /// (`crate::matching::recover`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub recovery: Option<super::super::recover::Recovery>,
+}
+
+impl Default for Confidence {
+    fn default() -> Self {
+        Self {
+            verdict: Verdict::Ok,
+            reasons: vec![],
+            measures: Measures::default(),
+            recovery: None,
+        }
+    }
+}
+
+/// Curvature disagreement from which a match is `failed`: B's curvature at φ about
+/// as unrelated to A's as an unrelated surface's (provisional; calibrated below).
+pub const DISAGREEMENT_FAILED: f64 = 0.4;
+
+/// Curvature disagreement from which a match is `doubtful`.
+pub const DISAGREEMENT_DOUBTFUL: f64 = 0.25;
+
+/// Residual from a similarity (units of `√area(B)`) from which a match is `doubtful`.
+pub const RESIDUAL_DOUBTFUL: f64 = 0.04;
+
+/// Matched fraction of A below which a match is `doubtful`, and `failed`.
+pub const MATCHED_DOUBTFUL: f64 = 0.4;
+pub const MATCHED_FAILED: f64 = 0.15;
+
+impl Confidence {
+    /// The verdict on `measures`: the worst any measure gives, each reason worded.
+    pub(crate) fn of(measures: Measures) -> Self {
+        let mut verdict = Verdict::Ok;
+        let mut reasons = vec![];
+        let mut find = |v: Verdict, reason: String| {
+            verdict = verdict.max(v);
+            reasons.push(reason);
+        };
+        if let Some(d) = measures.curvature_disagreement {
+            let v = if d >= DISAGREEMENT_FAILED {
+                Some(Verdict::Failed)
+            } else if d >= DISAGREEMENT_DOUBTFUL {
+                Some(Verdict::Doubtful)
+            } else {
+                None
+            };
+            if let Some(v) = v {
+                find(
+                    v,
+                    format!(
+                        "B's curvature where A is matched disagrees with A's by {:.0}% of the \
+                         curvature both have (matches that hold: about 10%; unrelated places: \
+                         50–80%): A was probably laid onto the wrong part of B, or turned",
+                        100.0 * d
+                    ),
+                );
+            }
+        }
+        if let Some(r) = measures.area_ratio
+            && !super::plausible_area_ratio(r)
+        {
+            find(
+                Verdict::Failed,
+                format!(
+                    "A's matched part lands on B at {r:.2}× its own area ({}): no match of like \
+                     surfaces does that (a face against a whole head or a scan with \
+                     shoulders: crop both to the region they share, or give landmarks)",
+                    if r < 1.0 { "squeezed" } else { "stretched" }
+                ),
+            );
+        }
+        let m = measures.matched_fraction_a;
+        if m < MATCHED_DOUBTFUL {
+            find(
+                if m < MATCHED_FAILED {
+                    Verdict::Failed
+                } else {
+                    Verdict::Doubtful
+                },
+                format!("only {:.0}% of A is matched", 100.0 * m),
+            );
+        }
+        if let Some(r) = measures.residual
+            && r >= RESIDUAL_DOUBTFUL
+        {
+            find(
+                Verdict::Doubtful,
+                format!(
+                    "A's matched points lie {r:.3} of B's size (RMS) from the best similarity \
+                     of A onto B: more than two shapes' difference explains"
+                ),
+            );
+        }
+        Self {
+            verdict,
+            reasons,
+            measures,
+            recovery: None,
+        }
+    }
+}
+
+impl Confidence {
+    /// One line for a command line: the verdict, the measures it read and, when it is
+    /// not `ok`, why.
+    pub fn line(&self) -> String {
+        let m = &self.measures;
+        let num = |x: Option<f64>, digits: usize| x.map_or("-".into(), |x| format!("{x:.digits$}"));
+        let measures = format!(
+            "residual {} of B's size ({}× the shapes' distance), energy {:.3} per unit area, {:.1}% of A matched",
+            num(m.residual, 4),
+            num(m.residual_ratio, 1),
+            m.energy,
+            100.0 * m.matched_fraction_a
+        );
+        match self.verdict {
+            Verdict::Ok => format!("verdict ok: {measures}"),
+            v => format!(
+                "verdict {}: {}; {measures}",
+                if v == Verdict::Failed {
+                    "FAILED"
+                } else {
+                    "DOUBTFUL"
+                },
+                self.reasons.join("; ")
+            ),
+        }
+    }
+}
+
+impl Measures {
+    /// With the ratio of the residual to the surfaces' distance `sigma` after their
+    /// rigid alignment (ℓ units; `to_b` converts ℓ to units of `√area(B)`).
+    pub(crate) fn with_shape_residual(mut self, sigma: Option<f64>, to_b: f64) -> Self {
+        self.residual_ratio = match (self.residual, sigma) {
+            (Some(r), Some(s)) if s > 0.0 => Some(r / (s * to_b)),
+            _ => None,
+        };
+        self
+    }
+}
+
+/// The measures a verdict is drawn from (module docs).
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Measures {
+    /// RMS distance (units of `√area(B)`) of the correspondence from the best similarity
+    /// of space.
+    pub residual: Option<f64>,
+    /// `residual` over the surfaces' distance after their rigid alignment (both in the
+    /// shared length unit); `None` when that was not measured.
+    pub residual_ratio: Option<f64>,
+    /// The final energy per unit of A's matched area (ℓ²).
+    pub energy: f64,
+    /// How much B's curvature at φ disagrees with A's, relative to the curvature both
+    /// have (0: alike, about 1: unrelated; `LevelEnergy::curvature_disagreement`).
+    pub curvature_disagreement: Option<f64>,
+    /// The same on the coarsest level's smoothed images (fine detail not counted).
+    pub coarse_disagreement: Option<f64>,
+    /// The same with φ turned away from its place (the mean over three turns): what
+    /// unrelated places give on these surfaces.
+    pub unrelated_disagreement: Option<f64>,
+    pub matched_fraction_a: f64,
+    pub covered_fraction_b: f64,
+    pub area_ratio: Option<f64>,
+}
+
+/// The weighted RMS distance of `points` (on B) from the best similarity image of A's
+/// positions (vertex areas as weights), both meshes in one length unit; `None` with
+/// fewer than four matched vertices or a degenerate fit.
+pub(crate) fn similarity_residual(
+    (a_positions, a_triangles): (&[[f64; 3]], &[[u32; 3]]),
+    (b_positions, b_triangles): (&[[f64; 3]], &[[u32; 3]]),
+    points: &[Option<SurfacePoint>],
+) -> Option<f64> {
+    let mut area = vec![0.0; a_positions.len()];
+    for t in a_triangles {
+        let [p, q, r] = t.map(|v| a_positions[v as usize]);
+        let third = norm(cross(sub(q, p), sub(r, p))) / 6.0;
+        t.iter().for_each(|&v| area[v as usize] += third);
+    }
+    let (mut p, mut q, mut w) = (vec![], vec![], vec![]);
+    for (v, y) in points.iter().enumerate() {
+        if let Some(y) = y {
+            p.push(a_positions[v]);
+            q.push(y.position(b_positions, b_triangles));
+            w.push(area[v]);
+        }
+    }
+    if p.len() < 4 {
+        return None;
+    }
+    let t = fit_similarity_3d(&p, &q, &w, true)?;
+    let (mut sum, mut total) = (0.0, 0.0);
+    for k in 0..p.len() {
+        let y = t.apply(p[k]);
+        sum += w[k] * (0..3).map(|c| (y[c] - q[k][c]).powi(2)).sum::<f64>();
+        total += w[k];
+    }
+    (total > 0.0).then(|| (sum / total).sqrt())
+}
