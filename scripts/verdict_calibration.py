@@ -154,10 +154,11 @@ def main():
             if "error" in row:
                 print(f"{row['pairs']:8s} {row['pair']:46s} {row['mode']:9s} ERROR {row['error']}", flush=True)
                 continue
+            f = lambda k, d=3: "-" if m.get(k) is None else f"{m[k]:.{d}f}"
             print(f"{row['pairs']:8s} {row['pair']:46s} {row['mode']:9s} <.05 {100 * row['p05']:5.1f} "
-                  f"{row['verdict'] or '-':9s} res {m.get('residual') or float('nan'):.4f} "
-                  f"ratio {m.get('residual_ratio') or float('nan'):6.2f} E {m.get('energy', float('nan')):8.3f} "
-                  f"A {m.get('matched_fraction_a', float('nan')):.3f} B {m.get('covered_fraction_b', float('nan')):.3f} "
+                  f"{row['verdict'] or '-':9s} D {f('curvature_disagreement')} Dc {f('coarse_disagreement')} "
+                  f"Du {f('unrelated_disagreement')} res {f('residual', 4)} off {f('pose_offset', 4)} "
+                  f"ratio {f('residual_ratio', 2)} area {f('area_ratio', 2)} A {f('matched_fraction_a')} "
                   f"{row['seconds']:.1f}s", flush=True)
     os.makedirs(args.out, exist_ok=True)
     json.dump(rows, open(os.path.join(args.out, "results.json"), "w"), indent=1)

@@ -74,7 +74,13 @@ fn main() {
     };
     if let Err(e) = result {
         eprintln!("error: {}", error_message(&e));
-        std::process::exit(1);
+        // 3: `match --strict` refused a match it made (its verdict not `ok`).
+        let code = if e.downcast_ref::<cmd::matching::NotTrusted>().is_some() {
+            3
+        } else {
+            1
+        };
+        std::process::exit(code);
     }
 }
 

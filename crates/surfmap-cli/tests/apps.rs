@@ -173,17 +173,28 @@ fn morph_writes_a_playable_gltf_and_frames_that_end_on_b() {
         }
     }
     assert!(dir.join("stills.png").is_file());
-    // A match for other meshes is refused with the reason.
-    let out = surfmap()
-        .current_dir(&dir)
-        .args([
-            "morph", "b.obj", "a.obj", "--match", "match_ab", "-o", "x.glb",
-        ])
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(1));
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("does not fit"), "{err}");
+    // A match for other meshes is refused with the reason: A and B given the wrong way
+    // round are named as swapped, another mesh as the side that differs.
+    let refused = |args: &[&str]| {
+        let out = surfmap().current_dir(&dir).args(args).output().unwrap();
+        assert_eq!(out.status.code(), Some(1));
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let err = refused(&[
+        "morph", "b.obj", "a.obj", "--match", "match_ab", "-o", "x.glb",
+    ]);
+    assert!(
+        err.contains("A and B are swapped") && err.contains("A = a.obj"),
+        "{err}"
+    );
+    let err = refused(&[
+        "morph", "a.obj", "key1.obj", "--match", "match_ab", "-o", "x.glb",
+    ]);
+    assert!(
+        err.contains("B (") && err.contains("b.obj") && !err.contains("A ("),
+        "{err}"
+    );
+    assert!(!dir.join("x.glb").exists());
 }
 
 #[test]

@@ -76,6 +76,22 @@ fn matching_two_registered_faces_finds_the_registration() {
     );
     assert!(report["min_det"].as_f64().unwrap() > 0.0);
     assert_eq!(report["holes_filled_a"], 3);
+    // The folder records the meshes it maps (their files and content digests), and its
+    // verdict: ok, in match.json and on the summary's second line.
+    let mesh_a = surfmap::read_mesh(&a).unwrap().mesh;
+    for (side, path, mesh) in [("a", &a, &mesh_a), ("b", &b, &mesh_b)] {
+        let record = &report["inputs"][side];
+        assert_eq!(record["path"], path.display().to_string());
+        assert_eq!(record["vertices"], mesh.num_vertices());
+        assert_eq!(record["faces"], mesh.triangles.len());
+        assert_eq!(record["sha256"], mesh.content_sha256());
+    }
+    assert_eq!(
+        report["confidence"]["verdict"], "ok",
+        "{}",
+        report["confidence"]
+    );
+    assert!(stdout.contains("\nverdict ok: "), "{stdout}");
     // Eyes and mouth carried onto B's: A's hole rims matched (at most 1% of their
     // vertices dropped for folds), the median within half a mesh edge (~0.012 of √area)
     // of its registered counterpart.
@@ -200,7 +216,8 @@ fn placed_area_ratio(mesh_a: &surfmap::TriMesh, placed: &surfmap::TriMesh) -> f6
 /// template (a head without shoulders, plus two eyeballs): `--repair` makes both
 /// matchable, but the surfaces differ in extent and the match squeezes the scan into a
 /// small part of the template. The result is still fold-free and written, and the
-/// doubt is said — on stderr and in match.json — with the area ratio recomputed here.
+/// verdict says it failed — on stderr and in match.json — with the area ratio recomputed
+/// here.
 #[test]
 fn a_head_scan_squeezed_onto_a_template_is_flagged() {
     let (Some(scan), Some(template)) = (
@@ -227,13 +244,14 @@ fn a_head_scan_squeezed_onto_a_template_is_flagged() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("repair: non-manifold: cut"), "{stderr}");
     assert!(
-        stderr.contains("warning: A's matched part lands on B at"),
+        stderr.contains("warning: verdict FAILED")
+            && stderr.contains("A's matched part lands on B at"),
         "{stderr}"
     );
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("match.json")).unwrap()).unwrap();
     assert!(report["min_det"].as_f64().unwrap() > 0.0);
-    assert_eq!(report["warnings"].as_array().unwrap().len(), 1);
+    assert_eq!(report["confidence"]["verdict"], "failed");
     // The outputs are numbered as the scan file (the match ran on the repaired scan).
     let a = surfmap::read_mesh(&scan).unwrap().mesh;
     let placed = surfmap::read_mesh(&dir.join("A_on_B.obj")).unwrap().mesh;
@@ -950,6 +968,148 @@ fn an_open_mouth_is_matched_lip_to_lip() {
     );
 }
 
+/// The seven landmarks of the referee's pairs on an ICT crop (holes sorted by length:
+/// outer rim, mouth, two eyes): the corners of each hole (extreme x), then the nose tip
+/// (largest z).
+fn seven_landmarks(mesh: &surfmap::TriMesh, loops: &[surfmap::mesh::BoundaryLoop]) -> Vec<u32> {
+    let x = |v: &u32| mesh.positions[*v as usize][0];
+    let mut ids = vec![];
+    for hole in &loops[1..4] {
+        let v = &hole.vertices;
+        ids.push(*v.iter().min_by(|p, q| x(p).total_cmp(&x(q))).unwrap());
+        ids.push(*v.iter().max_by(|p, q| x(p).total_cmp(&x(q))).unwrap());
+    }
+    let z = |v: &u32| mesh.positions[*v as usize][2];
+    ids.push(
+        (0..mesh.num_vertices() as u32)
+            .max_by(|p, q| z(p).total_cmp(&z(q)))
+            .unwrap(),
+    );
+    ids
+}
+
+/// `DIR/landmarks.json` pairing vertices `a` of A with `b` of B.
+fn write_landmarks(dir: &Path, a: &[u32], b: &[u32]) -> PathBuf {
+    let path = dir.join("landmarks.json");
+    std::fs::create_dir_all(dir).unwrap();
+    std::fs::write(
+        &path,
+        serde_json::json!({
+            "names": (0..a.len()).map(|i| format!("l{i}")).collect::<Vec<_>>(),
+            "A": a,
+            "B": b,
+        })
+        .to_string(),
+    )
+    .unwrap();
+    path
+}
+
+/// A start broken on purpose — the registered pair neutral → id004 with its landmarks
+/// paired the wrong way round (B's list reversed), used only to place the start — gives a
+/// wrong match: the verdict calls it failed, on stderr and in match.json, and `--strict`
+/// exits with 3 after writing it. With recovery (the default) the other starts are tried
+/// and the match comes out right, `ok`. The same pair matched without input is `ok`.
+#[test]
+fn a_broken_start_is_called_failed_strict_refuses_it_and_recovery_mends_it() {
+    let Some((a, b)) = registered_pair() else {
+        return;
+    };
+    let mesh_a = surfmap::read_mesh(&a).unwrap().mesh;
+    let mesh_b = surfmap::read_mesh(&b).unwrap().mesh;
+    let mut loops = surfmap::mesh::Topology::new(&mesh_a).boundary_loops;
+    loops.sort_by_key(|l| std::cmp::Reverse(l.vertices.len()));
+    let ids = seven_landmarks(&mesh_a, &loops);
+    let reversed: Vec<u32> = ids.iter().rev().copied().collect();
+    let dir = temp_dir("match-broken-start");
+    let landmarks = write_landmarks(&dir, &ids, &reversed);
+    let start_only = [
+        "--align",
+        "features",
+        "--features-start",
+        "plane",
+        "--similarity-search",
+        "off",
+        "--beta",
+        "1,0.01,0",
+        "--free-landmarks",
+        "--size",
+        "129",
+    ];
+    let within = |out: &Path| {
+        let errors = registration_errors(out, &mesh_b);
+        errors.iter().flatten().filter(|&&d| d < 0.05).count() as f64 / errors.len() as f64
+    };
+    let verdict = |out: &Path| {
+        let report: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("match.json")).unwrap())
+                .unwrap();
+        report["confidence"].clone()
+    };
+    // Strict, without recovery: written, failed, exit code 3.
+    let out = dir.join("strict");
+    let run = surfmap()
+        .arg("match")
+        .arg(&a)
+        .arg(&b)
+        .arg("-o")
+        .arg(&out)
+        .arg("--landmarks")
+        .arg(&landmarks)
+        .args(start_only)
+        .args(["--no-recover", "--strict"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(3), "{stderr}");
+    assert!(
+        stderr.contains("verdict FAILED") && stderr.contains("--strict"),
+        "{stderr}"
+    );
+    assert!(
+        within(&out) < 0.5,
+        "the start did not break the match: {}",
+        within(&out)
+    );
+    let c = verdict(&out);
+    assert_eq!(c["verdict"], "failed", "{c}");
+    assert!(!c["reasons"].as_array().unwrap().is_empty() && c.get("recovery").is_none());
+    // With recovery: right and ok.
+    let out = dir.join("recovered");
+    let run = run_ok(
+        surfmap()
+            .arg("match")
+            .arg(&a)
+            .arg(&b)
+            .arg("-o")
+            .arg(&out)
+            .arg("--landmarks")
+            .arg(&landmarks)
+            .args(start_only),
+    );
+    let c = verdict(&out);
+    assert_eq!(c["verdict"], "ok", "{c}");
+    assert_eq!(c["recovery"]["kept"], true, "{c}");
+    assert_eq!(c["recovery"]["verdict_before"], "failed", "{c}");
+    assert!(within(&out) > 0.9, "recovered: {}", within(&out));
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(stdout.contains("verdict ok"), "{stdout}");
+    // Without input: ok, no recovery needed.
+    let out = dir.join("plain");
+    run_ok(
+        surfmap()
+            .arg("match")
+            .arg(&a)
+            .arg(&b)
+            .arg("-o")
+            .arg(&out)
+            .args(["--size", "129"]),
+    );
+    let c = verdict(&out);
+    assert_eq!(c["verdict"], "ok", "{c}");
+    assert!(c.get("recovery").is_none());
+}
+
 #[test]
 fn landmarks_that_moved_with_the_jaw_are_refined_in_space() {
     // Neutral against jaw open (registered), with the seven landmarks of the referee's
@@ -965,32 +1125,9 @@ fn landmarks_that_moved_with_the_jaw_are_refined_in_space() {
     let Some((a, b, mesh_a, mesh_b, loops)) = neutral_and_jaw_open() else {
         return;
     };
-    // Holes by length: outer rim, mouth, two eyes; corners = extreme x of each hole.
-    let x = |v: &u32| mesh_a.positions[*v as usize][0];
-    let mut ids = vec![];
-    for hole in &loops[1..4] {
-        let v = &hole.vertices;
-        ids.push(*v.iter().min_by(|p, q| x(p).total_cmp(&x(q))).unwrap());
-        ids.push(*v.iter().max_by(|p, q| x(p).total_cmp(&x(q))).unwrap());
-    }
-    let z = |v: &u32| mesh_a.positions[*v as usize][2];
-    ids.push(
-        (0..mesh_a.num_vertices() as u32)
-            .max_by(|p, q| z(p).total_cmp(&z(q)))
-            .unwrap(),
-    );
+    let ids = seven_landmarks(&mesh_a, &loops);
     let dir = temp_dir("match-jaw-landmarks");
-    let landmarks = dir.join("landmarks.json");
-    std::fs::write(
-        &landmarks,
-        serde_json::json!({
-            "names": (0..ids.len()).map(|i| format!("l{i}")).collect::<Vec<_>>(),
-            "A": ids,
-            "B": ids,
-        })
-        .to_string(),
-    )
-    .unwrap();
+    let landmarks = write_landmarks(&dir, &ids, &ids);
     let mut found = vec![];
     for start in ["both", "plane"] {
         let out = dir.join(start);

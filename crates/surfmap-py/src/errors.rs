@@ -10,6 +10,8 @@
 //!   error is not about defects.
 //! * `surfmap.SolverError` (a `RuntimeError`): the computation failed on a valid mesh
 //!   (a linear solve, an inadmissible start map); the message says what to try.
+//! * `surfmap.MatchNotTrusted` (a `RuntimeError`): `match(..., strict=True)` made a
+//!   match whose verdict is not ok; `correspondence` and `report` hold it.
 //! * `OSError` (its subclasses `FileNotFoundError`, `PermissionError`, …): a file
 //!   could not be read or written.
 
@@ -40,11 +42,19 @@ pyo3::create_exception!(
     "The computation failed on a valid mesh (a linear solve, an inadmissible start\nmap); the message says what to try."
 );
 
+pyo3::create_exception!(
+    surfmap,
+    MatchNotTrusted,
+    PyRuntimeError,
+    "match(..., strict=True) made a match whose verdict is not ok (doubtful or failed);\nthe message gives the verdict and its reasons, `correspondence` and `report` the\nmatch (report[\"confidence\"] as without strict)."
+);
+
 /// Adds the exception types to the module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
     m.add("MeshError", py.get_type::<MeshError>())?;
     m.add("SolverError", py.get_type::<SolverError>())?;
+    m.add("MatchNotTrusted", py.get_type::<MatchNotTrusted>())?;
     Ok(())
 }
 

@@ -9,13 +9,13 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use surfmap::matching::{
     Align, FeaturesStart, Guidance, HoleFeatures, Landmarks, MatchError, MatchOptions, OptionError,
-    PositionWeight, ScaleB, SearchWhen, Weights, folder,
+    PositionWeight, ScaleB, SearchWhen, Verdict, Weights,
 };
 
 use crate::advice::match_defect_message;
 use crate::arrays;
 use crate::convert::to_dict;
-use crate::errors::{SolverError, flatten_error_worded};
+use crate::errors::{MatchNotTrusted, SolverError, flatten_error_worded};
 
 fn match_error(e: MatchError) -> PyErr {
     match e {
@@ -135,8 +135,14 @@ fn landmarks(d: &Bound<'_, PyDict>) -> PyResult<Landmarks> {
 /// line's ``correspondence.npy`` — and the dictionary of its ``match.json`` (the options
 /// used under ``report["options"]``; with features or landmarks, how far each paired
 /// feature of A lies from B's before and after the solve under ``report["feature_fit"]``).
-/// Doubts about the result (``report["warnings"]``,
-/// e.g. A squeezed into a small part of B) are also raised as ``RuntimeWarning``. A value
+/// How far the match can be trusted is ``report["confidence"]``: ``"verdict"``
+/// (``"ok"``, ``"doubtful"`` or ``"failed"``), ``"reasons"`` and the ``"measures"`` it
+/// was drawn from (curvature disagreement, residual from a similarity, matched and
+/// covered fractions, area ratio); a verdict other than ok and the doubts about single
+/// features (``report["warnings"]``) are also raised as ``RuntimeWarning``. A match whose
+/// verdict is not ok first tries other starts (``report["confidence"]["recovery"]``;
+/// ``recover=False``: ``--no-recover``); ``strict=True`` raises ``MatchNotTrusted`` for
+/// it, the match on the exception (``correspondence``, ``report``). A value
 /// the command line would refuse raises ``ValueError`` naming the argument.
 ///
 /// >>> import numpy as np, surfmap
@@ -155,7 +161,7 @@ fn landmarks(d: &Bound<'_, PyDict>) -> PyResult<Landmarks> {
 /// >>> report["alignment"]["method"], report["options"]["weights"]["features"]
 /// ('features', 10.0)
 #[pyfunction]
-#[pyo3(name = "match", signature = (VA, FA, VB, FB, *, landmarks=None, features_a=None, features_b=None, size=None, align=None, features_start=None, keep_folds=None, rim_fit_rings=None, complete_rings=None, pin_landmarks=None, scale_b=None, budget=None, hole_features=None, whole_hole_rims=None, fill_holes=None, beta=None, position_weight=None, similarity_search=None, search_candidates=None, search_level=None, rim_tolerance=None, relief=None, crop_overlap=None))]
+#[pyo3(name = "match", signature = (VA, FA, VB, FB, *, landmarks=None, features_a=None, features_b=None, size=None, align=None, features_start=None, keep_folds=None, rim_fit_rings=None, complete_rings=None, pin_landmarks=None, scale_b=None, budget=None, hole_features=None, whole_hole_rims=None, fill_holes=None, beta=None, position_weight=None, similarity_search=None, search_candidates=None, search_level=None, rim_tolerance=None, relief=None, crop_overlap=None, strict=None, recover=None))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub fn match_meshes<'py>(
     py: Python<'py>,
@@ -186,6 +192,8 @@ pub fn match_meshes<'py>(
     rim_tolerance: Option<f64>,
     relief: Option<f64>,
     crop_overlap: Option<&str>,
+    strict: Option<bool>,
+    recover: Option<bool>,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>)> {
     // As the command line's `--features-a` and `--features-b` (each requires the other).
     match (features_a.is_some(), features_b.is_some()) {
@@ -270,6 +278,7 @@ pub fn match_meshes<'py>(
     }
     o.keep_folds = keep_folds.unwrap_or(o.keep_folds);
     o.pin_landmarks = pin_landmarks.unwrap_or(o.pin_landmarks);
+    o.strict = strict.unwrap_or(o.strict);
     o.budget = budget.unwrap_or(o.budget);
     o.fill_holes = fill_holes.unwrap_or(o.fill_holes);
     o.split_hole_rims = !whole_hole_rims.unwrap_or(!o.split_hole_rims);
@@ -279,6 +288,7 @@ pub fn match_meshes<'py>(
     adv.rim_tolerance = rim_tolerance.unwrap_or(adv.rim_tolerance);
     adv.relief = relief.unwrap_or(adv.relief);
     adv.search_level = search_level.unwrap_or(adv.search_level);
+    adv.recover = recover.unwrap_or(adv.recover);
     match search_candidates.as_deref() {
         None => {}
         Some(&[deg, scale]) => adv.search_candidates = [deg, scale],
@@ -295,22 +305,39 @@ pub fn match_meshes<'py>(
             .map(|f| arrays::feature_file(f, "features_b", b.num_vertices()))
             .transpose()?,
     };
-    let matched = py
-        .detach(|| surfmap::matching::match_meshes(&a, &b, &guidance, &options))
-        .map_err(match_error)?;
-    let report = matched.report;
-    let corr = matched.correspondence;
-    // The report's doubts (`report["warnings"]`) also as Python warnings.
-    for w in &report.warnings {
-        let message = std::ffi::CString::new(w.as_str()).unwrap_or_default();
+    let matched = py.detach(|| surfmap::matching::match_meshes(&a, &b, &guidance, &options));
+    let (matched, refused) = match matched {
+        Ok(m) => (m, false),
+        Err(MatchError::NotTrusted(m)) => (*m, true),
+        Err(e) => return Err(match_error(e)),
+    };
+    let rows = Array2::from_shape_vec(
+        (matched.correspondence.len(), 4),
+        matched.correspondence_rows(),
+    )
+    .expect("four values per vertex")
+    .into_pyarray(py)
+    .into_any();
+    let report = to_dict(py, &matched.report)?;
+    let line = matched.report.confidence.line();
+    if refused {
+        // strict=True: the match as the exception's attributes.
+        let err = MatchNotTrusted::new_err(line);
+        let value = err.value(py);
+        value.setattr("correspondence", rows)?;
+        value.setattr("report", report)?;
+        return Err(err);
+    }
+    // The report's doubts (`report["warnings"]`) and a verdict other than ok, as
+    // Python warnings.
+    let doubts = matched.report.warnings.iter().cloned();
+    let verdict = (matched.report.confidence.verdict != Verdict::Ok).then_some(line);
+    for w in doubts.chain(verdict) {
+        let message = std::ffi::CString::new(w).unwrap_or_default();
         let category = py.get_type::<pyo3::exceptions::PyRuntimeWarning>();
         PyErr::warn(py, category.as_any(), &message, 1)?;
     }
-    let rows = Array2::from_shape_vec((corr.len(), 4), folder::correspondence_rows(&corr))
-        .expect("four values per vertex")
-        .into_pyarray(py)
-        .into_any();
-    Ok((rows, to_dict(py, &report)?))
+    Ok((rows, report))
 }
 
 /// Adds the matching functions to the module.

@@ -60,21 +60,9 @@ def test_a_whole_head_is_cut_down_as_on_the_command_line(cli, data, tmp_path):
 
 
 def test_match_of_a_moved_copy_recovers_the_motion():
-    # A disc cut from a 41 × 41 grid over [-1, 1]² (a bump and a saddle), and a moved copy.
-    n = 41
-    x, y = np.meshgrid(np.linspace(-1, 1, n), np.linspace(-1, 1, n))
-    V = np.c_[x.ravel(), y.ravel(), (0.3 * np.exp(-2 * ((x - 0.3) ** 2 + y**2)) + 0.1 * x * y).ravel()]
-    i = np.arange(n * (n - 1)).reshape(n - 1, n)[:, :-1].ravel()
-    F = np.r_[np.c_[i, i + 1, i + n + 1], np.c_[i, i + n + 1, i + n]]
-    F = F[np.linalg.norm(V[F, :2].mean(1), axis=1) < 0.95]
-    used = np.unique(F)
-    index = np.full(len(V), -1)
-    index[used] = np.arange(len(used))
-    V, F = V[used], index[F]
-    c, s = np.cos(0.6), np.sin(0.6)
-    R = np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
-    VB = V @ R.T + [1.0, -2.0, 0.5]
+    V, F, VB = bumpy_disc_and_moved_copy()
     C, report = surfmap.match(V, F, VB, F, size=129)
+    assert report["confidence"]["verdict"] == "ok", report["confidence"]
     ok = C[:, 0] >= 0
     points = np.einsum("ij,ijk->ik", C[ok, 1:], VB[F[C[ok, 0].astype(int)]])
     err = np.linalg.norm(points - VB[ok], axis=1)
@@ -90,6 +78,55 @@ def test_match_of_a_moved_copy_recovers_the_motion():
     points_mm = np.einsum("ij,ijk->ik", C_mm[ok_mm, 1:], VB[F[C_mm[ok_mm, 0].astype(int)]])
     err_mm = np.linalg.norm(points_mm - VB[ok_mm], axis=1)
     assert ok_mm.mean() > 0.95 and np.median(err_mm) < 2 * cell
+
+
+def bumpy_disc_and_moved_copy(n=41):
+    """A disc cut from an n × n grid over [-1, 1]² (a bump and a saddle), and a turned,
+    moved copy (the same triangles: vertex i of A is vertex i of B)."""
+    x, y = np.meshgrid(np.linspace(-1, 1, n), np.linspace(-1, 1, n))
+    V = np.c_[x.ravel(), y.ravel(), (0.3 * np.exp(-2 * ((x - 0.3) ** 2 + y**2)) + 0.1 * x * y).ravel()]
+    i = np.arange(n * (n - 1)).reshape(n - 1, n)[:, :-1].ravel()
+    F = np.r_[np.c_[i, i + 1, i + n + 1], np.c_[i, i + n + 1, i + n]]
+    F = F[np.linalg.norm(V[F, :2].mean(1), axis=1) < 0.95]
+    used = np.unique(F)
+    index = np.full(len(V), -1)
+    index[used] = np.arange(len(used))
+    V, F = V[used], index[F]
+    c, s = np.cos(0.6), np.sin(0.6)
+    VB = V @ np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]]).T + [1.0, -2.0, 0.5]
+    return V, F, VB
+
+
+def test_the_verdict_says_when_a_match_failed():
+    # A start broken on purpose: five landmarks paired with B's vertices half a turn away
+    # (x, y -> -x, -y), used only to place the start. The match is wrong; the verdict
+    # says failed (report and RuntimeWarning), strict=True raises with the match on the
+    # exception, and recovery (the default) mends it.
+    V, F, VB = bumpy_disc_and_moved_copy()
+    spots = [[0.45, 0.0], [-0.45, 0.05], [0.0, 0.45], [0.05, -0.45], [0.3, 0.3]]
+    near = lambda p: int(np.argmin(np.linalg.norm(V[:, :2] - p, axis=1)))  # noqa: E731
+    landmarks = {"names": [f"p{k}" for k in range(5)], "A": [near(p) for p in spots],
+                 "B": [near(-np.array(p)) for p in spots]}
+    start_only = dict(size=65, landmarks=landmarks, align="features", features_start="plane",
+                      similarity_search="off", beta=(1.0, 0.01, 0.0), pin_landmarks=False)
+
+    def error(C):
+        ok = C[:, 0] >= 0
+        points = np.einsum("ij,ijk->ik", C[ok, 1:], VB[F[C[ok, 0].astype(int)]])
+        return np.median(np.linalg.norm(points - VB[ok], axis=1))
+
+    with pytest.warns(RuntimeWarning, match="verdict FAILED"):
+        C, report = surfmap.match(V, F, VB, F, recover=False, **start_only)
+    assert report["confidence"]["verdict"] == "failed" and report["confidence"]["reasons"]
+    assert error(C) > 0.3
+    with pytest.raises(surfmap.MatchNotTrusted, match="verdict FAILED") as e:
+        surfmap.match(V, F, VB, F, recover=False, strict=True, **start_only)
+    assert e.value.report["confidence"]["verdict"] == "failed"
+    assert e.value.correspondence.shape == (len(V), 4)
+    C, report = surfmap.match(V, F, VB, F, **start_only)
+    confidence = report["confidence"]
+    assert confidence["verdict"] == "ok" and confidence["recovery"]["kept"], confidence
+    assert error(C) < 0.05
 
 
 def test_the_budget_caps_the_levels_as_on_the_command_line(cli, tmp_path):

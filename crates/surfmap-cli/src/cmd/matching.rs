@@ -10,7 +10,7 @@ use anyhow::Context;
 use surfmap::TriMesh;
 use surfmap::matching::{
     Advanced, Align, FeaturesStart, Guidance, HoleFeatures, Landmarks, MatchError, MatchInput,
-    MatchOptions, OptionError, PositionWeight, ScaleB, SearchWhen, Weights, match_meshes,
+    MatchOptions, OptionError, PositionWeight, ScaleB, SearchWhen, Verdict, Weights, match_meshes,
 };
 use surfmap::mesh::repair::FaceOrigins;
 use surfmap::raster::FeatureFile;
@@ -189,7 +189,15 @@ pub struct Args {
     /// Also draw pictures: checkerboard carried across, deformed grid, energy staircase.
     #[arg(long)]
     pub pictures: bool,
-    /// Print nothing but errors.
+    /// Report a match whose verdict is not `ok` as it is, without first trying other
+    /// starts (the alignment's other poses in space, the start turned).
+    #[arg(long)]
+    pub no_recover: bool,
+    /// Exit with code 3 when the match's verdict is not `ok` (doubtful or failed; the
+    /// match is still written, its verdict and reasons in match.json's `confidence`).
+    #[arg(long)]
+    pub strict: bool,
+    /// Print nothing but errors and warnings (a verdict other than `ok` is a warning).
     #[arg(short, long)]
     pub quiet: bool,
     #[command(flatten)]
@@ -236,6 +244,7 @@ fn match_options(args: &Args) -> Result<MatchOptions, OptionError> {
     };
     o.keep_folds = args.keep_folds;
     o.pin_landmarks = !args.free_landmarks;
+    o.strict = args.strict;
     o.advanced = Advanced {
         rim_fit_rings: args.rim_fit_rings,
         complete_rings: args.complete_rings,
@@ -247,6 +256,7 @@ fn match_options(args: &Args) -> Result<MatchOptions, OptionError> {
             Some(&[deg, scale]) => [deg, scale],
             Some(other) => return Err(OptionError::SearchCandidates(other.to_vec())),
         },
+        recover: !args.no_recover,
     };
     o.validate()?;
     Ok(o)
@@ -298,27 +308,33 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         features_a: read_features(&args.features_a, input_a.num_vertices())?,
         features_b: read_features(&args.features_b, input_b.num_vertices())?,
     };
-    let matched = match_meshes(a, b, &guidance, &options)
-        .map_err(|e| match &e {
-            // The flattening's remedies as this command's flags.
-            MatchError::Flatten { surface, source } => {
-                match worded_flatten_error(source, match_defect_message) {
-                    Some(message) => anyhow::anyhow!(
-                        "cannot flatten {}: {message}",
-                        surface.map_or("the surface".to_string(), |s| format!("surface {s}"))
-                    ),
-                    None => e.into(),
-                }
+    let (mut matched, refused) = match match_meshes(a, b, &guidance, &options) {
+        Ok(m) => Ok((m, false)),
+        Err(MatchError::NotTrusted(m)) => Ok((*m, true)),
+        Err(e) => Err(e),
+    }
+    .map_err(|e| match &e {
+        // The flattening's remedies as this command's flags.
+        MatchError::Flatten { surface, source } => {
+            match worded_flatten_error(source, match_defect_message) {
+                Some(message) => anyhow::anyhow!(
+                    "cannot flatten {}: {message}",
+                    surface.map_or("the surface".to_string(), |s| format!("surface {s}"))
+                ),
+                None => e.into(),
             }
-            _ => e.into(),
-        })
-        .with_context(|| {
-            format!(
-                "cannot match {} onto {}",
-                args.a.display(),
-                args.b.display()
-            )
-        })?;
+        }
+        _ => e.into(),
+    })
+    .with_context(|| {
+        format!(
+            "cannot match {} onto {}",
+            args.a.display(),
+            args.b.display()
+        )
+    })?;
+    matched.report.inputs.a.path = Some(args.a.display().to_string());
+    matched.report.inputs.b.path = Some(args.b.display().to_string());
     let written = matched
         .write_folder(&args.output, args.pictures)
         .with_context(|| format!("cannot write the match into {}", args.output.display()))?;
@@ -337,5 +353,29 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     for w in &matched.report.warnings {
         eprintln!("warning: {w}");
     }
+    let confidence = &matched.report.confidence;
+    if refused {
+        return Err(NotTrusted(format!(
+            "{} (the match is written into {}; --strict refuses it)",
+            confidence.line(),
+            args.output.display()
+        ))
+        .into());
+    }
+    if confidence.verdict != Verdict::Ok {
+        eprintln!("warning: {}", confidence.line());
+    }
     Ok(())
 }
+
+/// `--strict` refused the match: its verdict is not `ok` (exit code 3).
+#[derive(Debug)]
+pub struct NotTrusted(pub String);
+
+impl std::fmt::Display for NotTrusted {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for NotTrusted {}

@@ -19,6 +19,14 @@ pub fn load_match(
     b_name: &Path,
 ) -> anyhow::Result<Vec<Option<SurfacePoint>>> {
     let folder = read_match_folder(dir)?;
+    folder.check_meshes(a, b).map_err(|why| {
+        anyhow::anyhow!(
+            "the match {} was not made from {} → {}: {why}",
+            dir.display(),
+            a_name.display(),
+            b_name.display()
+        )
+    })?;
     check_correspondence(&folder.correspondence, a.num_vertices(), b.num_triangles()).with_context(
         || {
             format!(

@@ -19,7 +19,9 @@ the command line writes as JSON. Long computations release the GIL.
 
 Errors: ``ValueError`` for bad arguments, ``MeshError`` (a ``ValueError``) for a mesh
 that cannot be used as given (its message names each defect and its repair),
-``SolverError`` (a ``RuntimeError``) when a computation fails, ``OSError`` for files.
+``SolverError`` (a ``RuntimeError``) when a computation fails, ``MatchNotTrusted`` (a
+``RuntimeError``) when ``match(..., strict=True)`` made a match whose verdict is not ok,
+``OSError`` for files.
 """
 
 import os
@@ -29,6 +31,7 @@ from typing import Any, Callable, Dict, Iterable, List, Optional, Union
 
 from ._surfmap import (
     BATCH_COLUMNS,
+    MatchNotTrusted,
     MeshError,
     SolverError,
     __version__,
@@ -48,6 +51,7 @@ from ._surfmap import (
 
 __all__ = [
     "BATCH_COLUMNS",
+    "MatchNotTrusted",
     "MeshError",
     "SolverError",
     "__version__",

@@ -24,6 +24,10 @@ class MeshError(ValueError):
 
     defects: List[Dict[str, Any]]
 
+class MatchNotTrusted(RuntimeError):
+    correspondence: FloatArray
+    report: Report
+
 class SolverError(RuntimeError):
     """The computation failed on a valid mesh; the message says what to try."""
 
@@ -147,4 +151,6 @@ def match(
     rim_tolerance: Optional[float] = None,
     relief: Optional[float] = None,
     crop_overlap: Optional[Literal["auto", "off"]] = None,
+    strict: Optional[bool] = None,
+    recover: Optional[bool] = None,
 ) -> Tuple[FloatArray, Report]: ...

@@ -20,6 +20,7 @@ use super::Chart;
 use super::match_folder::write_match_folder;
 use super::pad::pad_colours;
 use super::texture::{render_layout, to_rgb_image};
+use crate::matching::{InputMesh, Inputs};
 use crate::mesh::io::ObjMaterial;
 use crate::mesh::{SurfacePoint, TriMesh, Uvs};
 
@@ -327,11 +328,32 @@ pub fn write_inputs(out: &Path, scan: Option<TriMesh>, photo_side: u32) -> Strin
     });
     save(&out.join("a.obj"), &a);
     save(&out.join("b.obj"), &b);
-    let info = |from: &str, to: &str| serde_json::json!({"a": from, "b": to, "source": "apps_inputs: a closed-form map of the plane"});
-    write_match_folder(&out.join("match_ab"), &ab, &info("a.obj", "b.obj")).unwrap();
+    // Each folder records the meshes it maps, as `surfmap match` does.
+    let info = |from: (&str, &TriMesh), to: (&str, &TriMesh)| {
+        let record = |(path, mesh): (&str, &TriMesh)| InputMesh {
+            path: Some(path.into()),
+            ..InputMesh::of(mesh)
+        };
+        let inputs = Inputs {
+            a: record(from),
+            b: record(to),
+        };
+        serde_json::json!({"inputs": inputs, "source": "apps_inputs: a closed-form map of the plane"})
+    };
+    write_match_folder(
+        &out.join("match_ab"),
+        &ab,
+        &info(("a.obj", &a), ("b.obj", &b)),
+    )
+    .unwrap();
     if generated {
         let sb = planar_map(&textured, &b, f, |_, _| true);
-        write_match_folder(&out.join("match_scan_b"), &sb, &info("scan.obj", "b.obj")).unwrap();
+        write_match_folder(
+            &out.join("match_scan_b"),
+            &sb,
+            &info(("scan.obj", &textured), ("b.obj", &b)),
+        )
+        .unwrap();
     }
 
     // A rig: neutral → key1 → key2 (a chain) and neutral → key2 (direct).
@@ -351,9 +373,14 @@ pub fn write_inputs(out: &Path, scan: Option<TriMesh>, photo_side: u32) -> Strin
     let n1 = planar_map(&neutral, &key1, g1, everywhere);
     let k12 = planar_map(&key1, &key2, g2, everywhere);
     let n2 = planar_map(&neutral, &key2, |p| g2(g1(p)), everywhere);
-    write_match_folder(&out.join("match_n1"), &n1, &info("neutral.obj", "key1.obj")).unwrap();
-    write_match_folder(&out.join("match_12"), &k12, &info("key1.obj", "key2.obj")).unwrap();
-    write_match_folder(&out.join("match_n2"), &n2, &info("neutral.obj", "key2.obj")).unwrap();
+    let (n, k1, k2) = (
+        ("neutral.obj", &neutral),
+        ("key1.obj", &key1),
+        ("key2.obj", &key2),
+    );
+    write_match_folder(&out.join("match_n1"), &n1, &info(n, k1)).unwrap();
+    write_match_folder(&out.join("match_12"), &k12, &info(k1, k2)).unwrap();
+    write_match_folder(&out.join("match_n2"), &n2, &info(n, k2)).unwrap();
 
     // Per-vertex values of B for `transfer --values`: its height.
     let heights: Vec<f64> = b.positions.iter().map(|p| p[2]).collect();

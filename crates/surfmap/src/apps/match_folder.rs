@@ -12,6 +12,7 @@ use crate::raster::npy::{read_npy_f64, save_npy};
 /// File names inside a match folder and the row encoding: the matcher's
 /// ([`crate::matching::folder`]), which writes the folders these functions read.
 pub use crate::matching::folder::{CORRESPONDENCE_FILE, INFO_FILE, correspondence_rows};
+use crate::matching::{InputMesh, Inputs};
 
 /// A match folder's contents.
 #[derive(Clone, Debug, PartialEq)]
@@ -82,6 +83,59 @@ pub fn read_match_folder(dir: &Path) -> Result<MatchFolder, AppError> {
     })
 }
 
+impl MatchFolder {
+    /// The meshes the match was made from, when `match.json` records them (folders
+    /// written before it did have no record).
+    pub fn inputs(&self) -> Option<Inputs> {
+        serde_json::from_value(self.info.get("inputs")?.clone()).ok()
+    }
+
+    /// Whether `a` and `b` are the meshes the match was made from (by their content
+    /// digests, [`crate::TriMesh::content_sha256`]); an error naming which is not — and
+    /// saying so when A and B were swapped. Passes a folder without a record.
+    pub fn check_meshes(&self, a: &crate::TriMesh, b: &crate::TriMesh) -> Result<(), String> {
+        let Some(made) = self.inputs() else {
+            return Ok(());
+        };
+        let (ha, hb) = (a.content_sha256(), b.content_sha256());
+        if ha == made.a.sha256 && hb == made.b.sha256 {
+            return Ok(());
+        }
+        let named = |m: &InputMesh| {
+            format!(
+                "{} ({} vertices, {} faces)",
+                m.path.as_deref().unwrap_or("a mesh given as arrays"),
+                m.vertices,
+                m.faces
+            )
+        };
+        if ha == made.b.sha256 && hb == made.a.sha256 {
+            return Err(format!(
+                "A and B are swapped: the match maps A = {} onto B = {}; give them in that order \
+                 (or match the other way round)",
+                named(&made.a),
+                named(&made.b)
+            ));
+        }
+        let wrong: Vec<String> = [("A", &ha, a, &made.a), ("B", &hb, b, &made.b)]
+            .into_iter()
+            .filter(|(_, h, _, m)| **h != m.sha256)
+            .map(|(side, _, given, m)| {
+                format!(
+                    "{side} ({} vertices, {} faces) is not the mesh the match was made from, {}",
+                    given.num_vertices(),
+                    given.triangles.len(),
+                    named(m)
+                )
+            })
+            .collect();
+        Err(format!(
+            "{}; give the meshes the match was made from, or match these",
+            wrong.join("; ")
+        ))
+    }
+}
+
 /// Writes a match folder (created if missing): the correspondence and `info` as
 /// `match.json`, each file atomically.
 pub fn write_match_folder(
@@ -105,6 +159,48 @@ pub fn write_match_folder(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A folder is used only with the meshes it was made from: the same meshes pass
+    /// (also re-read, the digest is of the content), swapped ones are named as swapped,
+    /// another key as the side that differs; a folder without a record passes.
+    #[test]
+    fn a_folder_refuses_meshes_it_was_not_made_from() {
+        let a = crate::mesh::generate::bumpy_disc(6, 0.3);
+        let b = crate::mesh::generate::bumpy_disc(7, 0.3);
+        let mut other = b.clone();
+        other.positions[3][2] += 1e-9;
+        let inputs = Inputs {
+            a: InputMesh {
+                path: Some("neutral.obj".into()),
+                ..InputMesh::of(&a)
+            },
+            b: InputMesh {
+                path: Some("smile.obj".into()),
+                ..InputMesh::of(&b)
+            },
+        };
+        let folder = MatchFolder {
+            correspondence: vec![],
+            info: serde_json::json!({ "inputs": inputs }),
+        };
+        assert_eq!(folder.inputs(), Some(inputs));
+        assert_eq!(folder.check_meshes(&a, &b.clone()), Ok(()));
+        let e = folder.check_meshes(&b, &a).unwrap_err();
+        assert!(
+            e.starts_with("A and B are swapped") && e.contains("neutral.obj"),
+            "{e}"
+        );
+        let e = folder.check_meshes(&a, &other).unwrap_err();
+        assert!(
+            e.starts_with("B (") && e.contains("smile.obj") && !e.contains("A ("),
+            "{e}"
+        );
+        let old = MatchFolder {
+            correspondence: vec![],
+            info: serde_json::json!({}),
+        };
+        assert_eq!(old.check_meshes(&a, &other), Ok(()));
+    }
 
     #[test]
     fn folders_round_trip_and_bad_files_are_named() {

@@ -37,7 +37,7 @@
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::deformation::{cell_triangles, jacobian, jacobian_adjoint};
+use super::deformation::{Deformation, cell_triangles, jacobian, jacobian_adjoint};
 use super::similarity::Similarity3;
 use crate::grid::{Grid, GridPoint};
 
@@ -326,6 +326,38 @@ pub(crate) fn theta(s: f64, eps: f64) -> (f64, f64) {
 }
 
 impl LevelEnergy {
+    /// How much B's mean curvature at φ disagrees with A's where both are matched,
+    /// relative to how much curvature there is:
+    /// `D = ∫ χ (h_B∘φ − h_A)² / ∫ χ (h_A² + (h_B∘φ)²)` (node quadrature, weights
+    /// `√det g_A`): 0 when the curvatures agree everywhere, about 1 when they are
+    /// unrelated (a match turned or shifted off its place), 2 when opposite. The
+    /// bending term (2.9) over the curvature both surfaces have, so that it does not
+    /// depend on how curved the surfaces are. `None` where nothing is matched.
+    pub(crate) fn curvature_disagreement(&self, phi: &Deformation) -> Option<f64> {
+        self.curvature_disagreement_at(|k| phi.at(k))
+    }
+
+    /// [`Self::curvature_disagreement`] with node `k` of A's grid placed at `place(k)`
+    /// in ω_B.
+    pub(crate) fn curvature_disagreement_at(
+        &self,
+        place: impl Fn(usize) -> [f64; 2],
+    ) -> Option<f64> {
+        let (mut miss, mut total) = (0.0, 0.0);
+        for k in 0..self.a.h.len() {
+            let w = self.a.weight[k] * self.a.chi[k];
+            if w == 0.0 {
+                continue;
+            }
+            let sv = self.b.field.sample(place(k));
+            let c = w * chi(sv[B_SD], self.epsilon).0;
+            let (ha, hb) = (self.a.h[k], sv[B_H]);
+            miss += c * (hb - ha) * (hb - ha);
+            total += c * (ha * ha + hb * hb);
+        }
+        (total > 0.0).then(|| miss / total)
+    }
+
     pub fn size(&self) -> usize {
         self.a.size
     }

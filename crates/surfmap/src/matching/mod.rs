@@ -33,19 +33,20 @@
 //! the match folder ([`folder`]) and draws its pictures ([`pictures`]).
 
 pub mod deformation;
-pub mod energy;
 pub mod folder;
 pub mod folds;
 pub mod guidance;
 pub mod options;
-pub mod pictures;
 pub mod prepare;
 pub mod report;
-pub mod rigid;
 pub mod similarity;
 
 pub(crate) mod align;
+pub(crate) mod energy;
+pub(crate) mod pictures;
 pub(crate) mod post;
+pub(crate) mod recover;
+pub(crate) mod rigid;
 pub(crate) mod solve;
 
 use std::path::{Path, PathBuf};
@@ -63,8 +64,9 @@ pub use options::{
     POSITION_KAPPA, POSITION_RELIEF, POSITION_RESIDUAL_CAP, POSITION_RESIDUAL_FLOOR,
     PositionWeight, ScaleB, SearchWhen, UNIT_MISMATCH, Weights,
 };
+pub use report::confidence::{Confidence, Verdict};
 pub use report::feature_fit::FeatureFit;
-pub use report::{InputNumbering, MatchReport};
+pub use report::{InputMesh, InputNumbering, Inputs, MatchReport};
 pub use similarity::{Similarity2, Similarity3};
 pub use solve::SimilaritySearchLog;
 pub use solve::ncg::{LevelLog, StopReason};
@@ -80,16 +82,26 @@ pub fn match_meshes<'m>(
     guidance: &Guidance,
     options: &MatchOptions,
 ) -> Result<Match, MatchError> {
+    options.validate().map_err(MatchError::Option)?;
     let begin = std::time::Instant::now();
     let mut prepared = prepare::prepare(a.into(), b.into(), guidance, options)?;
-    let clock = std::time::Instant::now();
     let start = align::align(&mut prepared, options)?;
-    let solved = solve::solve(&prepared.a, &prepared.b, start, options);
-    let seconds_solve = clock.elapsed().as_secs_f64();
-    let correspondence = post::post(&prepared, &solved, options)?;
-    let mut report = report::report(&prepared, &solved, &correspondence, options, seconds_solve);
+    let mut attempt = recover::Attempt::run(&prepared, start, options)?;
+    // With `Align::None` the user fixed the start (the planes' identity): no other is tried.
+    if attempt.report.confidence.verdict != Verdict::Ok
+        && options.advanced.recover
+        && options.align != Align::None
+    {
+        attempt = recover::recover(&mut prepared, attempt, options)?;
+    }
+    let recover::Attempt {
+        solved,
+        correspondence,
+        mut report,
+        ..
+    } = attempt;
     report.seconds_total = begin.elapsed().as_secs_f64();
-    Ok(Match {
+    let matched = Match {
         correspondence: correspondence.given,
         a_on_b: correspondence.a_on_b,
         report,
@@ -102,7 +114,11 @@ pub fn match_meshes<'m>(
             scale_b: prepared.scale_b,
         },
         solved,
-    })
+    };
+    if options.strict && matched.report.confidence.verdict != Verdict::Ok {
+        return Err(MatchError::NotTrusted(Box::new(matched)));
+    }
+    Ok(matched)
 }
 
 /// One surface given to [`match_meshes`]: the mesh as given (the numbering of the
@@ -217,9 +233,13 @@ pub enum MatchError {
     #[error("{0}")]
     Input(String),
     #[error("invalid option: {0}")]
-    Option(String),
+    Option(OptionError),
     #[error("{0}")]
     Output(String),
+    /// With [`MatchOptions::strict`]: the match was made, but its verdict is not `ok`
+    /// (the match is here, to be written or looked at).
+    #[error("{}", .0.report.confidence.line())]
+    NotTrusted(Box<Match>),
 }
 
 impl From<crate::param::flatten::FlattenError> for MatchError {

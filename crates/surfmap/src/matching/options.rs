@@ -86,6 +86,9 @@ pub struct MatchOptions {
     /// Match each landmark exactly to its vertex of B in the output, the vertices
     /// around it following (else where φ puts it).
     pub pin_landmarks: bool,
+    /// Refuse a match whose verdict is not `ok` ([`super::Confidence`]): the match
+    /// comes back as the error [`super::MatchError::NotTrusted`].
+    pub strict: bool,
     /// Settings of the solve and the post-processing that rarely need changing.
     pub advanced: Advanced,
     #[serde(skip)]
@@ -165,6 +168,11 @@ pub struct Advanced {
     /// Extra starts of the similarity search: rotated by ±`[0]` degrees and scaled by
     /// (1 ± `[1]`); `[0, 0]` searches from the start alone.
     pub search_candidates: [f64; 2],
+    /// When the verdict is not `ok`, try other starts before reporting
+    /// (`crate::matching::recover`): the other poses of the alignment in space and the
+    /// start turned, the whole match made again from the most promising. Not with
+    /// [`Align::None`], where the user fixed the start.
+    pub recover: bool,
 }
 
 impl Default for Advanced {
@@ -176,6 +184,7 @@ impl Default for Advanced {
             relief: POSITION_RELIEF,
             search_level: SEARCH_LEVEL,
             search_candidates: [0.0, 0.0],
+            recover: true,
         }
     }
 }
@@ -496,6 +505,7 @@ impl Default for MatchOptions {
             scale_b: ScaleB::Auto,
             keep_folds: false,
             pin_landmarks: true,
+            strict: false,
             advanced: Advanced::default(),
             tuning: Tuning::default(),
         }

@@ -28,7 +28,7 @@ use crate::vec3::{cross3 as cross, dot3 as dot, norm3 as norm, sub3 as sub};
 /// Fraction of the pairs (closest first) that each ICP step fits.
 pub const KEEP: f64 = 0.7;
 
-/// Most vertices of B that the coarse ICP starts of [`align_rigidly`] pair with (an even
+/// Most vertices of B that the coarse ICP starts of [`align_rigidly_ranked`] pair with (an even
 /// subsample of B's vertices when it has more): 25 targets per coarse point of A (400),
 /// so that B is sampled far more densely than A while the 52 starts' closest-vertex
 /// queries — most of the alignment's time — no longer slow down with B's resolution
@@ -37,7 +37,7 @@ pub const KEEP: f64 = 0.7;
 /// (BENCHMARKS.md, "Matching": the coarse starts' targets).
 pub const COARSE_TARGETS: usize = 10_000;
 
-/// Pairings and steps of each coarse ICP start of [`align_rigidly`] (41: the 40
+/// Pairings and steps of each coarse ICP start of [`align_rigidly_ranked`] (41: the 40
 /// iterations of the earlier fixed loop and the final pairing's step).
 const COARSE_STEPS: usize = 41;
 
@@ -53,7 +53,7 @@ const COARSE_PROBE: usize = 21;
 /// starts, few of the coarser FLAME pairs'.
 const COARSE_CUT: f64 = 4.0;
 
-/// How far the shifted starts of [`align_rigidly`] move A from the centroid-to-centroid
+/// How far the shifted starts of [`align_rigidly_ranked`] move A from the centroid-to-centroid
 /// starts: this fraction of B's extent, either way along each of B's two longest
 /// principal axes (4 shifts of each cube and principal-axes start). Crops of a face on
 /// opposite sides (a quarter of each without a counterpart) have centroids that do not
@@ -457,17 +457,42 @@ impl IcpRun {
 /// The rigid motion of ℝ³ that best puts surface A (points `a`) onto surface B
 /// (points `b`): trimmed ICP on a subsample from 24 rotations about the centroids, the
 /// four principal-axes poses, those 28 shifted (`shifted_starts`) and the caller's
-/// `starts`; the best is refined on more points.
-pub fn align_rigidly(
+/// `starts`, the best refined on more points; then up to `count − 1` other poses its
+/// starts ended in, each distinct from those before it ([`distinct_poses`]), lowest rms first, each
+/// refined as the first is: the alternatives a match that went wrong tries
+/// (`crate::matching::align::alternatives`).
+pub fn align_rigidly_ranked(
     a: &[[f64; 3]],
     b: &[[f64; 3]],
     normals: &[[f64; 3]],
     starts: &[Similarity3],
-) -> Option<RigidAlignment> {
-    align_rigidly_with(a, b, normals, starts, COARSE_TARGETS, true)
+    count: usize,
+) -> Vec<RigidAlignment> {
+    align_rigidly_with(a, b, normals, starts, COARSE_TARGETS, true, count)
 }
 
-/// [`align_rigidly`] with the coarse starts paired with at most `coarse_targets` of B's
+/// Whether two poses of A differ enough to be different alignments: turned more than
+/// [`DISTINCT_ANGLE`] apart, or their translations (at A's centroid `c`) more than
+/// `DISTINCT_SHIFT` of `extent` apart.
+fn distinct_poses(p: &Similarity3, q: &Similarity3, c: [f64; 3], extent: f64) -> bool {
+    let (m, n) = (p.matrix, q.matrix);
+    // cos θ of the relative rotation Mᵀ N (both proper rotations): (tr − 1) / 2.
+    let trace: f64 = (0..3)
+        .map(|i| (0..3).map(|k| m[k][i] * n[k][i]).sum::<f64>())
+        .sum();
+    let angle = ((trace - 1.0) / 2.0).clamp(-1.0, 1.0).acos();
+    let (x, y) = (p.apply(c), q.apply(c));
+    angle > DISTINCT_ANGLE || norm(sub(x, y)) > DISTINCT_SHIFT * extent
+}
+
+/// Poses turned further apart than this (radians, 30°) are different alignments.
+const DISTINCT_ANGLE: f64 = std::f64::consts::PI / 6.0;
+
+/// Poses whose A-centroids lie further apart than this fraction of B's extent are
+/// different alignments.
+const DISTINCT_SHIFT: f64 = 0.1;
+
+/// [`align_rigidly_ranked`] with the coarse starts paired with at most `coarse_targets` of B's
 /// vertices (an even subsample of them, with their normals, when B has more), with or
 /// without the `shifted` starts.
 fn align_rigidly_with(
@@ -477,9 +502,10 @@ fn align_rigidly_with(
     starts: &[Similarity3],
     coarse_targets: usize,
     shifted: bool,
-) -> Option<RigidAlignment> {
+    count: usize,
+) -> Vec<RigidAlignment> {
     if a.len() < 3 || b.len() < 3 {
-        return None;
+        return vec![];
     }
     let closest = ClosestPoints::new(b);
     let subsampled;
@@ -567,10 +593,31 @@ fn align_rigidly_with(
     let best = match (best_of(false), best_of(true)) {
         (Some(unshifted), Some(shifted)) if shifted.rms < SHIFTED_MARGIN * unshifted.rms => shifted,
         (Some(unshifted), _) => unshifted,
-        (None, shifted) => shifted?,
+        (None, Some(shifted)) => shifted,
+        (None, None) => return vec![],
     };
+    let mut chosen = vec![best];
+    if count > 1 {
+        let mut others: Vec<RigidAlignment> = runs.iter().map(|(_, run)| run.alignment).collect();
+        others.sort_by(|x, y| x.rms.total_cmp(&y.rms));
+        let extent = crate::mesh::bounding_box(b).map_or(0.0, |(lo, hi)| norm(sub(hi, lo)));
+        for pose in others {
+            if chosen.len() == count {
+                break;
+            }
+            if chosen
+                .iter()
+                .all(|c| distinct_poses(&c.motion, &pose.motion, ca, extent))
+            {
+                chosen.push(pose);
+            }
+        }
+    }
     let fine = subsample(a, 3000);
-    Some(icp(&fine, b, normals, &closest, best.motion, 100))
+    chosen
+        .into_iter()
+        .map(|pose| icp(&fine, b, normals, &closest, pose.motion, 100))
+        .collect()
 }
 
 /// The inverse of an affine motion `x ↦ M x + t` (M invertible): `y ↦ M⁻¹ (y − t)`.
@@ -603,7 +650,7 @@ fn area(points: &[[f64; 3]], triangles: &[[u32; 3]]) -> f64 {
 }
 
 /// The rigid motion that best lays surface A (`a`, triangles `ta`) onto surface B, by
-/// [`align_rigidly`] from `starts` (A → B motions), or by [`refine_rigidly`] from
+/// [`align_rigidly_ranked`] from `starts` (A → B motions), or by [`refine_rigidly`] from
 /// `refine_from` when given — either way round.
 ///
 /// Trimmed ICP fits the closest [`KEEP`] of the moved surface's points, so it can lay A
@@ -613,32 +660,48 @@ fn area(points: &[[f64; 3]], triangles: &[[u32; 3]]) -> f64 {
 /// wrong pose; then B is laid onto A (from the inverted starts) and the motion inverted.
 /// The returned `rms` is then measured from B's points.
 pub fn align_surfaces(
+    a: (&[[f64; 3]], &[[u32; 3]]),
+    b: (&[[f64; 3]], &[[u32; 3]]),
+    starts: &[Similarity3],
+    refine_from: Option<Similarity3>,
+) -> Option<RigidAlignment> {
+    align_surfaces_ranked(a, b, starts, refine_from, 1)
+        .into_iter()
+        .next()
+}
+
+/// [`align_surfaces`]'s pose first, then up to `count − 1` distinct others
+/// ([`align_rigidly_ranked`]; none when refining `refine_from`).
+pub fn align_surfaces_ranked(
     (a, ta): (&[[f64; 3]], &[[u32; 3]]),
     (b, tb): (&[[f64; 3]], &[[u32; 3]]),
     starts: &[Similarity3],
     refine_from: Option<Similarity3>,
-) -> Option<RigidAlignment> {
+    count: usize,
+) -> Vec<RigidAlignment> {
     let run = |x: &[[f64; 3]], y: &[[f64; 3]], ty: &[[u32; 3]], starts: &[Similarity3], from| {
         let normals = vertex_normals(y, ty);
         match from {
-            Some(start) => refine_rigidly(x, y, &normals, start),
-            None => align_rigidly(x, y, &normals, starts),
+            Some(start) => refine_rigidly(x, y, &normals, start).into_iter().collect(),
+            None => align_rigidly_ranked(x, y, &normals, starts, count),
         }
     };
     if area(b, tb) >= KEEP * area(a, ta) {
         return run(a, b, tb, starts, refine_from);
     }
     let starts: Vec<Similarity3> = starts.iter().map(inverse).collect();
-    let back = run(b, a, ta, &starts, refine_from.as_ref().map(inverse))?;
-    Some(RigidAlignment {
-        motion: inverse(&back.motion),
-        rms: back.rms,
-        plane_rms: back.plane_rms,
-    })
+    run(b, a, ta, &starts, refine_from.as_ref().map(inverse))
+        .into_iter()
+        .map(|back| RigidAlignment {
+            motion: inverse(&back.motion),
+            rms: back.rms,
+            plane_rms: back.plane_rms,
+        })
+        .collect()
 }
 
 /// Trimmed ICP of A onto B from one `start` only (on the same subsample as the
-/// refinement of [`align_rigidly`]): for a pose already known roughly, e.g. from paired
+/// refinement of [`align_rigidly_ranked`]): for a pose already known roughly, e.g. from paired
 /// landmarks.
 pub fn refine_rigidly(
     a: &[[f64; 3]],
@@ -678,7 +741,7 @@ mod tests {
         let closest = ClosestPoints::new(b);
         let normals = vertex_normals(b, bt);
         assert!(icp(a, b, &normals, &closest, *truth, 10).rms < 1e-9);
-        let found = align_rigidly(a, b, &normals, &[]).unwrap();
+        let found = align_rigidly_ranked(a, b, &normals, &[], 1)[0];
         assert_same_pose(a, &found.motion, truth, tolerance);
     }
 
@@ -757,8 +820,13 @@ mod tests {
         let found =
             align_surfaces((&whole, &triangles), (&part, &part_triangles), &[], None).unwrap();
         assert_same_pose(&whole, &found.motion, &truth, 1e-6);
-        let one_way =
-            align_rigidly(&whole, &part, &vertex_normals(&part, &part_triangles), &[]).unwrap();
+        let one_way = align_rigidly_ranked(
+            &whole,
+            &part,
+            &vertex_normals(&part, &part_triangles),
+            &[],
+            1,
+        )[0];
         let off = whole
             .iter()
             .map(|&p| {
@@ -857,7 +925,7 @@ mod tests {
         for (a, b) in [(&a, &b), (&whole, &shrunk)] {
             let normals = vertex_normals(b, &triangles);
             let [with, without] = [true, false].map(|shifted| {
-                align_rigidly_with(a, b, &normals, &[], COARSE_TARGETS, shifted).unwrap()
+                align_rigidly_with(a, b, &normals, &[], COARSE_TARGETS, shifted, 1)[0]
             });
             assert_eq!(with.motion, without.motion);
             assert_eq!(with.rms.to_bits(), without.rms.to_bits());
@@ -878,7 +946,7 @@ mod tests {
         let targets = b.len() / 5;
         assert!(targets < 400 && targets < a.len());
         let normals = vertex_normals(&b, &triangles);
-        let found = align_rigidly_with(&a, &b, &normals, &[], targets, true).unwrap();
+        let found = align_rigidly_with(&a, &b, &normals, &[], targets, true, 1)[0];
         assert!(found.rms < 1e-6, "rms {}", found.rms);
         assert_same_pose(&a, &found.motion, &truth, 1e-5);
     }

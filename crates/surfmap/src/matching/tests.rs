@@ -941,3 +941,79 @@ fn too_few_landmarks_align_by_the_shapes_and_still_guide() {
         ),
     }
 }
+
+/// A start turned by half a turn on purpose: landmarks of B placed where A's landmarks
+/// would be after a half turn of the surface about its middle, used only to place the
+/// start (no feature weight, no pinning, no search). The match that results is wrong,
+/// and its verdict must say so; a right match of the same pair is `ok`. With recovery
+/// on, the other starts are tried and the match comes out right and `ok`.
+#[test]
+fn a_start_turned_on_purpose_is_called_failed_and_recovered() {
+    let motion = moved_copy_motion();
+    let a = surface(18, |p| p);
+    let b = surface(22, &motion);
+    let truth = |v: usize| Some(motion(a.positions[v]));
+    let spots = [
+        [0.45, 0.0],
+        [-0.45, 0.05],
+        [0.0, 0.45],
+        [0.05, -0.45],
+        [0.3, 0.3],
+    ];
+    // B's landmark i at the image of A's spot i turned by half a turn (x, y → −x, −y).
+    let turned: Vec<[f64; 2]> = spots.iter().map(|s| [-s[0], -s[1]]).collect();
+    let mut guidance = landmarks_at(&a, &b, &spots, &motion);
+    let lm = guidance.landmarks.as_mut().unwrap();
+    lm.b = turned
+        .iter()
+        .map(|s| nearest_vertex(&b, motion([s[0], s[1], height(s[0], s[1])])))
+        .collect();
+    let mut o = options();
+    o.align = Align::Features;
+    o.features_start = FeaturesStart::Plane;
+    o.similarity_search = SearchWhen::Off;
+    o.weights.features = 0.0;
+    o.pin_landmarks = false;
+    o.advanced.recover = false;
+    let broken = match_meshes(&a, &b, &guidance, &o).unwrap();
+    let (e, _) = errors(&a, &b, &broken.correspondence, truth);
+    assert!(
+        quantile(&e, 0.5) > 10.0 * CELL,
+        "the start did not break the match"
+    );
+    let c = &broken.report.confidence;
+    assert_eq!(c.verdict, Verdict::Failed, "{c:?}");
+    assert!(!c.reasons.is_empty() && c.recovery.is_none(), "{c:?}");
+    // The same pair matched from the shapes: ok.
+    let (good, corr) = run(&a, &b, &Guidance::default(), &options());
+    assert!(quantile(&errors(&a, &b, &corr, truth).0, 0.5) < CELL);
+    let c = &good.report.confidence;
+    assert_eq!(c.verdict, Verdict::Ok, "{c:?}");
+    assert!(c.reasons.is_empty() && c.recovery.is_none());
+    // Recovery: another start is tried and kept.
+    o.advanced.recover = true;
+    let recovered = match_meshes(&a, &b, &guidance, &o).unwrap();
+    let c = &recovered.report.confidence;
+    let r = c.recovery.as_ref().expect("recovery ran");
+    assert!(r.kept && r.verdict_before == Verdict::Failed, "{r:?}");
+    assert_eq!(c.verdict, Verdict::Ok, "{c:?}");
+    let (e, matched) = errors(&a, &b, &recovered.correspondence, truth);
+    assert!(
+        matched > 0.95 && quantile(&e, 0.5) < CELL,
+        "median {}",
+        quantile(&e, 0.5) / CELL
+    );
+    // Strict: the failed match comes back as the error, whole.
+    o.advanced.recover = false;
+    o.strict = true;
+    match match_meshes(&a, &b, &guidance, &o) {
+        Err(MatchError::NotTrusted(m)) => {
+            assert_eq!(m.report.confidence.verdict, Verdict::Failed);
+            assert_eq!(m.correspondence.len(), a.num_vertices());
+        }
+        other => panic!(
+            "strict accepted a failed match: {:?}",
+            other.map(|m| m.report.confidence)
+        ),
+    }
+}

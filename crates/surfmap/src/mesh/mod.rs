@@ -127,6 +127,23 @@ impl TriMesh {
         0.5 * norm3(cross3(sub3(b, a), sub3(c, a)))
     }
 
+    /// SHA-256 (hex) of the mesh's content: every vertex position (three `f64`,
+    /// little-endian) then every triangle (three `u32`), in order. The same mesh read
+    /// from an OBJ, an OFF or a PLY — or passed as arrays — has the same digest; any
+    /// change of a coordinate, of the numbering or of a face changes it. A match folder
+    /// records its meshes' digests so that a folder is not used with other meshes.
+    pub fn content_sha256(&self) -> String {
+        use sha2::Digest;
+        let mut h = sha2::Sha256::new();
+        for p in &self.positions {
+            p.iter().for_each(|c| h.update(c.to_le_bytes()));
+        }
+        for t in &self.triangles {
+            t.iter().for_each(|v| h.update(v.to_le_bytes()));
+        }
+        h.finalize().iter().map(|b| format!("{b:02x}")).collect()
+    }
+
     /// Total 3D surface area.
     pub fn area(&self) -> f64 {
         // `+ 0.0`: an empty sum of f64 is −0.0, which prints as "-0.000000".

@@ -20,7 +20,7 @@ use super::options::{
 };
 use super::prepare::Prepared;
 use super::prepare::surface::MatchSurface;
-use super::rigid::align_surfaces;
+use super::rigid::{RigidAlignment, align_surfaces, align_surfaces_ranked};
 use super::similarity::{
     Similarity2, Similarity3, fit_rotation_2d_at_scale, fit_similarity_2d,
     fit_similarity_2d_robust, fit_similarity_3d,
@@ -32,6 +32,7 @@ use holes::add_hole_features;
 use score::AlignmentScore;
 
 /// Where φ starts, and the energy's weights.
+#[derive(Clone, Debug)]
 pub(crate) struct Start {
     /// The plane similarity φ starts from on the coarsest level.
     pub plane: Similarity2,
@@ -48,6 +49,9 @@ pub(crate) struct Start {
     /// The surfaces' RMS distance along B's normals after their rigid alignment (ℓ
     /// units), from which the position weight was set (`None` with a fixed weight).
     pub shape_residual: Option<f64>,
+    /// The surfaces' rigid alignment in space (ℓ units), when one was made: what the
+    /// verdict compares the correspondence's own similarity with.
+    pub pose: Option<Similarity3>,
     pub report: AlignmentReport,
 }
 
@@ -55,7 +59,7 @@ pub(crate) struct Start {
 /// features (so it takes the prepared surfaces mutably).
 pub(crate) fn align(p: &mut Prepared<'_>, options: &MatchOptions) -> Result<Start, MatchError> {
     let (fa, fb) = (p.features_a.as_ref(), p.features_b.as_ref());
-    let (sa, sb) = (&mut p.a, &mut p.b);
+    let (sa, sb) = (&p.a, &p.b);
     if options.hole_features == HoleFeatures::On {
         let (ha, hb) = (sa.hole_rims().len(), sb.hole_rims().len());
         if ha != hb || ha == 0 {
@@ -101,7 +105,7 @@ pub(crate) fn align(p: &mut Prepared<'_>, options: &MatchOptions) -> Result<Star
         Some(start) => shape_alignment(sa, sb, scale, 1, Some(start)).ok(),
         None => shape_alignment(sa, sb, scale, options.tuning.align_rotations.max(1), None).ok(),
     };
-    let (s, similarity, mut alignment, residual) = if use_features {
+    let (s, similarity, alignment, residual) = if use_features {
         let pa = feature_centroids(sa, fa.unwrap());
         let pb = feature_centroids(sb, fb.unwrap());
         let at_one_point =
@@ -167,34 +171,130 @@ pub(crate) fn align(p: &mut Prepared<'_>, options: &MatchOptions) -> Result<Star
     };
     // The position term's weight from the surfaces' disagreement in space
     // ([`PositionWeight`]); the shape alignment measured it already.
-    let shape_residual = match (options.position_weight, residual) {
-        (PositionWeight::Fixed(_), _) => None,
-        (_, Some(r)) => Some(r),
-        _ => shape_residual(sa, sb, fa, fb),
+    // The pose in space: the shapes' alignment, or the features' refined in space, or
+    // (measured here when neither ran) the shapes' alignment from the features' motion.
+    let known_pose = if use_features {
+        in_space.as_ref().map(|x| x.1)
+    } else if options.align == Align::None {
+        None
+    } else {
+        Some(similarity)
+    };
+    let (residual, pose) = match (residual, known_pose) {
+        (Some(r), Some(p)) => (Some(r), Some(p)),
+        _ => match shape_residual(sa, sb, fa, fb) {
+            Some((r, p)) => (residual.or(Some(r)), known_pose.or(Some(p))),
+            None => (residual, known_pose),
+        },
+    };
+    let shape_residual = match options.position_weight {
+        PositionWeight::Fixed(_) => None,
+        PositionWeight::Auto => residual,
     };
     let betas = Betas {
         position: options.position_weight.weight(shape_residual),
         ..options.betas()
     };
-    if options.hole_features != HoleFeatures::Off {
-        (alignment.hole_pairs, alignment.split_holes) =
-            add_hole_features(sa, sb, &s, options.hole_features, options.split_ratio())?;
-    }
-
     let search = match options.similarity_search {
         SearchWhen::Off => false,
         SearchWhen::Shape => !use_features && options.align != Align::None,
         SearchWhen::Always => true,
     };
-    Ok(Start {
+    let mut start = Start {
         plane: s,
         motion: similarity,
         in_space: in_space.map(|(s, motion, _, _)| (s, motion)),
         search,
         betas,
         shape_residual,
+        pose,
         report: alignment,
-    })
+    };
+    pair_holes(p, &mut start, options)?;
+    Ok(start)
+}
+
+/// Pairs the hole rims of A and B after `start`'s alignment and adds them to both
+/// surfaces' features ([`holes`]), replacing the hole rims an earlier start paired;
+/// records the pairs in the start's report.
+pub(crate) fn pair_holes(
+    p: &mut Prepared<'_>,
+    start: &mut Start,
+    options: &MatchOptions,
+) -> Result<(), MatchError> {
+    let given = |f: &Option<FeatureFile>| f.as_ref().map_or(0, |f| f.features.len());
+    p.a.keep_features(given(&p.features_a));
+    p.b.keep_features(given(&p.features_b));
+    if options.hole_features != HoleFeatures::Off {
+        (start.report.hole_pairs, start.report.split_holes) = add_hole_features(
+            &mut p.a,
+            &mut p.b,
+            &start.plane,
+            options.hole_features,
+            options.split_ratio(),
+        )?;
+    }
+    Ok(())
+}
+
+/// Most alternative starts a match that went wrong tries ([`alternatives`]).
+pub(crate) const ALTERNATIVES: usize = 6;
+
+/// Other starts than `first` for a match whose verdict was not `ok`: the next distinct
+/// poses the rigid alignment in space ended in (`rigid::align_surfaces_ranked`; with
+/// landmarks or features, the shapes' own best pose first), each as the plane
+/// similarity its vertex pairs give, and `first`'s plane similarity turned by a half
+/// and a quarter turn either way about where it puts ω_A's centre (a flattening turned
+/// against the other, a start from mislabelled landmarks). At most [`ALTERNATIVES`].
+/// Hole rims are not paired ([`pair_holes`] per start).
+pub(crate) fn alternatives(p: &Prepared<'_>, first: &Start, options: &MatchOptions) -> Vec<Start> {
+    let (sa, sb) = (&p.a, &p.b);
+    let scale = sb.images.transform.scale / sa.images.transform.scale;
+    let from_shape = first.report.method.starts_with("shape");
+    let mut out = vec![];
+    let poses = shape_alignments(sa, sb, scale, options.tuning.align_rotations.max(1), 4);
+    for (k, (s, motion, mut report, _)) in poses.into_iter().enumerate() {
+        if from_shape && k == 0 {
+            continue;
+        }
+        report.method = format!(
+            "recovery: pose {} of the alignment in space, {}",
+            k + 1,
+            report.method
+        );
+        out.push(Start {
+            plane: s,
+            motion,
+            in_space: None,
+            search: options.similarity_search != SearchWhen::Off,
+            pose: Some(motion),
+            report,
+            ..first.clone()
+        });
+    }
+    let (ca, _) = sa.domain_centroid_and_area();
+    let centre = first.plane.apply(ca);
+    for turn in [0.5, 0.25, -0.25] {
+        let angle = turn * std::f64::consts::TAU;
+        let plane = Similarity2::about(centre, angle, 1.0, centre).after(&first.plane);
+        let mut report = first.report.clone();
+        report.method = format!(
+            "recovery: {} turned by {:+.0}°",
+            report.method,
+            angle.to_degrees()
+        );
+        report.similarity = plane;
+        (report.search, report.features_in_space) = (None, None);
+        out.push(Start {
+            plane,
+            in_space: None,
+            search: false,
+            report,
+            ..first.clone()
+        });
+    }
+    out.truncate(ALTERNATIVES);
+    out
 }
 
 /// The alignment that was used.
@@ -310,15 +410,62 @@ fn shape_alignment(
     scale: f64,
     rotations: usize,
     refine_from: Option<Similarity3>,
-) -> Result<(Similarity2, Similarity3, AlignmentReport, f64), MatchError> {
-    let unit = sa.length_unit;
-    let starts: Vec<Similarity3> = if refine_from.is_some() {
+) -> Result<PlaneStart, MatchError> {
+    let starts = if refine_from.is_some() {
         vec![]
     } else {
-        // Extra ICP starts: the rigid motions of the best similarities of the planes
-        // (a search over rotations, translations and scales of ω_A scored by the 3D
-        // fit, [`super::align`]); they reach poses that the rotations about the
-        // centroids miss when the surfaces overlap only in part.
+        rigid_starts(sa, sb, scale, rotations)
+    };
+    let rigid = align_surfaces(
+        (&sa.positions, &sa.triangles),
+        (&sb.positions, &sb.triangles),
+        &starts,
+        refine_from,
+    )
+    .ok_or_else(|| {
+        MatchError::Guidance("cannot align the surfaces in space: too few vertices".into())
+    })?;
+    plane_from_pose(sa, sb, &rigid)
+}
+
+/// [`shape_alignment`] from each of the `count` best distinct poses the rigid alignment
+/// ends in (`rigid::align_surfaces_ranked`), those that give a plane similarity.
+fn shape_alignments(
+    sa: &MatchSurface,
+    sb: &MatchSurface,
+    scale: f64,
+    rotations: usize,
+    count: usize,
+) -> Vec<PlaneStart> {
+    let starts = rigid_starts(sa, sb, scale, rotations);
+    align_surfaces_ranked(
+        (&sa.positions, &sa.triangles),
+        (&sb.positions, &sb.triangles),
+        &starts,
+        None,
+        count,
+    )
+    .iter()
+    .filter_map(|rigid| plane_from_pose(sa, sb, rigid).ok())
+    .collect()
+}
+
+/// A start from a pose in space: the plane similarity, the motion (ℓ units), the
+/// report, and the surfaces' distance along the normals (ℓ units).
+type PlaneStart = (Similarity2, Similarity3, AlignmentReport, f64);
+
+/// Extra ICP starts: the rigid motions of the best similarities of the planes (a search
+/// over rotations, translations and scales of ω_A scored by the 3D fit, [`score`]); they
+/// reach poses that the rotations about the centroids miss when the surfaces overlap
+/// only in part.
+fn rigid_starts(
+    sa: &MatchSurface,
+    sb: &MatchSurface,
+    scale: f64,
+    rotations: usize,
+) -> Vec<Similarity3> {
+    let unit = sa.length_unit;
+    {
         let ks = 5.min(sa.num_levels() - 1);
         let eps = epsilon(ks);
         let level_a = sa.level_a(ks, eps, &[]);
@@ -336,16 +483,16 @@ fn shape_alignment(
                 translation: c.motion.translation.map(|t| t * unit),
             })
             .collect()
-    };
-    let rigid = align_surfaces(
-        (&sa.positions, &sa.triangles),
-        (&sb.positions, &sb.triangles),
-        &starts,
-        refine_from,
-    )
-    .ok_or_else(|| {
-        MatchError::Guidance("cannot align the surfaces in space: too few vertices".into())
-    })?;
+    }
+}
+
+/// The plane similarity of the vertex pairs a rigid pose in space makes ([`shape_alignment`]).
+fn plane_from_pose(
+    sa: &MatchSurface,
+    sb: &MatchSurface,
+    rigid: &RigidAlignment,
+) -> Result<PlaneStart, MatchError> {
+    let unit = sa.length_unit;
     let closest = ClosestPoints::new(&sb.positions);
     let limit = (2.5 * rigid.rms).powi(2);
     let step = (sa.positions.len() / 4000).max(1);
@@ -407,23 +554,31 @@ fn shape_alignment(
 }
 
 /// The RMS distance (ℓ units) along B's normals between the surfaces after their best
-/// rigid alignment in space: trimmed ICP from the rigid motion of the paired features'
-/// 3D centroids when there are three or more, else from the usual starts
-/// ([`align_surfaces`], either way round); `None` when they cannot be aligned.
+/// rigid alignment in space, and that alignment (ℓ units): trimmed ICP from the rigid
+/// motion of the paired features' 3D centroids when there are three or more, else from
+/// the usual starts ([`align_surfaces`], either way round); `None` when they cannot be
+/// aligned.
 fn shape_residual(
     sa: &MatchSurface,
     sb: &MatchSurface,
     fa: Option<&FeatureFile>,
     fb: Option<&FeatureFile>,
-) -> Option<f64> {
+) -> Option<(f64, Similarity3)> {
     let start = features_motion(sa, sb, fa, fb);
+    let unit = sa.length_unit;
     align_surfaces(
         (&sa.positions, &sa.triangles),
         (&sb.positions, &sb.triangles),
         &[],
         start,
     )
-    .map(|rigid| rigid.plane_rms / sa.length_unit)
+    .map(|rigid| {
+        let pose = Similarity3 {
+            matrix: rigid.motion.matrix,
+            translation: rigid.motion.translation.map(|t| t / unit),
+        };
+        (rigid.plane_rms / unit, pose)
+    })
 }
 
 /// The rigid motion (mesh units) that best carries the paired features' 3D centroids of

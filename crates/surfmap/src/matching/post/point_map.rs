@@ -26,7 +26,7 @@ impl<'a> PointMap<'a> {
         snap_cells: f64,
     ) -> Result<Self, MatchError> {
         let locator = PointLocator::new(&b.uvs, &b.triangles)
-            .map_err(|e| MatchError::Option(format!("locating points on B: {e}")))?;
+            .map_err(|e| MatchError::Input(format!("locating points on B: {e}")))?;
         let to_b = b.images.transform;
         let tolerance = snap_cells / (solved.deformation.size - 1) as f64 / to_b.scale;
         Ok(Self {

@@ -132,7 +132,7 @@ pub(crate) fn prepare<'m>(
     );
     let scale_b = options.scale_b.factor(area_a, area_b);
     if !(scale_b.is_finite() && scale_b > 0.0) {
-        return Err(MatchError::Option(format!(
+        return Err(MatchError::Input(format!(
             "B's scale factor must be finite and positive, got {scale_b}"
         )));
     }
@@ -151,7 +151,7 @@ pub(crate) fn prepare<'m>(
     let unit = shared_length_unit(area_a, matched_b.area());
     if !(unit.is_finite() && unit > 0.0) {
         // Both areas were checked above: only B's scaling can get here.
-        return Err(MatchError::Option(format!(
+        return Err(MatchError::Input(format!(
             "B scaled by {scale_b:e} has no finite area; give B a smaller scale"
         )));
     }

@@ -141,6 +141,12 @@ impl MatchSurface {
         Ok(())
     }
 
+    /// Keeps the first `n` features (drops those added after them).
+    pub(crate) fn keep_features(&mut self, n: usize) {
+        self.feature_curves.truncate(n);
+        self.feature_distance.truncate(n);
+    }
+
     /// The distance map (finest grid, ℓ units) of feature `f` ([`Self::feature_curves`]).
     pub(crate) fn feature_distance(&self, f: usize) -> &Grid<f64> {
         &self.feature_distance[f]

@@ -22,7 +22,7 @@
 
 use serde::Serialize;
 
-use super::super::similarity::fit_similarity_3d;
+use super::super::similarity::{Similarity3, fit_similarity_3d};
 use crate::mesh::SurfacePoint;
 use crate::vec3::{cross3 as cross, norm3 as norm, sub3 as sub};
 
@@ -192,6 +192,10 @@ pub struct Measures {
     /// RMS distance (units of `√area(B)`) of the correspondence from the best similarity
     /// of space.
     pub residual: Option<f64>,
+    /// RMS distance (units of `√area(B)`) between that similarity and the surfaces'
+    /// rigid alignment in space: a match that slid or turned away from where the shapes
+    /// lie on each other; `None` without an alignment in space.
+    pub pose_offset: Option<f64>,
     /// `residual` over the surfaces' distance after their rigid alignment (both in the
     /// shared length unit); `None` when that was not measured.
     pub residual_ratio: Option<f64>,
@@ -210,14 +214,19 @@ pub struct Measures {
     pub area_ratio: Option<f64>,
 }
 
-/// The weighted RMS distance of `points` (on B) from the best similarity image of A's
-/// positions (vertex areas as weights), both meshes in one length unit; `None` with
-/// fewer than four matched vertices or a degenerate fit.
+/// The correspondence against similarities of space: the weighted RMS distance of
+/// `points` (on B) from the best similarity image `T` of A's positions (vertex areas as
+/// weights), and the RMS distance between `T` and `pose` (the surfaces' rigid alignment
+/// in space, when known) over the same vertices — both meshes in one length unit (ℓ
+/// for `pose`, which `unit` converts to). `None` with fewer than four matched vertices
+/// or a degenerate fit.
 pub(crate) fn similarity_residual(
     (a_positions, a_triangles): (&[[f64; 3]], &[[u32; 3]]),
     (b_positions, b_triangles): (&[[f64; 3]], &[[u32; 3]]),
     points: &[Option<SurfacePoint>],
-) -> Option<f64> {
+    pose: Option<&Similarity3>,
+    unit: f64,
+) -> Option<(f64, Option<f64>)> {
     let mut area = vec![0.0; a_positions.len()];
     for t in a_triangles {
         let [p, q, r] = t.map(|v| a_positions[v as usize]);
@@ -236,11 +245,21 @@ pub(crate) fn similarity_residual(
         return None;
     }
     let t = fit_similarity_3d(&p, &q, &w, true)?;
-    let (mut sum, mut total) = (0.0, 0.0);
-    for k in 0..p.len() {
-        let y = t.apply(p[k]);
-        sum += w[k] * (0..3).map(|c| (y[c] - q[k][c]).powi(2)).sum::<f64>();
-        total += w[k];
-    }
-    (total > 0.0).then(|| (sum / total).sqrt())
+    let rms = |d: &dyn Fn(usize) -> f64| {
+        let (mut sum, mut total) = (0.0, 0.0);
+        for k in 0..p.len() {
+            sum += w[k] * d(k);
+            total += w[k];
+        }
+        (total > 0.0).then(|| (sum / total).sqrt())
+    };
+    let squared = |x: [f64; 3], y: [f64; 3]| (0..3).map(|c| (x[c] - y[c]).powi(2)).sum::<f64>();
+    let residual = rms(&|k| squared(t.apply(p[k]), q[k]))?;
+    let offset = pose.and_then(|pose| {
+        rms(&|k| {
+            let x = p[k].map(|c| c / unit);
+            squared(t.apply(p[k]), pose.apply(x).map(|c| c * unit))
+        })
+    });
+    Some((residual, offset))
 }

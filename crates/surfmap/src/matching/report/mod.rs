@@ -2,8 +2,10 @@
 //! stages computed — counts, the area A's matched part covers on B, the fold check,
 //! what post-processing did, the alignment, how far each paired feature ends from B's
 //! ([`feature_fit`]), the solve's levels — as [`MatchReport`] (`match.json`, the
-//! Python result's dictionary), with the doubts worded for the user ([`match_warnings`]).
+//! Python result's dictionary), with a verdict on how far it can be trusted ([`confidence`])
+//! and the doubts about single features worded for the user.
 
+pub mod confidence;
 pub mod feature_fit;
 mod summary;
 
@@ -50,6 +52,8 @@ impl From<&LevelLog> for LevelSummary {
 /// Everything `match.json` says about a match.
 #[derive(Clone, Debug, Serialize)]
 pub struct MatchReport {
+    /// The meshes matched, as given.
+    pub inputs: Inputs,
     pub vertices_a: usize,
     pub vertices_b: usize,
     /// Vertices of A with a counterpart on B (after dropping folds).
@@ -64,8 +68,11 @@ pub struct MatchReport {
     /// benchmarked face pairs); far from it, A was squeezed into (or stretched over) part
     /// of B. `null` when nothing matched.
     pub area_ratio: Option<f64>,
+    /// How far the match can be trusted: a verdict, its reasons and the measures it was
+    /// drawn from ([`confidence`]).
+    pub confidence: confidence::Confidence,
     /// Doubts about the result, worded for the user (empty when none): see
-    /// [`match_warnings`] and `crate::matching::report::feature_fit::feature_warnings`.
+    /// [`feature_fit::feature_warnings`] (the match as a whole: [`Self::confidence`]).
     pub warnings: Vec<String>,
     pub holes_filled_a: usize,
     pub holes_filled_b: usize,
@@ -137,6 +144,37 @@ pub struct MatchReport {
     pub(crate) seconds_total: f64,
 }
 
+/// The two meshes a match was made from, as given (before any repair or crop): a
+/// match folder is used only with these (`transfer`, `morph`, `rig` refuse others).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
+pub struct Inputs {
+    pub a: InputMesh,
+    pub b: InputMesh,
+}
+
+/// One mesh a match was made from.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
+pub struct InputMesh {
+    /// The file it was read from (set by the command line; `null` from arrays).
+    pub path: Option<String>,
+    pub vertices: usize,
+    pub faces: usize,
+    /// [`crate::TriMesh::content_sha256`]: the same for the same mesh in any format.
+    pub sha256: String,
+}
+
+impl InputMesh {
+    /// The record of `mesh` (no path).
+    pub fn of(mesh: &crate::TriMesh) -> Self {
+        Self {
+            path: None,
+            vertices: mesh.num_vertices(),
+            faces: mesh.triangles.len(),
+            sha256: mesh.content_sha256(),
+        }
+    }
+}
+
 /// The meshes as given, when the outputs were numbered back to them from repaired ones
 /// ([`crate::mesh::repair::FaceOrigins`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -149,28 +187,6 @@ pub struct InputNumbering {
     /// Vertices of A as given that the repairs or the crop to the shared part removed
     /// (their rows are unmatched).
     pub removed_vertices_a: usize,
-}
-
-/// What a match report should warn about, from the matched area: the matched part of A
-/// lands on B at less than 1/`AREA_RATIO_DOUBT` or more than `AREA_RATIO_DOUBT`
-/// times its own area — the surfaces were matched in a way no pair of like surfaces is
-/// (a whole head squeezed into the face of another, a face spread over a head). The
-/// report adds a warning per feature φ left beyond the feature term's reach
-/// (`crate::matching::report::feature_fit::feature_warnings`).
-pub fn match_warnings(area_ratio: Option<f64>) -> Vec<String> {
-    let mut warnings = Vec::new();
-    if let Some(r) = area_ratio
-        && !plausible_area_ratio(r)
-    {
-        warnings.push(format!(
-            "A's matched part lands on B at {r:.2}× its own area ({}): the surfaces probably \
-             do not correspond the way they were matched. Check the pictures (--pictures); \
-             crop both to the region they share (a face against a whole head or a scan \
-             with shoulders does not match), or give landmarks.",
-            if r < 1.0 { "squeezed" } else { "stretched" }
-        ));
-    }
-    warnings
 }
 
 impl MatchReport {
@@ -215,16 +231,20 @@ pub(crate) fn report(
     }
     let area_ratio = (matched_area_a > 0.0).then(|| covered / matched_area_a);
     let feature_fit = feature_fit::feature_fits(a, b, solved, p.scale_b);
-    let mut warnings = match_warnings(area_ratio);
-    warnings.extend(feature_fit::feature_warnings(&feature_fit));
+    let warnings = feature_fit::feature_warnings(&feature_fit);
     let levels: Vec<LevelSummary> = solved.levels.iter().map(LevelSummary::from).collect();
     let mut report = MatchReport {
+        inputs: Inputs {
+            a: InputMesh::of(p.given_a),
+            b: InputMesh::of(p.given_b),
+        },
         vertices_a: correspondence.len(),
         vertices_b: b.positions.len(),
         matched_vertices_a: matched,
         matched_fraction_a: matched as f64 / correspondence.len().max(1) as f64,
         covered_fraction_b: (covered / area_b.max(f64::MIN_POSITIVE)).min(1.0),
         area_ratio,
+        confidence: confidence::Confidence::default(),
         warnings,
         holes_filled_a: a.filled_holes,
         holes_filled_b: b.filled_holes,
@@ -259,6 +279,30 @@ pub(crate) fn report(
         seconds_total: 0.0,
     };
     report.count_dropped(c.dropped_as_given);
+    let unit = a.length_unit;
+    let disagreements = super::solve::curvature_disagreements(a, b, solved, options);
+    let fit = confidence::similarity_residual(
+        (&a.positions, &a.triangles),
+        (&b.positions, &b.triangles),
+        correspondence,
+        solved.pose.as_ref(),
+        unit,
+    );
+    report.confidence = confidence::Confidence::of(
+        confidence::Measures {
+            residual: fit.map(|f| f.0 / area_b.sqrt()),
+            pose_offset: fit.and_then(|f| f.1).map(|o| o / area_b.sqrt()),
+            residual_ratio: None,
+            curvature_disagreement: disagreements.finest,
+            coarse_disagreement: disagreements.coarse,
+            unrelated_disagreement: disagreements.unrelated,
+            energy: report.energy / (matched_area_a / (unit * unit)).max(f64::MIN_POSITIVE),
+            matched_fraction_a: report.matched_fraction_a,
+            covered_fraction_b: report.covered_fraction_b,
+            area_ratio: report.area_ratio,
+        }
+        .with_shape_residual(solved.shape_residual, unit / area_b.sqrt()),
+    );
     if let Some(r) = &p.renumbering {
         report.overlap_crop = p.crops.clone();
         report.input_numbering = Some(InputNumbering {

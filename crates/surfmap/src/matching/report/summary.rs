@@ -136,6 +136,7 @@ impl MatchReport {
             report.seconds_total,
             n = report.grid_size,
         );
+        text += &format!("\n{}", report.confidence.line());
         if let Some(n) = &report.input_numbering {
             text += &format!(
                 "\noutputs numbered as the files given ({} vertices of A, {} triangles of B){}",

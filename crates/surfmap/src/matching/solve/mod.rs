@@ -52,6 +52,8 @@ pub(crate) struct Solved {
     /// The surfaces' RMS distance along B's normals after their rigid alignment (ℓ
     /// units), from which the position weight was set (`None` with a fixed weight).
     pub shape_residual: Option<f64>,
+    /// The start's rigid alignment in space ([`Start::pose`]).
+    pub pose: Option<Similarity3>,
     pub min_det: f64,
 }
 
@@ -62,12 +64,92 @@ impl Solved {
     }
 }
 
+/// How much B's curvature at φ disagrees with A's
+/// ([`LevelEnergy::curvature_disagreement`]): on φ's own level (the finest, or the
+/// coarsest after [`solve_coarsest`]); on the coarsest level's images, smoothed with
+/// σ = 2⁻⁶ of ω (φ read at its nodes), where the surfaces' fine detail — a scan's noise,
+/// a smooth template against a detailed face — no longer counts; and, as a baseline,
+/// on φ's level with φ turned by a quarter, a half and three quarters of a turn about
+/// where it puts ω_A's centre (the mean of the three: what unrelated places give).
+pub(crate) fn curvature_disagreements(
+    a: &MatchSurface,
+    b: &MatchSurface,
+    solved: &Solved,
+    options: &MatchOptions,
+) -> Disagreements {
+    let energy = |k: usize| {
+        let eps = epsilon(k);
+        LevelEnergy {
+            a: a.level_a(k, eps, &[]),
+            b: b.level_b(k, eps, options.tuning.soft, &[]),
+            epsilon: eps,
+            betas: options.betas(),
+            alpha: options.tuning.alpha,
+            similarity: solved.similarity,
+            position_offset: vec![],
+            relief: false,
+        }
+    };
+    let phi = &solved.deformation;
+    let k = (phi.size - 1).trailing_zeros() as usize;
+    let own = energy(k);
+    let (ca, _) = a.domain_centroid_and_area();
+    let centre = phi.apply(ca);
+    let unrelated: Vec<f64> = [0.25, 0.5, 0.75]
+        .iter()
+        .filter_map(|turn| {
+            let turned = Similarity2::about(centre, turn * std::f64::consts::TAU, 1.0, centre);
+            own.curvature_disagreement_at(|n| turned.apply(phi.at(n)))
+        })
+        .collect();
+    let k0 = options.tuning.coarsest_level.min(k);
+    let coarse = energy(k0);
+    let n0 = coarse.size();
+    Disagreements {
+        finest: own.curvature_disagreement(phi),
+        coarse: coarse.curvature_disagreement_at(|n| phi.apply(node(n0, n))),
+        unrelated: (!unrelated.is_empty())
+            .then(|| unrelated.iter().sum::<f64>() / unrelated.len() as f64),
+    }
+}
+
+/// [`curvature_disagreements`].
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Disagreements {
+    pub finest: Option<f64>,
+    pub coarse: Option<f64>,
+    pub unrelated: Option<f64>,
+}
+
 /// The stage (module docs).
 pub(crate) fn solve(
     a: &MatchSurface,
     b: &MatchSurface,
     start: Start,
     options: &MatchOptions,
+) -> Solved {
+    solve_levels(a, b, start, options, a.num_levels() - 1)
+}
+
+/// The coarsest level alone, from `start` (with its similarity search or second start,
+/// as [`solve`]'s first level): what a match that went wrong compares its alternative
+/// starts by.
+pub(crate) fn solve_coarsest(
+    a: &MatchSurface,
+    b: &MatchSurface,
+    start: Start,
+    options: &MatchOptions,
+) -> Solved {
+    solve_levels(a, b, start, options, options.tuning.coarsest_level)
+}
+
+/// The levels from the coarsest up to `last`.
+fn solve_levels(
+    a: &MatchSurface,
+    b: &MatchSurface,
+    start: Start,
+    options: &MatchOptions,
+    last: usize,
 ) -> Solved {
     let Start {
         plane: s,
@@ -76,9 +158,10 @@ pub(crate) fn solve(
         search,
         betas,
         shape_residual,
+        pose,
         report: mut alignment,
     } = start;
-    let top = a.num_levels() - 1;
+    let top = last;
     let k0 = options.tuning.coarsest_level;
     let features: Vec<usize> = (0..a.feature_curves.len()).collect();
     let solver = Solver {
@@ -123,6 +206,7 @@ pub(crate) fn solve(
         similarity,
         position_weight: betas.position,
         shape_residual,
+        pose,
         min_det,
     }
 }
