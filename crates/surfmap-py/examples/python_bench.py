@@ -2,7 +2,7 @@
 
 overhead MESH… [--repeat N] [--rounds R]
     The cost of calling surfmap.flatten(V, F) from Python against the same work called
-    from Rust (examples/flatten_call.rs: surfmap::flatten, then the report) on a mesh
+    from Rust (crates/surfmap-bench/examples/flatten_call.rs: surfmap::flatten, then the report) on a mesh
     in memory. R rounds alternate a Rust process (N calls) and N Python calls, so
     both see the same machine load; prints the median of each side per round, and the
     overhead of the median of medians and of the fastest calls (the least disturbed by
@@ -16,7 +16,7 @@ batch [MESH…] [--workers 1 2] [--rounds R] [--fill-holes]
 
 Run from the repository root with the package installed (pip install ./crates/surfmap-py)
 and the release binaries built:
-    cargo build --release -p surfmap-cli -p surfmap-py --example flatten_call
+    cargo build --release -p surfmap-cli && cargo build --release -p surfmap-bench --example flatten_call
     python crates/surfmap-py/examples/python_bench.py overhead ../shared/data/nefertiti_small.off
     python crates/surfmap-py/examples/python_bench.py batch --workers 1 2
     python crates/surfmap-py/examples/python_bench.py batch --fill-holes ../shared/data/faces/ict/ict_[!n]*.obj ../shared/data/faces/ict/ict_neutral.obj

@@ -1,5 +1,5 @@
-"""The documentation runs: every docstring example, the README's Python example as
-written, and type stubs that state the runtime's parameters."""
+"""The documentation runs: every docstring example, the Python guide's example
+(docs/python.md) as written, and type stubs that state the runtime's parameters."""
 
 import ast
 import doctest
@@ -39,13 +39,13 @@ def test_docstring_examples_run(name, obj, tmp_path, monkeypatch):
     assert runner.failures == 0, f"{name}: {runner.failures} failing example(s)"
 
 
-def test_the_readme_python_example_runs_as_written(tmp_path, monkeypatch, capsys):
-    readme = (REPO / "README.md").read_text()
-    section = readme[readme.index("## Python") :]
+def test_the_python_guide_example_runs_as_written(tmp_path, monkeypatch, capsys):
+    guide = (REPO / "docs" / "python.md").read_text()
+    section = guide[guide.index("## Flatten arrays") :]
     code = re.search(r"```python\n(.*?)```", section, re.S).group(1)
     assert len([line for line in code.splitlines() if line.strip()]) <= 10
     monkeypatch.chdir(tmp_path)
-    exec(compile(code, "README.md", "exec"), {})
+    exec(compile(code, "docs/python.md", "exec"), {})
     printed = capsys.readouterr().out.split()
     assert printed[0] == "True"
     assert (tmp_path / "bump_flat.obj").is_file()

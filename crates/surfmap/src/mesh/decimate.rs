@@ -38,7 +38,7 @@
 //! changed faces), so the collapse loop makes no per-collapse allocation (only the
 //! amortized growth of its output vectors and the heap). Lionhead subdivided 3×
 //! (534k vertices) to 20k: about 1.2 s in release on one core, plus 0.4 s for
-//! [`Disc::new`] (`examples/decimate_bench.rs`).
+//! [`Disc::new`] (`crates/surfmap-bench/examples/decimate_bench.rs`).
 
 use super::{Disc, NotADisc, PositionError, TriMesh};
 use crate::vec3::{cross3, dot3, sub3};

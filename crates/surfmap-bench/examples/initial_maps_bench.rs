@@ -2,7 +2,7 @@
 //! disc (`1 + 3n(n + 1)` vertices; default n = 258, about 200k vertices), with the
 //! number of flipped triangles of each result.
 //!
-//! Run: `cargo run --release -p surfmap --example initial_maps_bench [n]`
+//! Run: `cargo run --release -p surfmap-bench --example initial_maps_bench [n]`
 
 use std::time::Instant;
 use surfmap::Disc;

@@ -1,6 +1,6 @@
 //! One vertex ordering for all per-vertex systems versus AMD on each system: ordering
 //! time, rest of the symbolic phase, fill of `L`, numeric factorization time.
-//! `cargo run --release -p surfmap --example ordering_probe -- MESH [LEVELS]`
+//! `cargo run --release -p surfmap-bench --example ordering_probe -- MESH [LEVELS]`
 use std::time::Instant;
 use surfmap::linsolve::{Ordering, SpdSystem, Unknowns, VertexOrdering};
 

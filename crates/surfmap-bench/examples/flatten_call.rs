@@ -7,7 +7,7 @@
 //! threads of the process, the clock of Python's `time.process_time`), which other
 //! jobs on a shared machine do not inflate as much as the wall time.
 //!
-//! `cargo run --release -p surfmap-py --example flatten_call -- MESH [--repeat N]`
+//! `cargo run --release -p surfmap-bench --example flatten_call -- MESH [--repeat N]`
 
 use std::time::Instant;
 

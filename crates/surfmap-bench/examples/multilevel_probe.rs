@@ -1,6 +1,6 @@
 //! Probe: energy of the multilevel start map (before the fine-level Newton) for
 //! different re-insertion settings.
-//! `cargo run --release -p surfmap --example multilevel_probe -- MESH LEVELS COARSE POLISH...`
+//! `cargo run --release -p surfmap-bench --example multilevel_probe -- MESH LEVELS COARSE POLISH...`
 use surfmap::mesh::decimate::{DecimateOptions, decimate_with};
 use surfmap::mesh::io::read_mesh;
 use surfmap::mesh::subdivide::subdivide_midpoint;

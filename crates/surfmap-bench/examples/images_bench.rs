@@ -1,7 +1,7 @@
 //! Benchmark of the geometry images of `face_igl.obj` (51.7k faces): the full image set
 //! plus the pyramid at 257² and 1025², median of several runs, per-stage times.
 //!
-//! `cargo run --release --example images_bench [-- path/to/mesh.obj [sheet.png]]`
+//! `cargo run --release -p surfmap-bench --example images_bench [-- path/to/mesh.obj [sheet.png]]`
 //!
 //! The flattening is `param::flatten` with the balanced preset (thesis §3.2.1); its time is
 //! reported separately and excluded from the image timings. `RUNS` sets the number of runs,

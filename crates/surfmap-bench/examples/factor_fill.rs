@@ -1,6 +1,6 @@
 //! Fill of the Newton system's Cholesky factor versus the scalar Laplacian's, and
 //! numeric factorization time, for one mesh (ordering experiments).
-//! `cargo run --release -p surfmap --example factor_fill -- MESH`
+//! `cargo run --release -p surfmap-bench --example factor_fill -- MESH`
 use std::time::Instant;
 use surfmap::linsolve::SpdSystem;
 

@@ -2,7 +2,7 @@
 //! genus 0): start map used, iterations, median wall time, final energy and flipped
 //! triangles, for the conformal and balanced presets (and symmetric Dirichlet).
 //!
-//! `cargo run --release -p surfmap --example flatten_bench [-- --repeat 3] [-- MESH...]`
+//! `cargo run --release -p surfmap-bench --example flatten_bench [-- --repeat 3] [-- MESH...]`
 
 use std::path::PathBuf;
 use std::time::Instant;

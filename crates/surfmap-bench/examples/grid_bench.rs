@@ -7,7 +7,7 @@
 //! the larger grids), and "coherent": a 1000 × 1000 lattice in row order, each point
 //! jittered by up to two cells, as the matcher visits `φ(ξ)` for `ξ` in grid order.
 //!
-//! `cargo run --release -p surfmap --example grid_bench`
+//! `cargo run --release -p surfmap-bench --example grid_bench`
 
 use std::hint::black_box;
 use std::time::Instant;

@@ -2,7 +2,7 @@
 //! cut closed meshes, the higher-genus ones and the discs with holes opened by seams,
 //! every one under 20k faces in `../shared/data`.
 //!
-//! `cargo run --release -p surfmap --example hard_discs [-- --repeat 3] [-- --log] [-- MESH[:cut]...]`
+//! `cargo run --release -p surfmap-bench --example hard_discs [-- --repeat 3] [-- --log] [-- MESH[:cut]...]`
 //!
 //! `MESH:cut` opens the holes with seams (`--cut-holes`) instead of filling them. Per
 //! mesh: what was done (plan), whether the boundary barrier was needed, the Newton

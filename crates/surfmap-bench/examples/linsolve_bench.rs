@@ -10,7 +10,7 @@
 //! Each case: pattern + symbolic factorization once, then three rounds of
 //! refill (zero + scatter through slots), numeric factorization and solve.
 //!
-//! Run: `cargo run --release -p surfmap --example linsolve_bench [side]`
+//! Run: `cargo run --release -p surfmap-bench --example linsolve_bench [side]`
 
 use std::time::Instant;
 use surfmap::linsolve::SpdSystem;

@@ -1,7 +1,7 @@
 //! Per-element cost of the Newton kernels: energy, gradient + PSD-projected Hessian,
 //! and the flip-free step, in ns per triangle (median of several runs, one thread).
 //!
-//! Run: `cargo run --release -p surfmap --example element_bench [triangles]`
+//! Run: `cargo run --release -p surfmap-bench --example element_bench [triangles]`
 
 use std::hint::black_box;
 use std::time::Instant;

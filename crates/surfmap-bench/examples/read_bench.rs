@@ -2,7 +2,7 @@
 //! of reading plus building its topology (`Topology::new`) — the target is
 //! igea.ply (269k faces) read and topology built in ≤ 0.3 s.
 //!
-//! `cargo run --release --example read_bench -- [-n N] FILE...`
+//! `cargo run --release -p surfmap-bench --example read_bench -- [-n N] FILE...`
 
 use std::path::Path;
 use std::time::Instant;

@@ -1,5 +1,5 @@
 //! Prints the per-iteration Newton log of one flattening (thesis fig. 4.1 data).
-//! `cargo run --release -p surfmap --example flatten_log -- MESH [conformal|balanced|sd]`
+//! `cargo run --release -p surfmap-bench --example flatten_log -- MESH [conformal|balanced|sd]`
 use surfmap::{Alpha, Energy, FlattenOptions, flatten};
 
 fn main() {

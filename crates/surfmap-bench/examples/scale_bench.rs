@@ -4,7 +4,7 @@
 //! without it (same run; the multilevel run first, so the peak memory line of the
 //! first run is its own).
 //!
-//! `cargo run --release -p surfmap --example scale_bench -- MESH LEVELS [multi|single|both]`
+//! `cargo run --release -p surfmap-bench --example scale_bench -- MESH LEVELS [multi|single|both]`
 //! e.g. `../shared/data/faces/face_bff.obj 3` (34k → 2.2M faces).
 
 use surfmap::mesh::io::read_mesh;
