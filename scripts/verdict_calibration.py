@@ -100,7 +100,8 @@ def run_one(args, entry, pair_dir, mode):
     conf = report.get("confidence", {})
     row.update(p05=s["pct_005"], flip=s["flip"], collapse=s["collapse"], false_match=s["false_match"],
                verdict=conf.get("verdict"), reasons=conf.get("reasons", []), measures=conf.get("measures", {}),
-               energy=report["energy"], warnings=report["warnings"])
+               energy=report["energy"], warnings=report["warnings"], recovery=conf.get("recovery"),
+               seconds_reported=report.get("seconds"))
     return row
 
 
