@@ -182,11 +182,13 @@ pub fn modes_picture(
     for j in 0..modes {
         let sigma = model.variances[j].sqrt();
         let share = 100.0 * model.variances[j] / model.total_variance.max(f64::MIN_POSITIVE);
-        for (b, label) in [(-2.0, "-2σ"), (0.0, "MEAN"), (2.0, "+2σ")] {
-            frames.push((
-                format!("MODE {} {label} ({share:.0}%)", j + 1),
-                model.along(j, b * sigma),
-            ));
+        // Labels fit a tile (font scale 3: 18 px a character): the share on the middle.
+        for (b, label) in [
+            (-2.0, format!("MODE {} -2σ", j + 1)),
+            (0.0, format!("MODE {}: {share:.0}%", j + 1)),
+            (2.0, format!("MODE {} +2σ", j + 1)),
+        ] {
+            frames.push((label, model.along(j, b * sigma)));
         }
     }
     let distance = |p: &[[f64; 3]]| -> Vec<f64> {
@@ -229,10 +231,10 @@ pub fn modes_picture(
 /// titled as the distance from the mean.
 fn with_colour_bar(sheet: RgbImage, largest: f64) -> RgbImage {
     let extra = 230;
-    let (w, h) = (sheet.width() + extra, sheet.height().max(260));
+    let (w, h) = (sheet.width() + extra, sheet.height().max(420));
     let mut img = RgbImage::from_pixel(w, h, Rgb([255, 255, 255]));
     image::imageops::replace(&mut img, &sheet, 0, 0);
-    let (x0, y0, bw, bh) = (sheet.width() + 20, 70u32, 24u32, (h - 140).min(400));
+    let (x0, y0, bw, bh) = (sheet.width() + 20, 70u32, 24u32, (h - 200).min(400));
     for y in 0..bh {
         let t = 1.0 - y as f64 / (bh - 1) as f64;
         let c = Colormap::Viridis.at_rgb8(t);
@@ -275,7 +277,7 @@ fn with_colour_bar(sheet: RgbImage, largest: f64) -> RgbImage {
         &mut img,
         x0 as i64,
         (y0 + bh + 12) as i64 + line,
-        "% : SHARE OF",
+        "MODE K: N% -",
         font,
         black,
     );
@@ -283,7 +285,15 @@ fn with_colour_bar(sheet: RgbImage, largest: f64) -> RgbImage {
         &mut img,
         x0 as i64,
         (y0 + bh + 12) as i64 + 2 * line,
-        "THE VARIANCE",
+        "ITS SHARE OF THE",
+        font,
+        black,
+    );
+    draw_text(
+        &mut img,
+        x0 as i64,
+        (y0 + bh + 12) as i64 + 3 * line,
+        "VARIANCE",
         font,
         black,
     );
