@@ -101,6 +101,25 @@ fn read(path: &Path) -> Result<surfmap::TriMesh, String> {
         .map_err(|e| e.to_string())
 }
 
+/// The batch job of the template `t` with the options `o`, writing into `outdir`.
+fn job<'a>(
+    t: &'a Template,
+    o: &'a MatchOptions,
+    outdir: &'a Path,
+    keep_matches: bool,
+    landmarks_dir: Option<&'a Path>,
+) -> RegisterJob<'a> {
+    RegisterJob {
+        template: t,
+        options: o,
+        dir: outdir,
+        keep_matches,
+        landmarks_dir,
+        read: &read,
+        match_error: match_error_message,
+    }
+}
+
 fn create_dir(dir: &Path) -> PyResult<()> {
     std::fs::create_dir_all(dir.join("registered"))
         .map_err(|e| os_error(e.kind(), format!("cannot create {}: {e}", dir.display())))
@@ -167,15 +186,7 @@ pub fn register_file<'py>(
         name.unwrap_or_else(|| surfmap::batch::output_names(std::slice::from_ref(&scan)).remove(0));
     let row = py.detach(|| -> PyResult<RegisterRow> {
         let t = self::template(&template, &o)?;
-        let job = RegisterJob {
-            template: &t,
-            options: &o,
-            dir: &outdir,
-            keep_matches,
-            landmarks_dir: landmarks_dir.as_deref(),
-            read: &read,
-            match_error: match_error_message,
-        };
+        let job = job(&t, &o, &outdir, keep_matches, landmarks_dir.as_deref());
         Ok(job.register_file(&scan, &name))
     })?;
     to_dict(py, &row)
@@ -205,15 +216,7 @@ pub fn _register_many<'py>(
     let names = surfmap::batch::output_names(&scans);
     let rows = py.detach(|| -> PyResult<Vec<RegisterRow>> {
         let t = self::template(&template, &o)?;
-        let job = RegisterJob {
-            template: &t,
-            options: &o,
-            dir: &outdir,
-            keep_matches,
-            landmarks_dir: landmarks_dir.as_deref(),
-            read: &read,
-            match_error: match_error_message,
-        };
+        let job = job(&t, &o, &outdir, keep_matches, landmarks_dir.as_deref());
         let rows = register_many(&job, &scans, &names, workers, resume, |row| {
             if let Some(cb) = &callback {
                 Python::attach(|py| {

@@ -214,9 +214,6 @@ impl BatchRow {
     /// empty for `None`, floats in their shortest exact form, text quoted when needed
     /// (an error message may span lines: a list of defects; a plan has commas).
     pub fn csv_record(&self) -> String {
-        fn opt<T: ToString>(v: &Option<T>) -> String {
-            v.as_ref().map(T::to_string).unwrap_or_default()
-        }
         let fields: [String; Self::CSV_HEADER.len()] = [
             self.input.clone(),
             self.status.to_owned(),
@@ -249,12 +246,23 @@ impl BatchRow {
             self.time_s.to_string(),
             opt(&self.error),
         ];
-        fields
-            .iter()
-            .map(|f| csv_field(f))
-            .collect::<Vec<_>>()
-            .join(",")
+        csv_line(&fields)
     }
+}
+
+/// A table cell: empty for `None`, else the value's text (floats in their shortest
+/// exact form).
+pub fn opt<T: ToString>(v: &Option<T>) -> String {
+    v.as_ref().map(T::to_string).unwrap_or_default()
+}
+
+/// One CSV record: the fields quoted as [`csv_field`] says, joined by commas.
+pub fn csv_line(fields: &[String]) -> String {
+    fields
+        .iter()
+        .map(|f| csv_field(f))
+        .collect::<Vec<_>>()
+        .join(",")
 }
 
 /// One CSV field (RFC 4180): quoted, with quotes doubled, when it holds a comma, a

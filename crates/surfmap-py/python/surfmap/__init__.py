@@ -105,6 +105,28 @@ class _ProgressLine:
         self.stream.flush()
 
 
+def _workers(workers: Optional[int]) -> int:
+    """``workers`` checked: a positive integer, or None for one per core (0)."""
+    if workers is None:
+        return 0
+    if not isinstance(workers, int) or isinstance(workers, bool) or workers < 1:
+        raise ValueError(
+            f"workers must be a positive integer (or None: one per core), got {workers!r}"
+        )
+    return workers
+
+
+def _progress(progress: Union[bool, Callable[[Row], None]], total: int, what: str):
+    """The callback for ``progress`` (a callable as it is, True a progress line on
+    stderr) and the line to close afterwards (or None)."""
+    if callable(progress):
+        return progress, None
+    if progress:
+        line = _ProgressLine(total, what=what)
+        return line, line
+    return None, None
+
+
 def flatten_many(
     paths: Iterable[Union[str, "os.PathLike[str]"]],
     outdir: Union[str, "os.PathLike[str]"],
@@ -136,19 +158,8 @@ def flatten_many(
     [('failed', None)]
     """
     paths = [os.fspath(p) for p in paths]
-    if workers is None:
-        workers = 0
-    elif not isinstance(workers, int) or isinstance(workers, bool) or workers < 1:
-        raise ValueError(
-            f"workers must be a positive integer (or None: one per core), got {workers!r}"
-        )
-    line = None
-    if callable(progress):
-        callback = progress
-    elif progress:
-        callback = line = _ProgressLine(len(paths))
-    else:
-        callback = None
+    workers = _workers(workers)
+    callback, line = _progress(progress, len(paths), "meshes")
     try:
         return _flatten_many(paths, os.fspath(outdir), workers, callback, **options)
     finally:
@@ -235,19 +246,8 @@ def register(
     [('scan', 'failed')]
     """
     paths = scan_paths(scans)
-    if workers is None:
-        workers = 0
-    elif not isinstance(workers, int) or isinstance(workers, bool) or workers < 1:
-        raise ValueError(
-            f"workers must be a positive integer (or None: one per core), got {workers!r}"
-        )
-    line = None
-    if callable(progress):
-        callback = progress
-    elif progress:
-        callback = line = _ProgressLine(len(paths), what="scans")
-    else:
-        callback = None
+    workers = _workers(workers)
+    callback, line = _progress(progress, len(paths), "scans")
     try:
         return _register_many(
             os.fspath(template),

@@ -22,7 +22,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use super::{RegisterError, Template, register_scan};
-use crate::batch::{FailedRow, PoolError, csv_field};
+use crate::batch::{FailedRow, PoolError, csv_line, opt};
 use crate::matching::{Guidance, Landmarks, MatchError, MatchOptions};
 use crate::mesh::TriMesh;
 
@@ -72,9 +72,6 @@ impl RegisterRow {
 
     /// The row's values as CSV fields (empty for `None`, quoted when needed).
     pub fn csv_record(&self) -> String {
-        fn opt<T: ToString>(v: &Option<T>) -> String {
-            v.as_ref().map(T::to_string).unwrap_or_default()
-        }
         let fields: [String; Self::CSV_HEADER.len()] = [
             self.name.clone(),
             self.input.clone(),
@@ -88,11 +85,7 @@ impl RegisterRow {
             self.seconds.to_string(),
             opt(&self.error),
         ];
-        fields
-            .iter()
-            .map(|f| csv_field(f))
-            .collect::<Vec<_>>()
-            .join(",")
+        csv_line(&fields)
     }
 
     /// Whether the scan was registered (whatever its verdict).

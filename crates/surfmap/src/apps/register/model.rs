@@ -224,7 +224,7 @@ pub fn shape_model(shapes: &[Vec<[f64; 3]>]) -> Result<ShapeModel, ModelError> {
     let mut variances = Vec::new();
     for k in (0..count).rev() {
         let lambda = values[k];
-        if !(lambda > 1e-12 * largest) {
+        if lambda.is_nan() || lambda <= 1e-12 * largest {
             continue;
         }
         let u = &vectors[k];
@@ -295,7 +295,8 @@ mod tests {
             .collect();
         // The infinitesimal similarities at the base: 3 translations, 3 rotations, scale.
         let mut motions: Vec<Vec<[f64; 3]>> = Vec::new();
-        let fields: Vec<Box<dyn Fn([f64; 3]) -> [f64; 3]>> = vec![
+        type Field = Box<dyn Fn([f64; 3]) -> [f64; 3]>;
+        let fields: Vec<Field> = vec![
             Box::new(|_| [1.0, 0.0, 0.0]),
             Box::new(|_| [0.0, 1.0, 0.0]),
             Box::new(|_| [0.0, 0.0, 1.0]),
@@ -378,14 +379,9 @@ mod tests {
         // The model is in the mean scale of the shapes (their sizes ∝ their scale).
         let s = scales.iter().sum::<f64>() / n;
         let expected = [(half + root) * s * s, (half - root) * s * s];
-        for k in 0..2 {
-            let rel = (model.variances[k] - expected[k]).abs() / expected[k];
-            assert!(
-                rel < 0.05,
-                "variance {k}: {} vs {}",
-                model.variances[k],
-                expected[k]
-            );
+        for (k, (got, want)) in model.variances.iter().zip(expected).enumerate() {
+            let rel = (got - want).abs() / want;
+            assert!(rel < 0.05, "variance {k}: {got} vs {want}");
         }
         assert!(model.explained(2) > 0.99, "{}", model.explained(2));
         assert_eq!(model.modes_for(0.95), 2);
@@ -421,7 +417,7 @@ mod tests {
     fn too_few_or_mismatched_shapes_are_refused() {
         let a = bumpy_disc(3, 0.3).positions;
         assert!(matches!(
-            shape_model(&[a.clone()]),
+            shape_model(std::slice::from_ref(&a)),
             Err(ModelError::TooFew(1))
         ));
         let b = bumpy_disc(4, 0.3).positions;

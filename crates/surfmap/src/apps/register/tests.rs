@@ -146,9 +146,10 @@ fn warp(p: [f64; 3]) -> [f64; 3] {
 }
 
 fn test_options() -> MatchOptions {
-    let mut o = MatchOptions::default();
-    o.size = 129;
-    o
+    MatchOptions {
+        size: 129,
+        ..MatchOptions::default()
+    }
 }
 
 /// The matcher and the placement together on a scan whose truth is known: the template
@@ -312,5 +313,70 @@ fn a_batch_lists_the_bad_scans_and_resumes() {
         let name = entry.unwrap().file_name();
         assert!(!name.to_string_lossy().starts_with('.'), "{name:?}");
     }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `--landmarks-dir`: each scan's `STEM.json` guides its match, and a pinned landmark's
+/// template vertex lands exactly on its scan vertex; a scan without its file fails with a
+/// reason that names the file.
+#[test]
+fn landmark_files_are_read_per_scan() {
+    use std::path::{Path, PathBuf};
+    let dir = std::env::temp_dir().join(format!("surfmap-register-lm-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let (scans, marks) = (dir.join("scans"), dir.join("landmarks"));
+    std::fs::create_dir_all(&scans).unwrap();
+    std::fs::create_dir_all(&marks).unwrap();
+    let options = test_options();
+    let template = Template::new(bumpy_disc(10, 0.35), &options).unwrap();
+    let motion = similarity([0.0, 1.0, 0.3], 0.3, 1.0, [1.0, 0.0, 0.0]);
+    let scan = warped_scan(14, 0.95, &motion);
+    write(&scans.join("a.obj"), &scan);
+    write(&scans.join("b.obj"), &scan);
+    // Five template vertices and the scan vertices nearest their true places.
+    let ids: Vec<u32> = vec![0, 37, 75, 120, 190];
+    let nearest: Vec<u32> = ids
+        .iter()
+        .map(|&i| {
+            let truth = motion.apply(warp(template.mesh.positions[i as usize]));
+            (0..scan.num_vertices() as u32)
+                .min_by(|&a, &b| {
+                    distance(scan.positions[a as usize], truth)
+                        .total_cmp(&distance(scan.positions[b as usize], truth))
+                })
+                .unwrap()
+        })
+        .collect();
+    let landmarks = serde_json::json!({
+        "names": ["l0", "l1", "l2", "l3", "l4"], "A": ids, "B": nearest,
+    });
+    std::fs::write(marks.join("a.json"), landmarks.to_string()).unwrap();
+    let read = |p: &Path| {
+        crate::read_mesh(p)
+            .map(|f| f.mesh)
+            .map_err(|e| e.to_string())
+    };
+    let out = dir.join("out");
+    let job = RegisterJob {
+        template: &template,
+        options: &options,
+        dir: &out,
+        keep_matches: false,
+        landmarks_dir: Some(&marks),
+        read: &read,
+        match_error: |e| e.to_string(),
+    };
+    let inputs: Vec<PathBuf> = vec![scans.join("a.obj"), scans.join("b.obj")];
+    let rows = register_many(&job, &inputs, &["a".into(), "b".into()], 1, false, |_| {}).unwrap();
+    assert!(rows[0].ok(), "{:?}", rows[0]);
+    let registered = crate::read_mesh(Path::new(rows[0].output.as_deref().unwrap()))
+        .unwrap()
+        .mesh;
+    for (&i, &j) in ids.iter().zip(&nearest) {
+        let d = distance(registered.positions[i as usize], scan.positions[j as usize]);
+        assert!(d < 1e-9, "landmark {i} → {j}: {d}");
+    }
+    let e = rows[1].error.as_deref().unwrap();
+    assert!(e.contains("b.json") && e.contains("landmarks"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
