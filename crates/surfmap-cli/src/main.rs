@@ -51,6 +51,8 @@ enum Command {
     Morph(cmd::morph::Args),
     /// Blend-shape rig: key poses on the neutral's connectivity, one glTF with a target per key.
     Rig(cmd::rig::Args),
+    /// Register one template onto many scans: each scan in the template's topology, a summary table.
+    Register(cmd::register::Args),
     /// One self-contained interactive HTML page of a flattening, a match, a morph or rig, or a batch.
     View(cmd::view::Args),
 }
@@ -70,6 +72,7 @@ fn main() {
         Command::Transfer(a) => cmd::transfer::run(a),
         Command::Morph(a) => cmd::morph::run(a),
         Command::Rig(a) => cmd::rig::run(a),
+        Command::Register(a) => cmd::register::run(a),
         Command::View(a) => cmd::view::run(a),
     };
     if let Err(e) = result {

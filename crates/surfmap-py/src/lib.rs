@@ -16,6 +16,7 @@
 //! | `flatten.rs` | `flatten` and the flattening keywords |
 //! | `images.rs` | `geometry_images` |
 //! | `batch.rs` | `flatten_file`, `flatten_many` (its engine), `output_names`, `BATCH_COLUMNS` |
+//! | `register.rs` | `register_file`, `_register_many` (the engine of `register`), `REGISTER_COLUMNS` |
 //! | `matching.rs` | `match` (the place for it; not bound yet) |
 
 mod advice;
@@ -27,6 +28,7 @@ mod flatten;
 mod images;
 mod matching;
 mod mesh;
+mod register;
 
 use pyo3::prelude::*;
 
@@ -50,6 +52,13 @@ fn _surfmap(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add(
         "BATCH_COLUMNS",
         surfmap::batch::BatchRow::CSV_HEADER.to_vec(),
+    )?;
+    m.add_function(wrap_pyfunction!(register::register_file, m)?)?;
+    m.add_function(wrap_pyfunction!(register::_register_many, m)?)?;
+    m.add_function(wrap_pyfunction!(register::_check_register, m)?)?;
+    m.add(
+        "REGISTER_COLUMNS",
+        surfmap::apps::register::batch::RegisterRow::CSV_HEADER.to_vec(),
     )?;
     matching::register(m)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

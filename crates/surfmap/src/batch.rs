@@ -214,9 +214,6 @@ impl BatchRow {
     /// empty for `None`, floats in their shortest exact form, text quoted when needed
     /// (an error message may span lines: a list of defects; a plan has commas).
     pub fn csv_record(&self) -> String {
-        fn opt<T: ToString>(v: &Option<T>) -> String {
-            v.as_ref().map(T::to_string).unwrap_or_default()
-        }
         let fields: [String; Self::CSV_HEADER.len()] = [
             self.input.clone(),
             self.status.to_owned(),
@@ -249,17 +246,28 @@ impl BatchRow {
             self.time_s.to_string(),
             opt(&self.error),
         ];
-        fields
-            .iter()
-            .map(|f| csv_field(f))
-            .collect::<Vec<_>>()
-            .join(",")
+        csv_line(&fields)
     }
+}
+
+/// A table cell: empty for `None`, else the value's text (floats in their shortest
+/// exact form).
+pub fn opt<T: ToString>(v: &Option<T>) -> String {
+    v.as_ref().map(T::to_string).unwrap_or_default()
+}
+
+/// One CSV record: the fields quoted as [`csv_field`] says, joined by commas.
+pub fn csv_line(fields: &[String]) -> String {
+    fields
+        .iter()
+        .map(|f| csv_field(f))
+        .collect::<Vec<_>>()
+        .join(",")
 }
 
 /// One CSV field (RFC 4180): quoted, with quotes doubled, when it holds a comma, a
 /// quote or a line break.
-fn csv_field(s: &str) -> String {
+pub fn csv_field(s: &str) -> String {
     if s.contains([',', '"', '\n', '\r']) {
         format!("\"{}\"", s.replace('"', "\"\""))
     } else {
@@ -269,10 +277,24 @@ fn csv_field(s: &str) -> String {
 
 /// Writes the summary table: a header and one line per row (atomically).
 pub fn write_csv(path: &Path, rows: &[BatchRow]) -> std::io::Result<()> {
+    write_table(
+        path,
+        &BatchRow::CSV_HEADER,
+        rows.iter().map(BatchRow::csv_record),
+    )
+}
+
+/// Writes a CSV table atomically: the `header` line, then one line per record (each
+/// record's fields already joined, as [`csv_field`] quotes them).
+pub fn write_table(
+    path: &Path,
+    header: &[&str],
+    records: impl Iterator<Item = String>,
+) -> std::io::Result<()> {
     crate::fsutil::write_atomically(path, |w| {
-        writeln!(w, "{}", BatchRow::CSV_HEADER.join(","))?;
-        for r in rows {
-            writeln!(w, "{}", r.csv_record())?;
+        writeln!(w, "{}", header.join(","))?;
+        for r in records {
+            writeln!(w, "{r}")?;
         }
         Ok(())
     })
@@ -387,17 +409,30 @@ pub struct PoolError {
     pub source: rayon::ThreadPoolBuildError,
 }
 
+/// A row of a batch table that can stand for an input whose job failed.
+pub trait FailedRow {
+    /// The row of `input` that failed with `error` after `time_s` seconds.
+    fn failed(input: &Path, error: String, time_s: f64) -> Self;
+}
+
+impl FailedRow for BatchRow {
+    fn failed(input: &Path, error: String, time_s: f64) -> Self {
+        BatchRow::failed(input, error, time_s)
+    }
+}
+
 /// Runs `job` on every input on a pool of `threads` threads (0: one per core) and
-/// returns the rows in input order. Everything `job` computes runs on that pool, its
+/// returns the rows in input order (flattening: [`BatchRow`]; registration:
+/// [`crate::apps::register::batch::RegisterRow`]). Everything `job` computes runs on that pool, its
 /// parallel loops included, so `threads` bounds the cores used. `on_done` sees each row
 /// as it finishes (from the worker thread; for progress). A job that panics gives a
 /// failed row naming the panic instead of stopping the batch.
-pub fn run(
+pub fn run<R: FailedRow + Send>(
     inputs: &[PathBuf],
     threads: usize,
-    job: impl Fn(usize, &Path) -> BatchRow + Sync,
-    on_done: impl Fn(&BatchRow) + Sync,
-) -> Result<Vec<BatchRow>, PoolError> {
+    job: impl Fn(usize, &Path) -> R + Sync,
+    on_done: impl Fn(&R) + Sync,
+) -> Result<Vec<R>, PoolError> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
@@ -416,7 +451,7 @@ pub fn run(
                             .map(|s| s.to_string())
                             .or_else(|| panic.downcast_ref::<String>().cloned())
                             .unwrap_or_default();
-                        BatchRow::failed(
+                        R::failed(
                             input,
                             format!("internal error ({what}); please report this mesh"),
                             clock.elapsed().as_secs_f64(),

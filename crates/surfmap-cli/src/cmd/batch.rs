@@ -58,14 +58,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             .map_err(|e| anyhow::anyhow!("cannot create {}: {e}", folder.display()))?;
     }
     let names = batch::output_names(&args.inputs);
-    let bar = if args.quiet || !std::io::stderr().is_terminal() {
-        ProgressBar::hidden()
-    } else {
-        ProgressBar::new(args.inputs.len() as u64).with_style(
-            ProgressStyle::with_template("{bar:30} {pos}/{len} meshes {elapsed} (eta {eta}) {msg}")
-                .expect("valid template"),
-        )
-    };
+    let bar = progress_bar(args.inputs.len(), args.quiet, "meshes");
     let material = material(args);
     let output = BatchOutput {
         dir,
@@ -91,12 +84,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         |i, input| batch::flatten_file(input, &names[i], &opts, &output, &front),
         |row| {
             if let Some(e) = &row.error {
-                let line = format!("error: {e}");
-                if bar.is_hidden() {
-                    eprintln!("{line}");
-                } else {
-                    bar.println(line);
-                }
+                report_line(&bar, format!("error: {e}"));
             }
             bar.set_message(row.input.clone());
             bar.inc(1);
@@ -126,6 +114,29 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// The progress bar of a batch of `len` items called `what` (`meshes`, `scans`), with
+/// its ETA; hidden with `quiet` or when stderr is not a terminal.
+pub fn progress_bar(len: usize, quiet: bool, what: &str) -> ProgressBar {
+    if quiet || !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    ProgressBar::new(len as u64).with_style(
+        ProgressStyle::with_template(&format!(
+            "{{bar:30}} {{pos}}/{{len}} {what} {{elapsed}} (eta {{eta}}) {{msg}}"
+        ))
+        .expect("valid template"),
+    )
+}
+
+/// A line printed above the bar (on stderr when the bar is hidden).
+pub fn report_line(bar: &ProgressBar, line: String) {
+    if bar.is_hidden() {
+        eprintln!("{line}");
+    } else {
+        bar.println(line);
+    }
 }
 
 /// A flattening error as the single-mesh command words it (its remedy as flags).

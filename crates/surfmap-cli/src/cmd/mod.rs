@@ -10,6 +10,7 @@ pub mod matching;
 pub mod matchio;
 pub mod measure;
 pub mod morph;
+pub mod register;
 pub mod rig;
 pub mod tradeoff;
 pub mod transfer;

@@ -18,6 +18,8 @@ Row = Dict[str, Any]
 
 # The columns of the batch table (summary.csv, the rows of flatten_file / flatten_many).
 BATCH_COLUMNS: List[str]
+# The columns of the registration table (summary.csv of register / register_file rows).
+REGISTER_COLUMNS: List[str]
 
 class MeshError(ValueError):
     """The mesh cannot be used as given; ``defects`` lists why (dicts as in inspect())."""
@@ -120,6 +122,30 @@ def _flatten_many(
     workers: int = 0,
     callback: Optional[Callable[[Row], None]] = None,
     **options: Any,
+) -> List[Row]: ...
+
+def register_file(
+    template: PathLike,
+    scan: PathLike,
+    outdir: PathLike,
+    name: Optional[str] = None,
+    landmarks_dir: Optional[PathLike] = None,
+    keep_matches: bool = False,
+    size: Optional[int] = None,
+    budget: Optional[int] = None,
+) -> Row: ...
+def _check_register(template: PathLike, size: Optional[int] = None, budget: Optional[int] = None) -> float: ...
+def _register_many(
+    template: PathLike,
+    scans: Sequence[PathLike],
+    outdir: PathLike,
+    workers: int = 0,
+    callback: Optional[Callable[[Row], None]] = None,
+    landmarks_dir: Optional[PathLike] = None,
+    keep_matches: bool = False,
+    resume: bool = False,
+    size: Optional[int] = None,
+    budget: Optional[int] = None,
 ) -> List[Row]: ...
 
 def match(

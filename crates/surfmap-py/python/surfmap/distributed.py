@@ -1,4 +1,5 @@
-"""Flattening a large set of meshes on a cluster: Dask distributed (tested), Ray (recipe).
+"""Flattening a large set of meshes, or registering a template onto many scans, on a
+cluster: Dask distributed (tested), Ray (recipe).
 
 The unit of work is ``surfmap.flatten_file(path, outdir, name, **options)``: it reads
 one mesh file, flattens it, writes ``NAME.obj`` and ``NAME.json`` into ``outdir`` and
@@ -26,6 +27,16 @@ Dask distributed::
                             fill_holes=True)
     print(table[table.status == "failed"][["input", "error"]])
 
+Registration (``register``): one task per scan, ``surfmap.register_file`` — the
+template is prepared once per worker process and reused by its later tasks; the rows
+gather into the table of ``surfmap register`` (``summary.csv`` and ``summary.json`` in
+``outdir``)::
+
+    from surfmap.distributed import register
+    table = register("/shared/template.obj", "/shared/scans/*.ply", "/shared/reg",
+                     client=Client("tcp://scheduler:8786"))
+    print(table.groupby("verdict").size())
+
 Ray (the same unit of work; this recipe is not run by the test suite)::
 
     import glob, pandas, ray, surfmap
@@ -48,22 +59,46 @@ import functools
 import os
 from typing import TYPE_CHECKING, Any, Dict, Iterable, List, Optional, Union
 
-from ._surfmap import BATCH_COLUMNS, _check_flatten_options, flatten_file, output_names
+from ._surfmap import (
+    BATCH_COLUMNS,
+    REGISTER_COLUMNS,
+    _check_flatten_options,
+    _check_register,
+    flatten_file,
+    output_names,
+    register_file,
+)
 
 if TYPE_CHECKING:
     import pandas
 
-__all__ = ["flatten_on_dask", "failed_row", "write_table"]
+__all__ = ["flatten_on_dask", "failed_row", "register", "write_table"]
 
 PathLike = Union[str, "os.PathLike[str]"]
 
 
-def failed_row(path: str, error: str) -> Dict[str, Any]:
-    """A row of the batch table for a mesh whose task never returned (a worker that
-    died, a cancelled future): every number None, the reason in ``error``."""
-    row: Dict[str, Any] = {column: None for column in BATCH_COLUMNS}
+def failed_row(path: str, error: str, columns: Iterable[str] = BATCH_COLUMNS) -> Dict[str, Any]:
+    """A row of the batch table (``columns``: ``BATCH_COLUMNS`` or ``REGISTER_COLUMNS``)
+    for a mesh whose task never returned (a worker that died, a cancelled future): every
+    number None, the reason in ``error``."""
+    row: Dict[str, Any] = {column: None for column in columns}
     row.update(input=path, status="failed", error=error)
     return row
+
+
+def _gather(futures: List[Any], paths: List[str], columns: Iterable[str]) -> List[Dict[str, Any]]:
+    """The futures' rows in input order; a task lost on the cluster becomes a failed row."""
+    from dask.distributed import as_completed
+
+    position = {future.key: i for i, future in enumerate(futures)}
+    rows: List[Optional[Dict[str, Any]]] = [None] * len(paths)
+    for future in as_completed(futures):
+        i = position[future.key]
+        try:
+            rows[i] = future.result()
+        except Exception as e:  # the task itself never raises: the cluster lost it
+            rows[i] = failed_row(paths[i], f"task failed on the cluster: {type(e).__name__}: {e}", columns)
+    return rows  # type: ignore[return-value]
 
 
 def write_table(table: "pandas.DataFrame", path: PathLike) -> None:
@@ -95,7 +130,6 @@ def flatten_on_dask(
     here before any task starts.
     """
     import pandas as pd
-    from dask.distributed import as_completed
 
     _check_flatten_options(**options)
     paths = [os.fspath(p) for p in paths]
@@ -104,15 +138,64 @@ def flatten_on_dask(
     names = output_names(paths)
     task = functools.partial(flatten_file, **options)
     futures = client.map(task, paths, [outdir] * len(paths), names, pure=False)
-    position = {future.key: i for i, future in enumerate(futures)}
-    rows: List[Optional[Dict[str, Any]]] = [None] * len(paths)
-    for future in as_completed(futures):
-        i = position[future.key]
-        try:
-            rows[i] = future.result()
-        except Exception as e:  # the task itself never raises: the cluster lost it
-            rows[i] = failed_row(paths[i], f"task failed on the cluster: {type(e).__name__}: {e}")
+    rows = _gather(futures, paths, BATCH_COLUMNS)
     frame = pd.DataFrame(rows, columns=list(BATCH_COLUMNS))
+    if table is not None:
+        write_table(frame, table)
+    return frame
+
+
+def register(
+    template: PathLike,
+    scans: Union[PathLike, Iterable[PathLike]],
+    outdir: PathLike,
+    client: Any,
+    landmarks_dir: Optional[PathLike] = None,
+    keep_matches: bool = False,
+    size: Optional[int] = None,
+    budget: Optional[int] = None,
+    table: Optional[PathLike] = None,
+) -> "pandas.DataFrame":
+    """Registers the template onto every scan on the Dask cluster of ``client``, one task
+    per scan (``surfmap.register_file``), into the folder ``outdir`` (files as
+    ``surfmap.register`` writes them; ``scans``: files, a folder or a glob pattern).
+
+    The template is checked here first (a ``ValueError`` if it cannot be matched), and
+    prepared once in each worker process, whose later tasks reuse it. Returns the table
+    of all scans as a pandas DataFrame in input order (columns
+    ``surfmap.REGISTER_COLUMNS``), also written as ``outdir/summary.csv`` and
+    ``summary.json`` (and to ``table``, ``.csv`` or ``.parquet``, when given); a bad
+    scan, or a task lost on the cluster, is a row with ``status == "failed"`` and the
+    reason in ``error``.
+    """
+    import json
+
+    import pandas as pd
+
+    from . import scan_paths
+
+    template = os.fspath(template)
+    _check_register(template, size, budget)
+    paths = scan_paths(scans)
+    outdir = os.fspath(outdir)
+    os.makedirs(outdir, exist_ok=True)
+    names = output_names(paths)
+    lm = None if landmarks_dir is None else os.fspath(landmarks_dir)
+    task = functools.partial(register_file, landmarks_dir=lm, keep_matches=keep_matches, size=size, budget=budget)
+    n = len(paths)
+    futures = client.map(task, [template] * n, paths, [outdir] * n, names, pure=False)
+    rows = _gather(futures, paths, REGISTER_COLUMNS)
+    for row, name in zip(rows, names):
+        row["name"] = name
+    frame = pd.DataFrame(rows, columns=list(REGISTER_COLUMNS))
+    # Each file written beside its place and renamed: never seen half written.
+    tmp = os.path.join(outdir, f".summary.csv.tmp{os.getpid()}")
+    frame.to_csv(tmp, index=False)
+    os.replace(tmp, os.path.join(outdir, "summary.csv"))
+    tmp = os.path.join(outdir, f".summary.json.tmp{os.getpid()}")
+    with open(tmp, "w") as f:
+        json.dump(rows, f, indent=2)
+    os.replace(tmp, os.path.join(outdir, "summary.json"))
     if table is not None:
         write_table(frame, table)
     return frame

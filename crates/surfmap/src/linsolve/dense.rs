@@ -43,6 +43,27 @@ pub fn symmetric_eigen<const N: usize>(m: &[[f64; N]; N]) -> Option<([f64; N], [
     Some((values, vectors))
 }
 
+/// Eigenvalues (non-decreasing) and unit eigenvectors (`vectors[k]` belongs to
+/// `values[k]`) of the symmetric `n × n` matrix with entries `m(i, j)` (only `i ≥ j` is
+/// read): [`symmetric_eigen`] for a size known at run time (the Gram matrix of a shape
+/// model's PCA). `None` if an entry is not finite or the solver fails.
+pub fn symmetric_eigen_n(
+    n: usize,
+    m: impl Fn(usize, usize) -> f64,
+) -> Option<(Vec<f64>, Vec<Vec<f64>>)> {
+    let a = Mat::<f64>::from_fn(n, n, |i, j| m(i.max(j), i.min(j)));
+    if !a.norm_max().is_finite() {
+        return None;
+    }
+    let evd = a.self_adjoint_eigen(Side::Lower).ok()?;
+    let (u, s) = (evd.U(), evd.S());
+    let values = (0..n).map(|k| s.column_vector()[k]).collect();
+    let vectors = (0..n)
+        .map(|k| (0..n).map(|i| u[(i, k)]).collect())
+        .collect();
+    Some((values, vectors))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -82,6 +82,74 @@ pub fn save_npy<T: NpyElement>(path: &Path, shape: &[usize], data: &[T]) -> io::
     crate::fsutil::write_atomically(path, |w| write_npy(w, shape, data))
 }
 
+/// Writes named `.npy` streams (each `(name, bytes)`, e.g. from [`write_npy`] into a
+/// `Vec`) as an `.npz` file, atomically: a zip archive whose members `NAME.npy` are
+/// *stored* (no compression, as `numpy.savez` writes them), each with its CRC-32. Fails
+/// for archives beyond 4 GiB (no zip64).
+pub fn save_npz(path: &Path, arrays: &[(&str, Vec<u8>)]) -> io::Result<()> {
+    let too_big = || io::Error::new(io::ErrorKind::InvalidInput, "npz archive beyond 4 GiB");
+    let mut body: Vec<u8> = Vec::new();
+    let mut central: Vec<u8> = Vec::new();
+    for (name, data) in arrays {
+        let file = format!("{name}.npy");
+        let offset = u32::try_from(body.len()).map_err(|_| too_big())?;
+        let size = u32::try_from(data.len()).map_err(|_| too_big())?;
+        let crc = crc32(data);
+        // Version 2.0, no flags, stored, time 00:00 of 1980-01-01 (date 0x21).
+        let common = |out: &mut Vec<u8>| {
+            for v in [20u16, 0, 0, 0, 0x21] {
+                out.extend_from_slice(&v.to_le_bytes());
+            }
+            for v in [crc, size, size] {
+                out.extend_from_slice(&v.to_le_bytes());
+            }
+            out.extend_from_slice(&(file.len() as u16).to_le_bytes());
+            out.extend_from_slice(&0u16.to_le_bytes());
+        };
+        body.extend_from_slice(&0x0403_4b50u32.to_le_bytes());
+        common(&mut body);
+        body.extend_from_slice(file.as_bytes());
+        body.extend_from_slice(data);
+        central.extend_from_slice(&0x0201_4b50u32.to_le_bytes());
+        central.extend_from_slice(&20u16.to_le_bytes());
+        common(&mut central);
+        // Comment length, disk, internal and external attributes, local header offset.
+        for v in [0u16, 0, 0] {
+            central.extend_from_slice(&v.to_le_bytes());
+        }
+        central.extend_from_slice(&0u32.to_le_bytes());
+        central.extend_from_slice(&offset.to_le_bytes());
+        central.extend_from_slice(file.as_bytes());
+    }
+    let entries = u16::try_from(arrays.len()).map_err(|_| too_big())?;
+    let start = u32::try_from(body.len()).map_err(|_| too_big())?;
+    let length = u32::try_from(central.len()).map_err(|_| too_big())?;
+    start.checked_add(length).ok_or_else(too_big)?;
+    crate::fsutil::write_atomically(path, |w| {
+        w.write_all(&body)?;
+        w.write_all(&central)?;
+        w.write_all(&0x0605_4b50u32.to_le_bytes())?;
+        for v in [0u16, 0, entries, entries] {
+            w.write_all(&v.to_le_bytes())?;
+        }
+        w.write_all(&length.to_le_bytes())?;
+        w.write_all(&start.to_le_bytes())?;
+        w.write_all(&0u16.to_le_bytes())
+    })
+}
+
+/// CRC-32 (IEEE 802.3, reflected polynomial `0xEDB88320`), as zip stores it.
+pub fn crc32(data: &[u8]) -> u32 {
+    let mut crc = !0u32;
+    for &byte in data {
+        crc ^= byte as u32;
+        for _ in 0..8 {
+            crc = (crc >> 1) ^ (0xEDB8_8320 & (crc & 1).wrapping_neg());
+        }
+    }
+    !crc
+}
+
 /// Reads a `.npy` array of `float64` (`<f8` or `>f8`, C order; versions 1.0, 2.0 and
 /// 3.0): its shape and values. Errors say what the file holds instead.
 pub fn read_npy_f64(bytes: &[u8]) -> Result<(Vec<usize>, Vec<f64>), String> {
@@ -203,5 +271,39 @@ mod tests {
                 .contains("bytes")
         );
         assert!(read_npy_f64(b"hello").is_err());
+    }
+
+    /// The check value of CRC-32 ("123456789" → 0xCBF43926), and an archive whose
+    /// members sit where its central directory says, with their CRCs.
+    #[test]
+    fn npz_is_a_stored_zip_of_npy_members() {
+        assert_eq!(crc32(b"123456789"), 0xCBF4_3926);
+        let mut a = Vec::new();
+        write_npy(&mut a, &[2, 2], &[1.0f64, 2.0, 3.0, 4.0]).unwrap();
+        let mut b = Vec::new();
+        write_npy(&mut b, &[3], &[7u32, 8, 9]).unwrap();
+        let dir = std::env::temp_dir().join(format!("surfmap-npz-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("m.npz");
+        save_npz(&path, &[("mean", a.clone()), ("ids", b.clone())]).unwrap();
+        let z = std::fs::read(&path).unwrap();
+        let u16_at = |i: usize| u16::from_le_bytes([z[i], z[i + 1]]) as usize;
+        let u32_at = |i: usize| u32::from_le_bytes(z[i..i + 4].try_into().unwrap()) as usize;
+        let end = z.len() - 22;
+        assert_eq!(u32_at(end), 0x0605_4b50);
+        assert_eq!(u16_at(end + 10), 2);
+        let mut at = u32_at(end + 16);
+        for (name, data) in [("mean.npy", &a), ("ids.npy", &b)] {
+            assert_eq!(u32_at(at), 0x0201_4b50);
+            assert_eq!(u32_at(at + 16), crc32(data) as usize);
+            let name_len = u16_at(at + 28);
+            assert_eq!(&z[at + 46..at + 46 + name_len], name.as_bytes());
+            let local = u32_at(at + 42);
+            assert_eq!(u32_at(local), 0x0403_4b50);
+            let start = local + 30 + u16_at(local + 26);
+            assert_eq!(&z[start..start + data.len()], data.as_slice());
+            at += 46 + name_len;
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }
