@@ -389,35 +389,44 @@ impl LevelEnergy {
         assert_eq!(u.len(), n * n);
         assert_eq!(grad.len(), n * n);
         debug_assert!(nf == 0 || self.b.near_distance >= 3.0 * self.epsilon);
-        work.resize(n * n, nf);
+        work.resize(n, nf);
         let Workspace {
             samples,
             feature_samples,
             near,
             adjoint,
             feature_adjoint,
+            node_terms,
+            cell_terms,
         } = work;
         let fstride = nf.max(1);
-        let nodes = grad
-            .par_chunks_mut(n)
+        // Each row's terms go to its own slot and are summed in row order afterwards:
+        // a parallel `reduce` would associate the sums as work stealing happens to split
+        // them, and the same input must give the same energy to the last bit.
+        grad.par_chunks_mut(n)
             .zip(samples.par_chunks_mut(n))
             .zip(feature_samples.par_chunks_mut(n * fstride))
             .zip(near.par_chunks_mut(n))
             .zip(feature_adjoint.par_chunks_mut(n * fstride))
+            .zip(node_terms.par_iter_mut())
             .enumerate()
-            .map(|(i, ((((g, s), fs), near), fadj))| self.node_row(u, i, g, s, fs, near, fadj))
-            .reduce(EnergyTerms::default, EnergyTerms::add);
+            .for_each(|(i, (((((g, s), fs), near), fadj), t))| {
+                *t = self.node_row(u, i, g, s, fs, near, fadj)
+            });
+        let nodes = node_terms
+            .iter()
+            .fold(EnergyTerms::default(), |a, &t| a.add(t));
         adjoint.iter_mut().for_each(|a| *a = [0.0; 4]);
-        let mut cells = EnergyTerms::default();
         for parity in 0..2 {
-            let part = grad[parity * n..]
+            grad[parity * n..]
                 .par_chunks_mut(2 * n)
                 .zip(adjoint[parity * n..].par_chunks_mut(2 * n))
                 .zip(feature_adjoint[parity * n * fstride..].par_chunks_mut(2 * n * fstride))
+                .zip(cell_terms[parity..].par_chunks_mut(2))
                 .enumerate()
                 .filter(|(c, _)| 2 * c + parity < n - 1)
-                .map(|(c, ((g, adj), fadj))| {
-                    self.cell_row(
+                .for_each(|(c, (((g, adj), fadj), t))| {
+                    t[0] = self.cell_row(
                         2 * c + parity,
                         u,
                         samples,
@@ -427,10 +436,11 @@ impl LevelEnergy {
                         adj,
                         fadj,
                     )
-                })
-                .reduce(EnergyTerms::default, EnergyTerms::add);
-            cells = cells.add(part);
+                });
         }
+        let cells = cell_terms[..n - 1]
+            .iter()
+            .fold(EnergyTerms::default(), |a, &t| a.add(t));
         if !cells.total.is_finite() {
             return EnergyTerms::infinite();
         }
@@ -770,10 +780,16 @@ pub(crate) struct Workspace {
     near: Vec<FeatureSet>,
     adjoint: Vec<[f64; 4]>,
     feature_adjoint: Vec<f64>,
+    /// Per grid row: the terms of its nodes, and of its cells (row `i` of cells lies
+    /// between node rows `i` and `i + 1`).
+    node_terms: Vec<EnergyTerms>,
+    cell_terms: Vec<EnergyTerms>,
 }
 
 impl Workspace {
-    fn resize(&mut self, nodes: usize, features: usize) {
+    /// Sizes every buffer for an `n × n` grid with `features` feature channels.
+    fn resize(&mut self, n: usize, features: usize) {
+        let nodes = n * n;
         let f = features.max(1);
         self.samples.resize(nodes, NodeSample::default());
         self.feature_samples
@@ -781,6 +797,8 @@ impl Workspace {
         self.near.resize(nodes, FeatureSet::default());
         self.adjoint.resize(nodes, [0.0; 4]);
         self.feature_adjoint.resize(nodes * f, 0.0);
+        self.node_terms.resize(n, EnergyTerms::default());
+        self.cell_terms.resize(n, EnergyTerms::default());
     }
 }
 
