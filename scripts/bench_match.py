@@ -50,17 +50,19 @@ def main():
                        p05=s["pct_005"], p02=curve[0.02], p10=s["pct_01"], lm=lm_scale * s["lm_err"],
                        coverA=s["coverage_A"], coverB=s["cover_B"], flip=s["flip"],
                        collapse=s["collapse"], false_match=s["false_match"], seconds=seconds,
-                       solve=report["seconds_solve"], min_det=report["min_det"])
+                       solve=report["seconds_solve"], min_det=report["min_det"],
+                       verdict=report.get("confidence", {}).get("verdict", "-"))
             rows.append(row)
             print(f"{e['dir']:46s} {method:10s} <.02 {row['p02']:.3f} <.05 {row['p05']:.3f} lm {row['lm']:.2f} "
                   f"flip {row['flip']:.4f} coll {row['collapse']:.4f} fm {row['false_match']:.3f} "
-                  f"solve {row['solve']:.2f}s total {seconds:.2f}s min det {row['min_det']:.3f}", flush=True)
+                  f"solve {row['solve']:.2f}s total {seconds:.2f}s min det {row['min_det']:.3f} {row['verdict']}", flush=True)
     os.makedirs(args.out, exist_ok=True)
     json.dump(rows, open(os.path.join(args.out, "results.json"), "w"), indent=1)
     print()
     print("| track (pairs, lm units) | method | mean err | % <0.02 | % <0.05 | % <0.10 | lm err | cover A | cover B "
-          "| flip | collapse | false match | solve s (median) | process s (median) |")
-    print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+          "| flip | collapse | false match | worst % <0.05 | verdicts ok/doubtful/failed | solve s (median) "
+          "| process s (median) |")
+    print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|")
     for track in ("expression", "identity", "partial", "resolution"):
         for method in ("surfmap", "surfmap_lm"):
             rs = [r for r in rows if r["track"] == track and r["method"] == method]
@@ -71,7 +73,9 @@ def main():
             print(f"| {track} ({len(rs)}, {rs[0]['units']}) | {method} | {m('mean'):.3f} | {100 * m('p02'):.1f} | {100 * m('p05'):.1f} "
                   f"| {100 * m('p10'):.1f} | {m('lm'):.2f} | {100 * m('coverA'):.1f} | {100 * m('coverB'):.1f} "
                   f"| {100 * max(r['flip'] for r in rs):.2f} | {100 * max(r['collapse'] for r in rs):.2f} "
-                  f"| {100 * m('false_match'):.1f} | {med('solve'):.2f} | {med('seconds'):.2f} |")
+                  f"| {100 * m('false_match'):.1f} | {100 * min(r['p05'] for r in rs):.1f} "
+                  f"| {'/'.join(str(sum(r['verdict'] == v for r in rs)) for v in ('ok', 'doubtful', 'failed'))} "
+                  f"| {med('solve'):.2f} | {med('seconds'):.2f} |")
 
 
 if __name__ == "__main__":

@@ -216,8 +216,9 @@ fn placed_area_ratio(mesh_a: &surfmap::TriMesh, placed: &surfmap::TriMesh) -> f6
 /// template (a head without shoulders, plus two eyeballs): `--repair` makes both
 /// matchable, but the surfaces differ in extent and the match squeezes the scan into a
 /// small part of the template. The result is still fold-free and written, and the
-/// verdict says it failed — on stderr and in match.json — with the area ratio recomputed
-/// here.
+/// verdict says it failed — on stderr and in match.json — because B's shape under A
+/// disagrees with A's and the match slid away from the surfaces' rigid pose; the area
+/// ratio (under 0.6) is recomputed here from A_on_B.obj.
 #[test]
 fn a_head_scan_squeezed_onto_a_template_is_flagged() {
     let (Some(scan), Some(template)) = (
@@ -245,7 +246,8 @@ fn a_head_scan_squeezed_onto_a_template_is_flagged() {
     assert!(stderr.contains("repair: non-manifold: cut"), "{stderr}");
     assert!(
         stderr.contains("warning: verdict FAILED")
-            && stderr.contains("A's matched part lands on B at"),
+            && stderr.contains("disagrees with A's")
+            && stderr.contains("it slid or turned on B"),
         "{stderr}"
     );
     let report: serde_json::Value =
@@ -268,7 +270,7 @@ fn a_head_scan_squeezed_onto_a_template_is_flagged() {
         "report {} against {ratio}",
         report["area_ratio"]
     );
-    assert!(ratio < 1.0 / 3.0, "area ratio {ratio}");
+    assert!(ratio < 0.6, "area ratio {ratio}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -278,7 +280,10 @@ fn a_head_scan_squeezed_onto_a_template_is_flagged() {
 /// more; it is not kept, because from the alignment's start A is matched at a plausible
 /// size. The output is then the search-free one (checked against
 /// `--similarity-search off`), at a plausible area ratio (recomputed here from
-/// A_on_B.obj) and without a warning.
+/// A_on_B.obj). Matched whole, the face crop still lands on the wrong part of the head
+/// (its nose tip centimetres from B's; `--crop-overlap auto` is the remedy, tested
+/// below), and the verdict says so: failed, on the coarse curvature disagreement of a
+/// match that moved from the surfaces' rigid pose.
 #[test]
 fn a_search_start_that_squeezes_a_is_not_kept() {
     let (Some(a), Some(b)) = (
@@ -306,11 +311,19 @@ fn a_search_start_that_squeezes_a_is_not_kept() {
         said.contains("not kept: solved from it, the coarsest level matched A at"),
         "{said}"
     );
-    assert!(!said.contains("warning:"), "{said}");
     let report: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(dir.join("auto").join("match.json")).unwrap(),
     )
     .unwrap();
+    assert!(
+        said.contains("warning: verdict FAILED") && said.contains("the match moved"),
+        "{said}"
+    );
+    assert_eq!(report["confidence"]["verdict"], "failed");
+    let coarse = report["confidence"]["measures"]["coarse_disagreement"]
+        .as_f64()
+        .unwrap();
+    assert!(coarse > 0.3, "coarse disagreement {coarse}");
     let search = &report["alignment"]["search"];
     assert_eq!(search["kept"], false);
     assert_eq!(search["implausible_size"], true);
@@ -396,9 +409,12 @@ fn nose_tip_miss(a: &Path, b: &Path, dir: &Path) -> f64 {
 /// Surfaces of different extent are cut down to the part they share before the match
 /// (`--crop-overlap auto`, the default): libigl's whole head with neck against the ICT
 /// face-and-scalp crop, either way round (40 % of the head's area far from the crop).
-/// Matched whole, A's nose tip lands 1.8–2.9 cm from B's (BENCHMARKS.md, "Whole heads
-/// against face crops"); cut down, within a few millimetres, with nothing doubted. The
-/// rows stay numbered as the files, the cut vertices of A unmatched.
+/// Matched whole, A's nose tip lands 1.8–2.9 cm from B's (docs/experiments/matching.md,
+/// "Whole heads against face crops"); cut down, within a few millimetres, and the verdict
+/// is `ok` (two people from two sources: their shapes disagree more than two faces of one
+/// registered set — a coarse disagreement up to 0.37 — but the match stays at the
+/// surfaces' rigid pose). The rows stay numbered as the files, the cut vertices of A
+/// unmatched.
 #[test]
 fn surfaces_of_different_extent_are_cut_down_to_what_they_share() {
     let (Some(ict), Some(bust)) = (
@@ -429,6 +445,7 @@ fn surfaces_of_different_extent_are_cut_down_to_what_they_share() {
         let report: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(out.join("match.json")).unwrap())
                 .unwrap();
+        assert_eq!(report["confidence"]["verdict"], "ok", "{name}");
         assert!(report["min_det"].as_f64().unwrap() > 0.0);
         let crop = &report["overlap_crop"];
         let (cropped, whole) = if cut == 'A' { ("a", "b") } else { ("b", "a") };
