@@ -198,6 +198,9 @@ def main():
     ap.add_argument("--min-nz", type=float, default=-0.3, help="crop: least z component of the normal")
     ap.add_argument("--eye-holes", action="store_true", help="cut the eyelid pockets out (4 loops)")
     ap.add_argument("--tracks", default="identity,partial")
+    ap.add_argument("--mm", action="store_true",
+                    help="write the pairs in millimetres (FLAME is in metres): tools whose parameters "
+                         "assume mm, such as MeshMonk in references.py, need it; scores do not change")
     ap.add_argument("--table", nargs=2, metavar=("BENCH", "REFS"),
                     help="print the tables from bench_match.py's and references.py's results instead")
     args = ap.parse_args()
@@ -232,7 +235,8 @@ def main():
     print("landmarks (crop vertex: template position, mm):")
     for k, v in lm0.items():
         print(f"  {k:15s} {v:5d}  " + " ".join(f"{1000 * x:7.1f}" for x in Vc[v]))
-    crops = {name: heads[name][0][c2h] for name in MESHES}
+    units, scale = ("mm", 1000.0) if args.mm else ("m", 1.0)
+    crops = {name: scale * heads[name][0][c2h] for name in MESHES}
 
     tracks = args.tracks.split(",")
     jobs = [("identity", k, a, b) for k, (a, b) in enumerate(IDENTITY) if "identity" in tracks]
@@ -244,9 +248,9 @@ def main():
         name = f"{k:02d}_flame_{a}__flame_{b}"
         d = os.path.join(args.out, track, name)
         seed = int(rng.integers(2**31))
-        info = make_pair(d, crops[a], crops[b], Fc, lm0, cfg, seed, units="m")
+        info = make_pair(d, crops[a], crops[b], Fc, lm0, cfg, seed, units=units)
         info.update(track=track, name=name, dir=os.path.relpath(d, args.out), A_src=f"flame_{a}.ply",
-                    B_src=f"flame_{b}.ply", seed=seed, resolution_factor=1.0, units="m", crop=cfg,
+                    B_src=f"flame_{b}.ply", seed=seed, resolution_factor=1.0, units=units, crop=cfg,
                     face_crop=dict(radius=args.radius, min_nz=args.min_nz, eye_holes=args.eye_holes))
         index.append(info)
         print(f"[{time.time() - t0:5.1f}s] {track}/{name}: nA={info['nA']} nB={info['nB']} "

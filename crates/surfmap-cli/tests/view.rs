@@ -137,7 +137,7 @@ fn bad_paths_and_meshes_that_do_not_fit_get_clear_errors() {
             "p.html",
         ],
     );
-    assert!(e.contains("other meshes"), "{e}");
+    assert!(e.contains("A and B are swapped"), "{e}");
     let e = fails(
         &dir,
         &["view", "in/a.obj", "--a", "in/b.obj", "-o", "p.html"],
