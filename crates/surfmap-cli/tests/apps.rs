@@ -405,3 +405,113 @@ fn rig_without_match_folders_matches_the_keys_itself() {
     assert!(stderr.contains("the rig is not written"), "{stderr}");
     assert!(!dir.join("bad.glb").exists());
 }
+
+#[test]
+fn retarget_carries_the_expressions_onto_another_identity() {
+    let (Some(neutral), Some(smile), Some(jaw), Some(identity)) = (
+        shared_file("faces/ict/ict_neutral.obj"),
+        shared_file("faces/ict/ict_smile_l.obj"),
+        shared_file("faces/ict/ict_jawopen.obj"),
+        shared_file("faces/ict/ict_id000.obj"),
+    ) else {
+        eprintln!("note: ../shared/data/faces/ict is absent; skipping the retarget test");
+        return;
+    };
+    let dir = temp_dir("retarget");
+    // X: the ICT neutral and two expressions (in its topology, as a rig's keys are).
+    // Y: identity 000, moved. ICT is a linear model, so Y's true expression is
+    // id000 + (expression − neutral), vertex by vertex, moved as Y is.
+    let read = |p: &Path| surfmap::read_mesh(p).unwrap().mesh;
+    let (n, id) = (read(&neutral), read(&identity));
+    let pose = |m: &surfmap::TriMesh| moved(m, -0.2, [1.0, 2.0, -0.5]);
+    surfmap::write_obj(&dir.join("new.obj"), &pose(&id), None).unwrap();
+    let width = width_x(&n);
+    let out = run(
+        &dir,
+        &[
+            "retarget",
+            neutral.to_str().unwrap(),
+            smile.to_str().unwrap(),
+            jaw.to_str().unwrap(),
+            "--onto",
+            "new.obj",
+            "--names",
+            "smile,jaw",
+            "-o",
+            "new_rig.glb",
+            "--report",
+            "r.json",
+        ],
+    );
+    assert!(
+        out.contains("match:") && out.contains("retarget: 2 keys"),
+        "{out}"
+    );
+    let (doc, _) = read_glb(&dir.join("new_rig.glb"));
+    assert_eq!(target_names(&doc), ["smile", "jaw"]);
+    for (name, key) in [("smile", &smile), ("jaw", &jaw)] {
+        let k = read(key);
+        let truth = surfmap::TriMesh::new(
+            id.positions
+                .iter()
+                .zip(&k.positions)
+                .zip(&n.positions)
+                .map(|((i, k), n)| std::array::from_fn(|c| i[c] + k[c] - n[c]))
+                .collect(),
+            id.triangles.clone(),
+        );
+        let truth = pose(&truth);
+        let got = read(&dir.join(format!("new_rig_keys/{name}.obj")));
+        let mut e: Vec<f64> = distances(&got.positions, &truth.positions)
+            .into_iter()
+            .map(|d| 100.0 * d / width)
+            .collect();
+        // Where the expression moves the face by more than 1 % of its width: how much of
+        // that move the transfer misses.
+        let moving: Vec<usize> = (0..n.num_vertices())
+            .filter(|&i| distances(&[k.positions[i]], &[n.positions[i]])[0] > 0.01 * width)
+            .collect();
+        let missed = moving.iter().map(|&i| e[i]).sum::<f64>() / moving.len() as f64;
+        let moved_by = moving
+            .iter()
+            .map(|&i| 100.0 * distances(&[k.positions[i]], &[n.positions[i]])[0] / width)
+            .sum::<f64>()
+            / moving.len() as f64;
+        e.sort_by(f64::total_cmp);
+        let mean = e.iter().sum::<f64>() / e.len() as f64;
+        let p95 = e[e.len() * 95 / 100];
+        eprintln!(
+            "retargeted {name} against the truth: mean {mean:.3} %, p95 {p95:.3} % of the face width; where it moves ({} vertices, by {moved_by:.2} % on average) {missed:.3} %",
+            moving.len()
+        );
+        assert!(
+            mean < 1.0 && p95 < 3.0,
+            "{name}: mean {mean} %, p95 {p95} %"
+        );
+        assert!(
+            missed < 0.5 * moved_by,
+            "{name}: missed {missed} of {moved_by}"
+        );
+    }
+    // A key that is not in the neutral's topology is refused with the remedy.
+    surfmap::write_obj(
+        &dir.join("other.obj"),
+        &surfmap::mesh::generate::bumpy_disc(6, 0.3),
+        None,
+    )
+    .unwrap();
+    let bad = surfmap()
+        .current_dir(&dir)
+        .arg("retarget")
+        .arg(&neutral)
+        .arg("other.obj")
+        .args(["--onto", "new.obj", "-o", "x.glb"])
+        .output()
+        .unwrap();
+    assert_eq!(bad.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&bad.stderr);
+    assert!(
+        stderr.contains("other.obj") && stderr.contains("neutral's topology"),
+        "{stderr}"
+    );
+}
