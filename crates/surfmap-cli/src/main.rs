@@ -51,6 +51,8 @@ enum Command {
     Morph(cmd::morph::Args),
     /// Blend-shape rig: key poses on the neutral's connectivity, one glTF with a target per key.
     Rig(cmd::rig::Args),
+    /// A rig's expressions carried onto a new neutral through the match of the two neutrals.
+    Retarget(cmd::retarget::Args),
     /// Register one template onto many scans: each scan in the template's topology, a summary table.
     Register(cmd::register::Args),
     /// One self-contained interactive HTML page of a flattening, a match, a morph or rig, or a batch.
@@ -72,6 +74,7 @@ fn main() {
         Command::Transfer(a) => cmd::transfer::run(a),
         Command::Morph(a) => cmd::morph::run(a),
         Command::Rig(a) => cmd::rig::run(a),
+        Command::Retarget(a) => cmd::retarget::run(a),
         Command::Register(a) => cmd::register::run(a),
         Command::View(a) => cmd::view::run(a),
     };

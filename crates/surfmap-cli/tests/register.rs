@@ -4,25 +4,8 @@
 
 mod common;
 
-use common::{shared_file, surfmap, temp_dir};
+use common::{distances, moved, shared_file, surfmap, temp_dir, width_x};
 use std::path::Path;
-
-/// `mesh` moved by a rotation of `angle` about z and a translation (cm).
-fn moved(mesh: &surfmap::TriMesh, angle: f64, t: [f64; 3]) -> surfmap::TriMesh {
-    let (s, c) = angle.sin_cos();
-    let positions = mesh
-        .positions
-        .iter()
-        .map(|p| {
-            [
-                c * p[0] - s * p[1] + t[0],
-                s * p[0] + c * p[1] + t[1],
-                p[2] + t[2],
-            ]
-        })
-        .collect();
-    surfmap::TriMesh::new(positions, mesh.triangles.clone())
-}
 
 fn summary(dir: &Path) -> Vec<serde_json::Value> {
     let text = std::fs::read_to_string(dir.join("summary.json")).unwrap();
@@ -85,21 +68,16 @@ fn ict_faces_are_registered_and_broken_scans_listed() {
         assert!(bad["error"].as_str().unwrap().len() > 10, "{bad}");
     }
     let template_mesh = surfmap::read_mesh(&template).unwrap().mesh;
-    let width = {
-        let xs = template_mesh.positions.iter().map(|p| p[0]);
-        xs.clone().fold(f64::MIN, f64::max) - xs.fold(f64::MAX, f64::min)
-    };
+    let width = width_x(&template_mesh);
     for (row, (name, truth)) in [&rows[1], &rows[3]].into_iter().zip(&truths) {
         assert_eq!(row["status"], "ok", "{row}");
         let registered = surfmap::read_mesh(Path::new(row["output"].as_str().unwrap()))
             .unwrap()
             .mesh;
         assert_eq!(registered.triangles, template_mesh.triangles);
-        let mut e: Vec<f64> = registered
-            .positions
-            .iter()
-            .zip(&truth.positions)
-            .map(|(p, q)| (0..3).map(|c| (p[c] - q[c]).powi(2)).sum::<f64>().sqrt() / width)
+        let mut e: Vec<f64> = distances(&registered.positions, &truth.positions)
+            .into_iter()
+            .map(|d| d / width)
             .collect();
         e.sort_by(f64::total_cmp);
         let mean = e.iter().sum::<f64>() / e.len() as f64;
@@ -169,4 +147,116 @@ fn bad_arguments_are_refused_with_their_remedy() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("template"), "{stderr}");
     assert!(!dir.join("o/summary.csv").exists());
+}
+
+#[test]
+fn a_sequence_is_registered_in_order_with_its_jitter() {
+    let (Some(template), Some(smile)) = (
+        shared_file("faces/ict/ict_neutral.obj"),
+        shared_file("faces/ict/ict_smile_l.obj"),
+    ) else {
+        eprintln!("note: ../shared/data/faces/ict is absent; skipping the sequence test");
+        return;
+    };
+    let dir = temp_dir("register-sequence");
+    let frames = dir.join("frames");
+    std::fs::create_dir_all(&frames).unwrap();
+    // Three frames blending the neutral into the smile (vertex by vertex: the ICT crops
+    // are registered), the head turning and drifting; the truth of template vertex i on
+    // frame k is vertex i of the blend, moved.
+    let neutral = surfmap::read_mesh(&template).unwrap().mesh;
+    let smile = surfmap::read_mesh(&smile).unwrap().mesh;
+    let mut truths = Vec::new();
+    for k in 0..3 {
+        let s = 0.5 * k as f64;
+        let blend = surfmap::TriMesh::new(
+            neutral
+                .positions
+                .iter()
+                .zip(&smile.positions)
+                .map(|(p, q)| std::array::from_fn(|c| (1.0 - s) * p[c] + s * q[c]))
+                .collect(),
+            neutral.triangles.clone(),
+        );
+        let frame = moved(
+            &blend,
+            0.03 * k as f64,
+            [0.3 * k as f64, -0.1 * k as f64, 0.0],
+        );
+        surfmap::write_obj(&frames.join(format!("frame{k}.obj")), &frame, None).unwrap();
+        truths.push(frame);
+    }
+    let out = dir.join("out");
+    let run = surfmap()
+        .arg("register")
+        .arg(&template)
+        .arg(&frames)
+        .arg("-o")
+        .arg(&out)
+        .args(["--sequence", "--warm-start", "--no-model", "--jobs", "2"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    let rows = summary(&out);
+    let width = width_x(&neutral);
+    let mut mean_errors = Vec::new();
+    for (k, row) in rows.iter().enumerate() {
+        assert_eq!(row["name"], format!("frame{k}"));
+        assert_eq!(row["status"], "ok", "{row}");
+        // Each frame from the previous one (when that one's verdict is ok).
+        let from = row["started_from"].as_str().unwrap();
+        if k == 0 || rows[k - 1]["verdict"] != "ok" {
+            assert_eq!(from, "template");
+        } else {
+            assert_eq!(from, format!("frame{}", k - 1));
+        }
+        let registered = surfmap::read_mesh(Path::new(row["output"].as_str().unwrap()))
+            .unwrap()
+            .mesh;
+        let e = distances(&registered.positions, &truths[k].positions);
+        let mean = e.iter().sum::<f64>() / e.len() as f64;
+        eprintln!(
+            "frame {k}: mean error {:.3} % of the face width; {row}",
+            100.0 * mean / width
+        );
+        assert!(mean < 0.01 * width, "frame {k}: mean {mean}");
+        mean_errors.push(mean);
+    }
+    // Motion since the previous frame on frames 1 and 2; jitter on the middle frame only.
+    assert!(rows[0]["motion_mean"].is_null() && rows[0]["jitter_mean"].is_null());
+    assert!(rows[2]["jitter_mean"].is_null());
+    // The true jitter is 0 (a linear blend moved rigidly, up to the rigid fits); the
+    // registered one is bounded by the errors: |y_1 − ½(y_0 + y_2)| ≤ e_1 + ½(e_0 + e_2)
+    // vertex by vertex (with the rigid fits' small share).
+    let jitter = rows[1]["jitter_mean"].as_f64().unwrap();
+    let bound = mean_errors[1] + 0.5 * (mean_errors[0] + mean_errors[2]);
+    assert!(
+        jitter > 0.0 && jitter < 1.2 * bound,
+        "jitter {jitter}, bound {bound}"
+    );
+    assert!(rows[1]["jitter_p95"].as_f64().unwrap() >= jitter);
+    // The motion is the smile's half step (non-rigid), within the two frames' errors.
+    for k in 1..3 {
+        let truth_step = neutral
+            .positions
+            .iter()
+            .zip(&smile.positions)
+            .map(|(p, q)| 0.5 * (0..3).map(|c| (p[c] - q[c]).powi(2)).sum::<f64>().sqrt())
+            .sum::<f64>()
+            / neutral.positions.len() as f64;
+        let motion = rows[k]["motion_mean"].as_f64().unwrap();
+        let slack = mean_errors[k] + mean_errors[k - 1];
+        assert!(
+            (motion - truth_step).abs() < 1.2 * slack + 0.2 * truth_step,
+            "frame {k}: motion {motion}, true step {truth_step}, errors {slack}"
+        );
+    }
+    let csv = std::fs::read_to_string(out.join("summary.csv")).unwrap();
+    assert!(
+        csv.lines()
+            .next()
+            .unwrap()
+            .ends_with("started_from,motion_mean,jitter_mean,jitter_p95")
+    );
 }

@@ -400,6 +400,14 @@ pub fn flatten_file(
     row().unwrap_or_else(|e| BatchRow::failed(input, e, clock.elapsed().as_secs_f64()))
 }
 
+/// A thread pool of `threads` threads (0: one per core) for a batch.
+pub fn pool(threads: usize) -> Result<rayon::ThreadPool, PoolError> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|source| PoolError { threads, source })
+}
+
 /// Why a batch could not start.
 #[derive(Debug, thiserror::Error)]
 #[error("cannot start {threads} worker threads: {source}")]
@@ -433,11 +441,7 @@ pub fn run<R: FailedRow + Send>(
     job: impl Fn(usize, &Path) -> R + Sync,
     on_done: impl Fn(&R) + Sync,
 ) -> Result<Vec<R>, PoolError> {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .map_err(|source| PoolError { threads, source })?;
-    Ok(pool.install(|| {
+    Ok(pool(threads)?.install(|| {
         inputs
             .par_iter()
             .enumerate()

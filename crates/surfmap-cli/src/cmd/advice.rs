@@ -118,6 +118,22 @@ pub fn worded_flatten_error(
     })
 }
 
+/// A match error worded as `surfmap match` words it (a flattening's remedies as flags),
+/// surfaces A and B called `a` and `b` ("the template", "the scan").
+pub fn worded_match_error(e: &surfmap::matching::MatchError, a: &str, b: &str) -> String {
+    if let surfmap::matching::MatchError::Flatten { surface, source } = e
+        && let Some(message) = worded_flatten_error(source, match_defect_message)
+    {
+        let which = match surface {
+            Some('A') => a,
+            Some(_) => b,
+            None => "the surface",
+        };
+        return format!("cannot flatten {which}: {message}");
+    }
+    crate::source_chain_message(e)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

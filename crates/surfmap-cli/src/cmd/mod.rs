@@ -11,6 +11,7 @@ pub mod matchio;
 pub mod measure;
 pub mod morph;
 pub mod register;
+pub mod retarget;
 pub mod rig;
 pub mod tradeoff;
 pub mod transfer;

@@ -4,17 +4,21 @@
 //! `--keep-matches` its match folder `DIR/matches/NAME/`; `DIR/summary.csv` and
 //! `summary.json` list every scan with its verdict or its error; then the shape model of
 //! the scans with verdict `ok` goes into `DIR/model/` (`--model-only DIR` rebuilds it)
-//! (library: `surfmap::apps::register`).
+//! With `--sequence` the scans are frames of one moving face, registered in the order
+//! given (with `--warm-start` each from the previous frame's result), with each frame's
+//! motion and jitter in the summary (library: `surfmap::apps::register`, `register::sequence`).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, bail};
 use surfmap::apps::register::Template;
-use surfmap::apps::register::batch::{RegisterJob, register_many, write_summary};
+use surfmap::apps::register::batch::{
+    RegisterJob, register_many, register_sequence, write_summary,
+};
 use surfmap::matching::{MatchError, MatchOptions};
 
-use super::advice::{match_defect_message, worded_flatten_error};
+use super::advice::worded_match_error;
 use super::batch::{progress_bar, report_line};
 use super::{RepairArgs, load_mesh};
 
@@ -59,6 +63,22 @@ pub struct Args {
     /// and `.obj` are there); failed scans are tried again.
     #[arg(long)]
     pub resume: bool,
+    /// The scans are frames of one sequence, in the order given (a folder's files sorted
+    /// by name), registered one after the other; summary.csv gets `started_from` and, per
+    /// frame, the mean non-rigid motion since the previous frame and the mean and 95th
+    /// percentile of the jitter (half the rigidly aligned second difference in time, in
+    /// the scans' units). --jobs is the threads of each match.
+    #[arg(long, conflicts_with_all = ["resume", "model_only"])]
+    pub sequence: bool,
+    /// With --sequence: register each frame from the previous frame's registration (the
+    /// template's triangles at the positions registered there, matched onto the next
+    /// frame) instead of from the template; a frame whose verdict is not `ok` is never a
+    /// start. Consecutive matches then compare nearly equal shapes, but their errors add
+    /// up: on the ICT sequences of docs/bench/sequence.md it drifts (mean error 0.50 %
+    /// against 0.34 % of the face width over 8 frames of a smile) and does not lower the
+    /// jitter.
+    #[arg(long, requires = "sequence")]
+    pub warm_start: bool,
     /// Finest grid of each match, 2^k + 1 nodes per side (as `surfmap match --size`).
     #[arg(long, default_value_t = 257)]
     pub size: usize,
@@ -131,13 +151,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         match_error: match_error_message,
     };
     let bar = progress_bar(inputs.len(), args.quiet, "scans");
-    let rows = register_many(&job, &inputs, &names, args.jobs, args.resume, |row| {
+    let on_done = |row: &surfmap::apps::register::batch::RegisterRow| {
         if let Some(e) = &row.error {
             report_line(&bar, format!("error: {}: {e}", row.input));
         }
         bar.set_message(row.name.clone());
         bar.inc(1);
-    })?;
+    };
+    let rows = if args.sequence {
+        register_sequence(&job, &inputs, &names, args.jobs, args.warm_start, on_done)?
+    } else {
+        register_many(&job, &inputs, &names, args.jobs, args.resume, on_done)?
+    };
     bar.finish_and_clear();
     let [csv, _] = write_summary(output, &rows)?;
     let seconds = clock.elapsed().as_secs_f64();
@@ -155,6 +180,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             output.display(),
             csv.display()
         );
+    }
+    if args.sequence && !args.quiet {
+        let jitter: Vec<f64> = rows.iter().filter_map(|r| r.jitter_mean).collect();
+        if !jitter.is_empty() {
+            outln!(
+                "sequence: mean jitter {:.4e} (mean over {} frames; per frame in {})",
+                jitter.iter().sum::<f64>() / jitter.len() as f64,
+                jitter.len(),
+                csv.display()
+            );
+        }
     }
     if not_ok > 0 {
         eprintln!(
@@ -221,19 +257,9 @@ fn model(dir: &Path, include_doubtful: bool, quiet: bool) -> anyhow::Result<()> 
     Ok(())
 }
 
-/// A match error worded as `surfmap match` words it (a flattening's remedies as flags).
+/// A match error worded as `surfmap match` words it, A named the template, B the scan.
 fn match_error_message(e: &MatchError) -> String {
-    if let MatchError::Flatten { surface, source } = e
-        && let Some(message) = worded_flatten_error(source, match_defect_message)
-    {
-        let which = match surface {
-            Some('A') => "the template",
-            Some(_) => "the scan",
-            None => "the surface",
-        };
-        return format!("cannot flatten {which}: {message}");
-    }
-    crate::source_chain_message(e)
+    worded_match_error(e, "the template", "the scan")
 }
 
 /// The scan files named by `args`: files as given (a missing one fails in its row),

@@ -5,6 +5,15 @@
 //! topology. With `--chain` the matches run neutral → KEY1 → KEY2 → … and key `i` uses
 //! the composed map; `--direct` matches neutral → KEYi measure how far the composition
 //! is from a direct match.
+//!
+//! Without `--match`, rig makes the matches itself (`surfmap::matching::match_meshes`
+//! with the options `surfmap match` has by default): neutral → KEYi, or along the chain.
+//! Each match's confidence verdict is printed; a key whose match is `failed` refuses
+//! the rig (exit code 3, nothing but the matches written): its morph target would be
+//! wrong where the match is, and nothing in a glTF says so. A `doubtful` key is kept
+//! with a warning on stderr; `--strict` refuses it too. `--matches-dir DIR` writes the
+//! matches made as match folders, to look at (`surfmap view`) or to pass back with
+//! `--match` when a verdict is judged too harsh.
 
 use std::path::PathBuf;
 
@@ -14,9 +23,12 @@ use surfmap::apps::correspondence::{MapDistance, compare_maps};
 use surfmap::apps::gltf::{GltfMorphScene, GltfTarget, write_glb};
 use surfmap::apps::rig::{ChainLink, chain_maps, rig_key};
 use surfmap::fsutil::write_atomically;
+use surfmap::matching::{Guidance, MatchError, MatchOptions, Verdict, match_meshes};
 use surfmap::write_obj;
 
+use super::advice::worded_match_error;
 use super::load_mesh;
+use super::matching::NotTrusted;
 use super::matchio::{chart_of, load_match};
 use super::morph::{extension_note, png_bytes, texture_of, write_stills};
 
@@ -28,9 +40,19 @@ pub struct Args {
     #[arg(required = true)]
     pub keys: Vec<PathBuf>,
     /// Match folders, one per key in order: neutral → KEYi, or with --chain
-    /// KEY(i−1) → KEYi (the first from the neutral).
-    #[arg(long = "match", value_name = "DIR", required = true)]
+    /// KEY(i−1) → KEYi (the first from the neutral). Without --match the matches are
+    /// made here, with `surfmap match`'s default options, and their verdicts printed; a
+    /// key whose match is `failed` refuses the rig (exit code 3).
+    #[arg(long = "match", value_name = "DIR")]
     pub matches: Vec<PathBuf>,
+    /// Without --match: write the matches made into DIR/NAME/ (match folders, as
+    /// `surfmap match` writes; pass one back with --match to use it as it is).
+    #[arg(long, value_name = "DIR", conflicts_with = "matches")]
+    pub matches_dir: Option<PathBuf>,
+    /// Without --match: refuse the rig (exit code 3) when a key's match is `doubtful`
+    /// too, not only when it is `failed`.
+    #[arg(long, conflicts_with = "matches")]
+    pub strict: bool,
     /// The matches form a chain; key i uses the composition of the first i matches.
     #[arg(long)]
     pub chain: bool,
@@ -75,12 +97,16 @@ struct KeyReport {
     max_extended_displacement: f64,
     /// With --chain and --direct: the composed map against the direct one on the key.
     composed_vs_direct: Option<MapDistance>,
+    /// Without --match: the verdict of the match made for this key (`ok`, `doubtful`,
+    /// `failed`) and its reasons.
+    verdict: Option<Verdict>,
+    reasons: Vec<String>,
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    if args.matches.len() != args.keys.len() {
+    if !args.matches.is_empty() && args.matches.len() != args.keys.len() {
         bail!(
-            "{} keys but {} --match folders: give one match per key, in the same order",
+            "{} keys but {} --match folders: give one match per key, in the same order (or none: rig then makes them)",
             args.keys.len(),
             args.matches.len()
         );
@@ -126,20 +152,37 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
 
     // Correspondences neutral → key i (composed along the chain when asked).
-    let mut maps = vec![];
-    for (i, dir) in args.matches.iter().enumerate() {
-        let (from, from_name) = if args.chain && i > 0 {
+    let from_of = |i: usize| {
+        if args.chain && i > 0 {
             (&keys[i - 1].mesh, &args.keys[i - 1])
         } else {
             (neutral, &args.neutral)
-        };
-        maps.push(load_match(
-            dir,
-            from,
-            from_name,
-            &keys[i].mesh,
-            &args.keys[i],
-        )?);
+        }
+    };
+    let mut maps = vec![];
+    let mut verdicts = vec![];
+    if args.matches.is_empty() {
+        for (i, name) in names.iter().enumerate() {
+            let (from, from_name) = from_of(i);
+            let made = make_match(&args, from, from_name, &keys[i].mesh, &args.keys[i], name)?;
+            maps.push(made.correspondence);
+            verdicts.push((
+                made.report.confidence.verdict,
+                made.report.confidence.reasons,
+            ));
+        }
+        refuse_untrusted(&args, &names, &verdicts)?;
+    } else {
+        for (i, dir) in args.matches.iter().enumerate() {
+            let (from, from_name) = from_of(i);
+            maps.push(load_match(
+                dir,
+                from,
+                from_name,
+                &keys[i].mesh,
+                &args.keys[i],
+            )?);
+        }
     }
     let maps = if args.chain {
         let charts: Vec<Option<surfmap::apps::Chart>> = keys
@@ -223,6 +266,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             extended: key.target.extended.len(),
             max_extended_displacement: key.target.max_extended_displacement(),
             composed_vs_direct,
+            verdict: verdicts.get(i).map(|v| v.0),
+            reasons: verdicts.get(i).map(|v| v.1.clone()).unwrap_or_default(),
         });
         frames.push((names[i].clone(), mesh.positions.clone()));
         targets.push(GltfTarget {
@@ -270,4 +315,87 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+/// Makes the match `from` → `key` for the key called `name` (default match options),
+/// prints its summary and verdict, writes it into `--matches-dir` when asked, and
+/// returns it.
+fn make_match(
+    args: &Args,
+    from: &surfmap::TriMesh,
+    from_name: &std::path::Path,
+    key: &surfmap::TriMesh,
+    key_name: &std::path::Path,
+    name: &str,
+) -> anyhow::Result<surfmap::matching::Match> {
+    let options = MatchOptions::default();
+    let mut made = match_meshes(from, key, &Guidance::default(), &options)
+        .map_err(|e: MatchError| {
+            anyhow::anyhow!(worded_match_error(
+                &e,
+                &from_name.display().to_string(),
+                &key_name.display().to_string()
+            ))
+        })
+        .with_context(|| {
+            format!(
+                "key {name}: cannot match {} onto {} (make the match with landmarks, surfmap match --landmarks, and pass it with --match)",
+                from_name.display(),
+                key_name.display()
+            )
+        })?;
+    made.report.inputs.a.path = Some(from_name.display().to_string());
+    made.report.inputs.b.path = Some(key_name.display().to_string());
+    if let Some(dir) = &args.matches_dir {
+        let folder = dir.join(name);
+        made.write_folder(&folder, false)
+            .with_context(|| format!("cannot write the match into {}", folder.display()))?;
+    }
+    if !args.quiet {
+        outln!("key {name}: {}", made.report.summary());
+    }
+    let confidence = &made.report.confidence;
+    if confidence.verdict != Verdict::Ok {
+        eprintln!(
+            "warning: key {name}: the match {} → {} has {}",
+            from_name.display(),
+            key_name.display(),
+            confidence.line()
+        );
+    }
+    Ok(made)
+}
+
+/// Refuses the rig (exit code 3) when a key's match is `failed`, or not `ok` with
+/// `--strict`, naming every such key and what to do.
+fn refuse_untrusted(
+    args: &Args,
+    names: &[String],
+    verdicts: &[(Verdict, Vec<String>)],
+) -> anyhow::Result<()> {
+    let refused: Vec<String> = names
+        .iter()
+        .zip(verdicts)
+        .filter(|(_, (v, _))| *v == Verdict::Failed || (args.strict && *v != Verdict::Ok))
+        .map(|(name, (v, _))| {
+            let v = serde_json::to_value(v)
+                .ok()
+                .and_then(|v| v.as_str().map(str::to_owned))
+                .unwrap_or_default();
+            format!("key {name} ({v})")
+        })
+        .collect();
+    if refused.is_empty() {
+        return Ok(());
+    }
+    let saved = match &args.matches_dir {
+        Some(dir) => format!("the matches are in {}", dir.display()),
+        None => "--matches-dir DIR writes them".to_owned(),
+    };
+    Err(NotTrusted(format!(
+        "the rig is not written: {} not trusted (the reasons above): {}. Look at the matches ({saved}; surfmap view DIR/NAME), make a match with landmarks (surfmap match NEUTRAL KEY --landmarks L.json -o DIR) and pass the matches with --match, one per key",
+        if refused.len() == 1 { "1 key's match is".to_owned() } else { format!("{} keys' matches are", refused.len()) },
+        refused.join(", ")
+    ))
+    .into())
 }

@@ -212,3 +212,34 @@ pub fn damaged_inputs(dir: &std::path::Path) -> Vec<Damaged> {
         },
     ]
 }
+
+/// `mesh` turned by `angle` about z and moved by `t` (a face moved in space).
+pub fn moved(mesh: &surfmap::TriMesh, angle: f64, t: [f64; 3]) -> surfmap::TriMesh {
+    let (s, c) = angle.sin_cos();
+    let positions = mesh
+        .positions
+        .iter()
+        .map(|p| {
+            [
+                c * p[0] - s * p[1] + t[0],
+                s * p[0] + c * p[1] + t[1],
+                p[2] + t[2],
+            ]
+        })
+        .collect();
+    surfmap::TriMesh::new(positions, mesh.triangles.clone())
+}
+
+/// The extent of `mesh` along x (a face's width: the unit of the ICT errors).
+pub fn width_x(mesh: &surfmap::TriMesh) -> f64 {
+    let xs = mesh.positions.iter().map(|p| p[0]);
+    xs.clone().fold(f64::MIN, f64::max) - xs.fold(f64::MAX, f64::min)
+}
+
+/// The distance of every point of `a` from the point of `b` with its index.
+pub fn distances(a: &[[f64; 3]], b: &[[f64; 3]]) -> Vec<f64> {
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| (0..3).map(|c| (p[c] - q[c]).powi(2)).sum::<f64>().sqrt())
+        .collect()
+}

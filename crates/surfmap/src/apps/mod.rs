@@ -23,6 +23,7 @@
 //! | [`pad`] | colour padding beyond a chart's boundary (no mipmap seams) |
 //! | [`morph`] | morph targets `φ_M(x) − x` with a harmonic extension over unmatched vertices |
 //! | [`rig`] | blend-shape keys re-expressed on the neutral's connectivity |
+//! | [`retarget`] | a rig's keys carried onto a new neutral through a match (displacement transfer) |
 //! | [`register`] | a template registered onto many scans: placed in its topology, a table per batch |
 //! | [`stills`] | a sheet of morph stills from one fixed view (figs. 5.3, 5.5) |
 //! | [`gltf`] | glTF 2.0 binary (`.glb`) with morph targets and a weight animation |
@@ -37,6 +38,7 @@ pub mod match_folder;
 pub mod morph;
 pub mod pad;
 pub mod register;
+pub mod retarget;
 pub mod rig;
 pub mod stills;
 pub mod texture;

@@ -14,6 +14,10 @@
 //! DIR/summary.csv, .json     every scan's row, in input order
 //! ```
 //!
+//! A sequence ([`register_sequence`]) registers the frames one after the other (with the
+//! warm start each from the previous frame's result, [`super::sequence`]) and fills the
+//! rows' `started_from` and motion and jitter columns.
+//!
 //! A scan that cannot be read or matched is a failed row with the reason; it never stops
 //! the others. The thread pool, panics included, is [`crate::batch::run`]'s.
 
@@ -21,7 +25,8 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use super::{RegisterError, Template, register_scan};
+use super::sequence::{frame_motions, register_frame};
+use super::{RegisterError, Template};
 use crate::batch::{FailedRow, PoolError, csv_line, opt};
 use crate::matching::{Guidance, Landmarks, MatchError, MatchOptions};
 use crate::mesh::TriMesh;
@@ -52,11 +57,25 @@ pub struct RegisterRow {
     pub seconds: f64,
     /// Why the scan failed (the message, remedy included).
     pub error: Option<String>,
+    /// In a sequence: the frame whose registration this one started from (its name), or
+    /// `template`.
+    #[serde(default)]
+    pub started_from: Option<String>,
+    /// In a sequence: the mean non-rigid displacement of the registered vertices since
+    /// the previous frame, and the mean and 95th percentile of their jitter (half the
+    /// rigidly aligned second difference in time), in the scans' units
+    /// ([`super::sequence::frame_motions`]).
+    #[serde(default)]
+    pub motion_mean: Option<f64>,
+    #[serde(default)]
+    pub jitter_mean: Option<f64>,
+    #[serde(default)]
+    pub jitter_p95: Option<f64>,
 }
 
 impl RegisterRow {
     /// The column names of [`RegisterRow::csv_record`], in order (the field names).
-    pub const CSV_HEADER: [&'static str; 11] = [
+    pub const CSV_HEADER: [&'static str; 15] = [
         "name",
         "input",
         "status",
@@ -68,6 +87,10 @@ impl RegisterRow {
         "energy",
         "seconds",
         "error",
+        "started_from",
+        "motion_mean",
+        "jitter_mean",
+        "jitter_p95",
     ];
 
     /// The row's values as CSV fields (empty for `None`, quoted when needed).
@@ -84,6 +107,10 @@ impl RegisterRow {
             opt(&self.energy),
             self.seconds.to_string(),
             opt(&self.error),
+            opt(&self.started_from),
+            opt(&self.motion_mean),
+            opt(&self.jitter_mean),
+            opt(&self.jitter_p95),
         ];
         csv_line(&fields)
     }
@@ -110,6 +137,10 @@ impl FailedRow for RegisterRow {
             energy: None,
             seconds: time_s,
             error: Some(error),
+            started_from: None,
+            motion_mean: None,
+            jitter_mean: None,
+            jitter_p95: None,
         }
     }
 }
@@ -165,11 +196,34 @@ impl RegisterJob<'_> {
         self.dir.join("registered")
     }
 
+    /// Creates `DIR/registered` (if missing) and returns it.
+    fn create_registered_dir(&self) -> Result<PathBuf, RegisterBatchError> {
+        let folder = self.registered_dir();
+        std::fs::create_dir_all(&folder).map_err(|source| RegisterBatchError::Io {
+            path: folder.clone(),
+            source,
+        })?;
+        Ok(folder)
+    }
+
     /// Registers one scan under `name` and writes its files: its row, or the failed row
     /// with the reason (a failure never stops the batch).
     pub fn register_file(&self, input: &Path, name: &str) -> RegisterRow {
+        self.register_frame_file(input, name, None).0
+    }
+
+    /// [`RegisterJob::register_file`] from an earlier registration `start`: the name of
+    /// its frame and the template's vertices registered on it ([`register_frame`];
+    /// `None`: from the template). Also returns the registered positions.
+    pub fn register_frame_file(
+        &self,
+        input: &Path,
+        name: &str,
+        start: Option<(&str, &[[f64; 3]])>,
+    ) -> (RegisterRow, Option<Vec<[f64; 3]>>) {
         let clock = std::time::Instant::now();
-        let row = || -> Result<RegisterRow, String> {
+        let mut positions = None;
+        let mut row = || -> Result<RegisterRow, String> {
             let scan = (self.read)(input)?;
             let landmarks = match self.landmarks_dir {
                 Some(dir) => Some(read_landmarks(&landmarks_file(dir, input))?),
@@ -179,16 +233,18 @@ impl RegisterJob<'_> {
                 landmarks,
                 ..Guidance::default()
             };
-            let registered = match register_scan(self.template, &scan, &guidance, self.options) {
-                Ok(r) => r,
-                Err(RegisterError::Match(e)) => {
-                    return Err(format!(
-                        "cannot match the template onto this scan: {}",
-                        (self.match_error)(&e)
-                    ));
-                }
-                Err(e) => return Err(e.to_string()),
-            };
+            let previous = start.map(|s| s.1);
+            let registered =
+                match register_frame(self.template, previous, &scan, &guidance, self.options) {
+                    Ok(r) => r,
+                    Err(RegisterError::Match(e)) => {
+                        return Err(format!(
+                            "cannot match the template onto this scan: {}",
+                            (self.match_error)(&e)
+                        ));
+                    }
+                    Err(e) => return Err(e.to_string()),
+                };
             let folder = self.registered_dir();
             let obj = folder.join(format!("{name}.obj"));
             crate::write_obj(&obj, &registered.mesh(self.template), None)
@@ -216,17 +272,23 @@ impl RegisterJob<'_> {
                 energy: Some(report.energy),
                 seconds: clock.elapsed().as_secs_f64(),
                 error: None,
+                started_from: None,
+                motion_mean: None,
+                jitter_mean: None,
+                jitter_p95: None,
             };
             let json = folder.join(format!("{name}.json"));
             crate::fsutil::write_json(&json, &row)
                 .map_err(|e| format!("cannot write {}: {e}", json.display()))?;
+            positions = Some(registered.placement.positions);
             Ok(row)
         };
-        row().unwrap_or_else(|e| {
+        let row = row().unwrap_or_else(|e| {
             let mut failed = RegisterRow::failed(input, e, clock.elapsed().as_secs_f64());
             failed.name = name.to_owned();
             failed
-        })
+        });
+        (row, positions)
     }
 
     /// The row of a scan registered by an earlier run (for `--resume`): its
@@ -251,11 +313,7 @@ pub fn register_many(
     resume: bool,
     on_done: impl Fn(&RegisterRow) + Sync,
 ) -> Result<Vec<RegisterRow>, RegisterBatchError> {
-    let folder = job.registered_dir();
-    std::fs::create_dir_all(&folder).map_err(|source| RegisterBatchError::Io {
-        path: folder.clone(),
-        source,
-    })?;
+    job.create_registered_dir()?;
     let mut rows: Vec<Option<RegisterRow>> = inputs
         .iter()
         .zip(names)
@@ -278,6 +336,70 @@ pub fn register_many(
         rows[todo[k]] = Some(row);
     }
     Ok(rows.into_iter().flatten().collect())
+}
+
+/// Registers the frames `inputs` (named `names`) in order and fills every row's
+/// `started_from`, motion and jitter columns ([`super::sequence`]). With `warm_start`,
+/// each frame is registered from the last frame registered with verdict `ok` before it
+/// (the template for the first, and while none is); without, every frame from the
+/// template. `on_done` sees each row as it finishes (without the motion columns, which
+/// need the next frame). Creates `DIR/registered`.
+/// The frames run one at a time, each match's parallel loops on a pool of `threads`
+/// threads (0: one per core).
+pub fn register_sequence(
+    job: &RegisterJob<'_>,
+    inputs: &[PathBuf],
+    names: &[String],
+    threads: usize,
+    warm_start: bool,
+    on_done: impl Fn(&RegisterRow) + Sync,
+) -> Result<Vec<RegisterRow>, RegisterBatchError> {
+    crate::batch::pool(threads)?
+        .install(|| sequence_on_pool(job, inputs, names, warm_start, &on_done))
+}
+
+fn sequence_on_pool(
+    job: &RegisterJob<'_>,
+    inputs: &[PathBuf],
+    names: &[String],
+    warm_start: bool,
+    on_done: &(impl Fn(&RegisterRow) + Sync),
+) -> Result<Vec<RegisterRow>, RegisterBatchError> {
+    let folder = job.create_registered_dir()?;
+    let mut rows = Vec::with_capacity(inputs.len());
+    let mut frames: Vec<Option<Vec<[f64; 3]>>> = Vec::with_capacity(inputs.len());
+    let mut start: Option<(String, Vec<[f64; 3]>)> = None;
+    for (input, name) in inputs.iter().zip(names) {
+        let from = start.as_ref().map(|(n, p)| (n.as_str(), &p[..]));
+        let (mut row, positions) = job.register_frame_file(input, name, from);
+        if row.ok() {
+            row.started_from = Some(from.map_or_else(|| "template".to_owned(), |f| f.0.to_owned()));
+        }
+        if let Some(p) = &positions
+            && warm_start
+            && row.verdict.as_deref() == Some("ok")
+        {
+            start = Some((name.clone(), p.clone()));
+        }
+        on_done(&row);
+        rows.push(row);
+        frames.push(positions);
+    }
+    let views: Vec<Option<&[[f64; 3]]>> = frames.iter().map(|f| f.as_deref()).collect();
+    for (row, m) in rows.iter_mut().zip(frame_motions(&views)) {
+        row.motion_mean = m.motion_mean;
+        row.jitter_mean = m.jitter_mean;
+        row.jitter_p95 = m.jitter_p95;
+        if row.ok() {
+            // The frame's own row file gets the columns too (resumable runs read it).
+            let json = folder.join(format!("{}.json", row.name));
+            crate::fsutil::write_json(&json, &*row).map_err(|source| RegisterBatchError::Io {
+                path: json.clone(),
+                source,
+            })?;
+        }
+    }
+    Ok(rows)
 }
 
 /// Writes `DIR/summary.csv` and `DIR/summary.json` (the rows in order); returns their

@@ -34,11 +34,14 @@
 //! Sharing them would need `matching::prepare` to accept A's surface prepared for a unit
 //! and without a crop (measured in docs/bench/register.md: the cost each scan repeats).
 //!
-//! Many scans: [`batch`] (one row per scan, files written atomically, resumable).
+//! Many scans: [`batch`] (one row per scan, files written atomically, resumable). Frames
+//! of one moving face: [`sequence`] (each frame from the previous one's result, and the
+//! jitter of the registered vertices).
 
 pub mod batch;
 pub mod model;
 pub mod model_folder;
+pub mod sequence;
 
 use std::time::Instant;
 
