@@ -4,13 +4,19 @@
 //!
 //! `cargo run --release -p surfmap-bench --example hard_discs [-- --repeat 3] [-- --log] [-- MESH[:cut]...]`
 //!
-//! `MESH:cut` opens the holes with seams (`--cut-holes`) instead of filling them. Per
+//! `MESH:cut` opens the holes with seams (`--cut-holes`) instead of filling them.
+//! `octopus` is the generated disc with long thin arms ([`surfmap::mesh::generate::octopus_disc`],
+//! default shape: tubes), `octopus:A,W,L,DOME` one of another shape (arms, tube
+//! circumference and length in quads, dome height), `octopus:A,W,L,DOME,TWIST` one with
+//! flat arms (base width, twist); the default list ends with it. Per
 //! mesh: what was done (plan), whether the boundary barrier was needed, the Newton
 //! iterations of the returned solve (the barrier solve when there was one), the
 //! iterations of all solves together, the energy, the guarantee, and the median wall
 //! and CPU time of the whole `flatten` call (CPU: all threads of the process, from
 //! `/proc/self/task/*/schedstat`, so a shared machine's load shows in the wall column
-//! only). `--log` prints every iteration of the last run.
+//! only). `--log` prints every iteration of the last run; `--bijective-off` solves
+//! without the boundary barrier (`Bijective::Off`); `--save DIR` writes each mesh there as
+//! `NAME.obj` (for the generated ones: to give them to peers).
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -29,6 +35,29 @@ fn cpu_seconds() -> f64 {
         * 1e-9
 }
 
+/// The generated disc named by `path` (`octopus` or `octopus:A,W,L,DOME[,TWIST]`).
+fn octopus(path: &std::path::Path) -> Option<surfmap::TriMesh> {
+    use surfmap::mesh::generate::{Octopus, octopus_disc};
+    let name = path.to_str()?;
+    let rest = name.strip_prefix("octopus")?;
+    let mut shape = Octopus::default();
+    if let Some(list) = rest.strip_prefix(':') {
+        let v: Vec<f64> = list
+            .split(',')
+            .map(|x| x.parse().expect("number"))
+            .collect();
+        assert!(matches!(v.len(), 4 | 5), "octopus:A,W,L,DOME[,TWIST]");
+        (shape.arms, shape.width, shape.length) = (v[0] as usize, v[1] as usize, v[2] as usize);
+        shape.dome = v[3];
+        if let Some(&twist) = v.get(4) {
+            (shape.twist, shape.tube) = (twist, false);
+        }
+    } else if !rest.is_empty() {
+        return None;
+    }
+    Some(octopus_disc(&shape))
+}
+
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
@@ -42,7 +71,13 @@ fn main() {
         args.drain(i..i + 2);
     }
     let print_log = args.iter().any(|a| a == "--log");
-    args.retain(|a| a != "--log");
+    let bijective_off = args.iter().any(|a| a == "--bijective-off");
+    args.retain(|a| a != "--log" && a != "--bijective-off");
+    let mut save = None;
+    if let Some(i) = args.iter().position(|a| a == "--save") {
+        save = Some(PathBuf::from(&args[i + 1]));
+        args.drain(i..i + 2);
+    }
     let meshes: Vec<(PathBuf, bool)> = if args.is_empty() {
         let Some(data) = surfmap::testing::shared_data() else {
             eprintln!("no ../shared/data: give meshes on the command line");
@@ -62,6 +97,7 @@ fn main() {
         ]
         .into_iter()
         .map(|(m, cut)| (data.join(m), cut))
+        .chain([(PathBuf::from("octopus"), false)])
         .collect()
     } else {
         args.iter()
@@ -76,14 +112,25 @@ fn main() {
         "mesh", "F", "plan", "barrier", "iters", "all", "energy", "guarantee", "wall_s", "cpu_s"
     );
     for (path, cut_holes) in &meshes {
-        let mesh = match read_mesh(path) {
-            Ok(m) => m.mesh,
+        let mesh = match octopus(path) {
+            Some(m) => Ok(m),
+            None => read_mesh(path).map(|m| m.mesh),
+        };
+        let mesh = match mesh {
+            Ok(m) => m,
             Err(e) => {
                 eprintln!("{}: {e}", path.display());
                 continue;
             }
         };
-        let options = FlattenOptions::default().with_fill_holes(!cut_holes);
+        if let (Some(dir), Some(name)) = (&save, path.file_name().and_then(|n| n.to_str())) {
+            let file = dir.join(format!("{}.obj", name.replace([':', ','], "_")));
+            surfmap::write_mesh(&file, &mesh).expect("written");
+        }
+        let mut options = FlattenOptions::default().with_fill_holes(!cut_holes);
+        if bijective_off {
+            options = options.with_bijective(surfmap::Bijective::Off);
+        }
         let (mut walls, mut cpus) = (Vec::new(), Vec::new());
         let mut last = None;
         for _ in 0..repeat.max(1) {
@@ -103,7 +150,11 @@ fn main() {
             }
         }
         let Some((r, all)) = last else { continue };
-        let name = path.file_name().unwrap().to_string_lossy();
+        let name = path
+            .file_name()
+            .unwrap()
+            .to_string_lossy()
+            .replace("octopus:", "oct:");
         let name = if *cut_holes {
             format!("{name} (cut)")
         } else {

@@ -339,6 +339,152 @@ pub fn bumpy_disc(n: usize, amplitude: f64) -> TriMesh {
     TriMesh::new(positions, triangles)
 }
 
+/// Shape of an [`octopus_disc`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Octopus {
+    /// Number of arms (≥ 1).
+    pub arms: usize,
+    /// Arm width at its base, in edges of the hub's rim (≥ 3 for a tube).
+    pub width: usize,
+    /// Arm length, in rows of roughly square quads.
+    pub length: usize,
+    /// Rings of the hub (≥ 1).
+    pub rings: usize,
+    /// Height of the hub's dome over its rim (the hub has radius 1).
+    pub dome: f64,
+    /// Amplitude of a flat arm's saddle twist, in arm half-widths (unused for tubes).
+    pub twist: f64,
+    /// Whether each arm is a closed tube (a tentacle: its two long sides glued, its tip
+    /// capped) instead of a flat strip.
+    pub tube: bool,
+}
+
+impl Default for Octopus {
+    /// Eight tentacles, tubes of 8 edges around and 14 rows long (length over diameter
+    /// about 5.5, so a conformal map shrinks their tips by about e^{−11} against their
+    /// base), on a hub of 8 rings with a dome of height 1: 2,896 triangles.
+    fn default() -> Self {
+        Self {
+            arms: 8,
+            width: 8,
+            length: 14,
+            rings: 8,
+            dome: 1.0,
+            twist: 0.0,
+            tube: true,
+        }
+    }
+}
+
+/// A disc with long thin arms (a hard case for flattening, issue 50): a hub, the unit
+/// disc lifted to the dome `z = dome·(1 − r²)²` (ring `k` of `max(6, n·k/rings)` vertices,
+/// `n = 2·arms·width` on the rim), with `arms` arms of `width × length` quads of side
+/// `h = 2π/n` attached to every other run of `width` rim edges, pointing radially
+/// outward.
+///
+/// - A flat arm (`tube: false`) narrows linearly to half its width at the tip and is
+///   lifted by the saddle twist `z = twist·w·t·sin(2π s / (4 w))` (`t ∈ [−1, 1]` across,
+///   `s` along it, `w` its local half width): nearly developable, so its conformal scale
+///   hardly varies.
+/// - A tube (`tube: true`) has its two long sides glued from the first row on (a circle
+///   of `width` vertices and radius `width·h/2π` around the arm's axis) and its tip capped
+///   by one vertex; it joins the rim through one vertex, where the boundary dips in. A
+///   conformal map of a tube shrinks it exponentially along its length, by `e^{−ℓ/ρ}`
+///   over a length `ℓ` (radius `ρ`), which is what makes such discs hard: the thin
+///   protrusions a cut closed mesh has when its cut does not run into them.
+///
+/// Counter-clockwise seen from +z on the hub and the flat arms, consistently oriented
+/// everywhere; the arms' vertices follow the hub's, arm by arm, row by row.
+pub fn octopus_disc(shape: &Octopus) -> TriMesh {
+    let arms = shape.arms.max(1);
+    let width = shape.width.max(if shape.tube { 3 } else { 1 });
+    let rings = shape.rings.max(1);
+    let rim = 2 * arms * width;
+    let (vertices, mut triangles) = ring_disc(rings, |k| (rim * k / rings).max(6));
+    let mut positions: Vec<[f64; 3]> = vertices
+        .iter()
+        .map(|&(k, t)| {
+            let r = k as f64 / rings as f64;
+            let z = shape.dome * (1.0 - r * r).powi(2);
+            [r * (TAU * t).cos(), r * (TAU * t).sin(), z]
+        })
+        .collect();
+    let rim_start = positions.len() - rim;
+    let edge = TAU / rim as f64;
+    let half = (0.5 * edge * width as f64).sin();
+    let root = (0.5 * edge * width as f64).cos();
+    let radius = width as f64 * edge / TAU;
+    for a in 0..arms {
+        let first = 2 * a * width;
+        let angle = TAU * (first as f64 + 0.5 * width as f64) / rim as f64;
+        let (dir, across) = ([angle.cos(), angle.sin()], [-angle.sin(), angle.cos()]);
+        let base: Vec<u32> = (0..=width)
+            .map(|j| (rim_start + (first + j) % rim) as u32)
+            .collect();
+        let mut rows = vec![base];
+        let mut push = |p: [f64; 3]| {
+            positions.push(p);
+            (positions.len() - 1) as u32
+        };
+        for i in 1..=shape.length {
+            let s = i as f64 * edge;
+            let along = root + s;
+            let row: Vec<u32> = if shape.tube {
+                // Vertex j at angle 2πj/width around the axis, from its lowest point.
+                let mut row: Vec<u32> = (0..width)
+                    .map(|j| {
+                        let phi = TAU * j as f64 / width as f64;
+                        let (x, z) = (-radius * phi.sin(), -radius * phi.cos());
+                        push([
+                            along * dir[0] + x * across[0],
+                            along * dir[1] + x * across[1],
+                            radius + z,
+                        ])
+                    })
+                    .collect();
+                row.push(row[0]);
+                row
+            } else {
+                let shrink = 1.0 - 0.5 * i as f64 / shape.length as f64;
+                (0..=width)
+                    .map(|j| {
+                        let t = 2.0 * j as f64 / width as f64 - 1.0;
+                        let offset = t * half * shrink;
+                        let z = shape.twist * half * shrink * t * (TAU * s / (8.0 * half)).sin();
+                        push([
+                            along * dir[0] + offset * across[0],
+                            along * dir[1] + offset * across[1],
+                            z,
+                        ])
+                    })
+                    .collect()
+            };
+            rows.push(row);
+        }
+        if shape.tube {
+            let tip = push([
+                (root + (shape.length as f64) * edge + radius) * dir[0],
+                (root + (shape.length as f64) * edge + radius) * dir[1],
+                radius,
+            ]);
+            rows.push(vec![tip; width + 1]);
+        }
+        // Quad (i, j) → two triangles, oriented as the hub (checked on the flat arm's
+        // base row: the rim runs along `across`, the rows along `dir`).
+        for i in 0..rows.len() - 1 {
+            let (p, q) = (&rows[i], &rows[i + 1]);
+            for j in 0..width {
+                for tri in [[p[j], q[j + 1], p[j + 1]], [p[j], q[j], q[j + 1]]] {
+                    if tri[0] != tri[1] && tri[1] != tri[2] && tri[0] != tri[2] {
+                        triangles.push(tri);
+                    }
+                }
+            }
+        }
+    }
+    TriMesh::new(positions, triangles)
+}
+
 /// The boundary loop of a generated disc, surface on the left (counter-clockwise when
 /// seen from the normal side), starting at its smallest vertex index. For tests that
 /// must not depend on [`super::Topology`]; `None` if the boundary is not one loop.
@@ -409,6 +555,30 @@ mod tests {
                 dot(a, cross(b, c)) / 6.0
             })
             .sum()
+    }
+
+    #[test]
+    fn octopus_discs_are_oriented_discs() {
+        // Flat arms: counter-clockwise from +z, every triangle (the hub's dome included).
+        let flat = Octopus {
+            tube: false,
+            width: 3,
+            length: 45,
+            twist: 1.0,
+            ..Octopus::default()
+        };
+        let mesh = octopus_disc(&flat);
+        check_disc(&mesh, |_| [0.0, 0.0, 1.0]);
+        let hub = ring_disc(8, |k| (48 * k / 8).max(6)).1.len();
+        assert_eq!(mesh.num_triangles(), hub + 2 * 8 * 3 * 45);
+        // Tubes: a disc (χ = 1, one boundary loop), consistently oriented.
+        let mesh = octopus_disc(&Octopus::default());
+        let boundary = crate::mesh::Disc::new(&mesh)
+            .expect("a disc")
+            .boundary()
+            .len();
+        assert_eq!(boundary, 2 * 8 * 8 - 8 * 8 + 8 * 2);
+        assert!((0..mesh.num_triangles()).all(|t| mesh.triangle_area(t) > 1e-6));
     }
 
     #[test]

@@ -279,6 +279,18 @@ impl<'m> NewtonSolver<'m> {
         })
     }
 
+    /// The triangles of the mesh being solved.
+    pub fn triangles(&self) -> &'m [[u32; 3]] {
+        self.triangles
+    }
+
+    /// Exchanges the rest triangles the energy is measured against with `rest` (the
+    /// progressive reference shapes of a crushed start, [`super::flatten`]); the solver
+    /// must hold one per triangle whenever it evaluates or minimizes.
+    pub fn swap_rest(&mut self, rest: &mut Vec<RestTriangle>) {
+        std::mem::swap(&mut self.rest, rest);
+    }
+
     /// Ends [`Self::minimize`] with [`StopReason::BoundaryCrossed`] once `persistence`
     /// iterations in a row (at least one) have mapped `boundary` (a loop of vertex ids)
     /// across itself.
