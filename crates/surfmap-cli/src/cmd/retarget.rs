@@ -19,6 +19,7 @@ use super::advice::worded_match_error;
 use super::load_mesh;
 use super::matching::NotTrusted;
 use super::matchio::load_match;
+use super::rig::check_rig_options;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -63,19 +64,12 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> anyhow::Result<()> {
-    if !args.names.is_empty() && args.names.len() != args.keys.len() {
-        bail!("--names: give one name per key ({} keys)", args.keys.len());
-    }
-    if args
-        .output
-        .extension()
-        .is_none_or(|e| !e.eq_ignore_ascii_case("glb"))
-    {
-        bail!("the rig is written as glTF binary: name the output OUT.glb");
-    }
-    if !(args.seconds_per_key.is_finite() && args.seconds_per_key > 0.0) {
-        bail!("--seconds-per-key must be > 0");
-    }
+    check_rig_options(
+        &args.names,
+        args.keys.len(),
+        &args.output,
+        args.seconds_per_key,
+    )?;
     let neutral = load_mesh(&args.neutral)?.mesh;
     let onto = load_mesh(&args.onto)?.mesh;
     let mut displacements = vec![];

@@ -117,19 +117,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             args.keys.len()
         );
     }
-    if !args.names.is_empty() && args.names.len() != args.keys.len() {
-        bail!("--names: give one name per key ({} keys)", args.keys.len());
-    }
-    if args
-        .output
-        .extension()
-        .is_none_or(|e| !e.eq_ignore_ascii_case("glb"))
-    {
-        bail!("the rig is written as glTF binary: name the output OUT.glb");
-    }
-    if !(args.seconds_per_key.is_finite() && args.seconds_per_key > 0.0) {
-        bail!("--seconds-per-key must be > 0");
-    }
+    check_rig_options(
+        &args.names,
+        args.keys.len(),
+        &args.output,
+        args.seconds_per_key,
+    )?;
     let neutral_file = load_mesh(&args.neutral)?;
     let neutral = &neutral_file.mesh;
     let keys: Vec<_> = args
@@ -398,4 +391,27 @@ fn refuse_untrusted(
         refused.join(", ")
     ))
     .into())
+}
+
+/// The checks `rig` and `retarget` share: one name per key, a `.glb` output, a positive
+/// duration per key.
+pub(crate) fn check_rig_options(
+    names: &[String],
+    keys: usize,
+    output: &std::path::Path,
+    seconds_per_key: f64,
+) -> anyhow::Result<()> {
+    if !names.is_empty() && names.len() != keys {
+        bail!("--names: give one name per key ({keys} keys)");
+    }
+    if output
+        .extension()
+        .is_none_or(|e| !e.eq_ignore_ascii_case("glb"))
+    {
+        bail!("the rig is written as glTF binary: name the output OUT.glb");
+    }
+    if !(seconds_per_key.is_finite() && seconds_per_key > 0.0) {
+        bail!("--seconds-per-key must be > 0");
+    }
+    Ok(())
 }
