@@ -222,12 +222,26 @@ def test_feature_curves_match_as_on_the_command_line(cli, data, tmp_path):
         cli_report = json.loads((out / "match.json").read_text())
         for key in AGREED:
             assert report[key] == cli_report[key], (start, key)
-        # The alignment from the features: they reached the solve.
-        assert report["alignment"]["method"] == cli_report["alignment"]["method"] == "features"
+        confidence = report["confidence"]
+        assert confidence["verdict"] == cli_report["confidence"]["verdict"] == "ok", (start, confidence)
+        if start == "both":
+            # The alignment from the features: they reached the solve, and it held.
+            assert report["alignment"]["method"] == cli_report["alignment"]["method"] == "features"
+            assert "recovery" not in confidence and "recovery" not in cli_report["confidence"]
+        else:
+            # From the features' plane alone the match fails (measured against the
+            # registration: 83 % of A matched, mean error 6.7 % of the face width), the
+            # verdict says so, and recovery solves again from the alignment in space and
+            # keeps it (99 % matched, 1.6 %), on both sides alike.
+            for r in (report, cli_report):
+                recovery = r["confidence"]["recovery"]
+                assert recovery["verdict_before"] == "failed" and recovery["kept"], recovery
+                assert r["alignment"]["method"].startswith("recovery: pose"), r["alignment"]["method"]
+            assert report["matched_fraction_a"] > 0.95
         # Each paired curve's fit is reported (the hole rims paired after them), as on
         # the command line; the nose tip, which did not move with the jaw, ends nearer
-        # B's than the start left it (measured: 0.56 → 0.29 cm from both starts, 0.46 →
-        # 0.25 from the plane; the chin, which moved, does not: 3.6 → 3.4 and 0.40 → 0.80).
+        # B's than the start left it (measured: 0.56 → 0.29 cm from both starts and from
+        # the recovered one; the chin, which moved, does not: 3.6 → 3.4).
         fits = {f["name"]: f for f in report["feature_fit"]}
         assert fits.keys() == {f["name"] for f in cli_report["feature_fit"]}
         assert {f["name"] for f in features["features"]} <= fits.keys()
@@ -405,9 +419,15 @@ def test_features_as_a_list_with_numpy_ids_are_the_same_features(holey):
     ids = [int(np.argmin(np.linalg.norm(VA[:, :2] - p, axis=1))) for p in ([-0.8, -0.8], [0.8, -0.8], [0.0, 0.8])]
     as_dict = {"features": [{"name": f"p{k}", "vertices": [v], "closed": False} for k, v in enumerate(ids)]}
     as_list = [{"name": f"p{k}", "vertices": np.array([v])} for k, v in enumerate(ids)]
-    # Aligned by them (three are fewer than `auto` aligns by), so that they show.
-    C, report = surfmap.match(*arrays, size=65, align="features", features_a=as_dict, features_b=as_dict)
-    C2, report2 = surfmap.match(*arrays, size=65, align="features", features_a=as_list, features_b=as_list)
+    # Aligned by them (three are fewer than `auto` aligns by), so that they show; without
+    # recovery, which would replace that start: on this bent copy the verdict calls the
+    # match from the features failed (pose offset 0.042 from the rigid alignment of the
+    # shapes, which the bend tilts) although it is the closest to the truth (mean error
+    # 0.034 against 0.073 from the start recovery picks) — a known false alarm outside
+    # the faces the verdict was calibrated on (docs/matching.md).
+    kw = dict(size=65, align="features", recover=False)
+    C, report = surfmap.match(*arrays, features_a=as_dict, features_b=as_dict, **kw)
+    C2, report2 = surfmap.match(*arrays, features_a=as_list, features_b=as_list, **kw)
     assert report["alignment"]["method"] == "features" and np.array_equal(C, C2)
 
 
