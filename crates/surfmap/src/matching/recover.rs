@@ -8,7 +8,8 @@
 //! (`LevelEnergy::curvature_disagreement`, the measure the verdict reads; the first start
 //! is scored the same way); the whole match is then made from the one that disagrees
 //! least, when that is not the first, and kept when its verdict is better — or as good
-//! with less disagreement. Matches whose verdict is `ok` pay nothing.
+//! with less disagreement — unless the only thing better is its pose offset
+//! ([`only_nearer_the_rigid_pose`]). Matches whose verdict is `ok` pay nothing.
 
 use serde::Serialize;
 
@@ -17,7 +18,7 @@ use super::align::{self, Start};
 use super::options::MatchOptions;
 use super::post::{self, Correspondence};
 use super::prepare::Prepared;
-use super::report::confidence::Verdict;
+use super::report::confidence::{Measures, Verdict};
 use super::report::{self, MatchReport};
 use super::solve::{self, Solved};
 
@@ -115,12 +116,13 @@ pub(crate) fn recover(
     Ok(chosen)
 }
 
-/// Whether report `x`'s verdict is better than `y`'s, or as good with less curvature
-/// disagreement.
+/// Whether the alternative's report `x` is better than the first start's `y`: its verdict
+/// better — unless only its pose offset improved ([`only_nearer_the_rigid_pose`]) — or as
+/// good with less curvature disagreement.
 fn better(x: &MatchReport, y: &MatchReport) -> bool {
     let (cx, cy) = (&x.confidence, &y.confidence);
     match cx.verdict.cmp(&cy.verdict) {
-        std::cmp::Ordering::Less => true,
+        std::cmp::Ordering::Less => !only_nearer_the_rigid_pose(&cx.measures, &cy.measures),
         std::cmp::Ordering::Greater => false,
         std::cmp::Ordering::Equal => match (
             cx.measures.curvature_disagreement,
@@ -129,5 +131,80 @@ fn better(x: &MatchReport, y: &MatchReport) -> bool {
             (Some(a), Some(b)) => a < b,
             _ => false,
         },
+    }
+}
+
+/// Relative drop of the coarse curvature disagreement below which an alternative's shape
+/// agrees no better than the first start's ([`only_nearer_the_rigid_pose`]). The
+/// alternatives kept in calibration lowered it several-fold (a turned start: 0.35 → 0.15).
+pub(crate) const SHAPE_GAIN: f64 = 0.05;
+
+/// Rise of the matched fraction of A below which an alternative matches no more of A.
+pub(crate) const MATCHED_GAIN: f64 = 0.02;
+
+/// Whether measures `x` improve on `y` only by a smaller pose offset: the coarse curvature
+/// disagreement not lower by [`SHAPE_GAIN`] (`d_x > (1 − SHAPE_GAIN)·d_y`), the matched
+/// fraction of A not higher by [`MATCHED_GAIN`], and the area ratio no more plausible.
+/// The pose offset is measured from the surfaces' rigid alignment in space, and most
+/// alternatives *start* from that alignment: theirs is small by construction, whatever
+/// the match. A lower pose offset alone is then no evidence of a better match — a bent
+/// copy aligned by correct features was called `failed` for a pose offset of 0.042 and
+/// would have been replaced by the start in space, with the same disagreement (0.233 →
+/// 0.232) and twice the error against the truth.
+fn only_nearer_the_rigid_pose(x: &Measures, y: &Measures) -> bool {
+    let shape_no_better = match (x.coarse_disagreement, y.coarse_disagreement) {
+        (Some(dx), Some(dy)) => dx > (1.0 - SHAPE_GAIN) * dy,
+        _ => false,
+    };
+    let plausible = |m: &Measures| m.area_ratio.is_none_or(solve::plausible_area_ratio);
+    shape_no_better
+        && x.matched_fraction_a <= y.matched_fraction_a + MATCHED_GAIN
+        && (plausible(y) || !plausible(x))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn measures(disagreement: f64, matched: f64, area_ratio: f64) -> Measures {
+        Measures {
+            coarse_disagreement: Some(disagreement),
+            matched_fraction_a: matched,
+            area_ratio: Some(area_ratio),
+            ..Measures::default()
+        }
+    }
+
+    #[test]
+    fn a_better_verdict_from_the_pose_offset_alone_is_no_better_match() {
+        let first = measures(0.233, 1.0, 0.94);
+        // The bent copy's start in space: the same shape disagreement, as much matched.
+        assert!(only_nearer_the_rigid_pose(
+            &measures(0.232, 1.0, 0.90),
+            &first
+        ));
+        // The jaw-open rescue: the shapes agree far better, more of A is matched.
+        let jaw = measures(0.350, 0.83, 1.30);
+        assert!(!only_nearer_the_rigid_pose(
+            &measures(0.154, 0.99, 0.98),
+            &jaw
+        ));
+        // Either improvement alone is evidence.
+        assert!(!only_nearer_the_rigid_pose(
+            &measures(0.20, 1.0, 0.94),
+            &first
+        ));
+        assert!(!only_nearer_the_rigid_pose(
+            &measures(0.35, 0.90, 1.3),
+            &measures(0.35, 0.8, 1.3)
+        ));
+        // An implausible area ratio made plausible is evidence too.
+        assert!(!only_nearer_the_rigid_pose(
+            &measures(0.3, 0.9, 1.0),
+            &measures(0.3, 0.9, 4.0)
+        ));
+        // Without a disagreement on either side, the verdict decides.
+        let none = Measures::default();
+        assert!(!only_nearer_the_rigid_pose(&none, &none));
     }
 }
