@@ -35,16 +35,18 @@ const SCAFFOLD_START_ENERGY: f64 = 1e4;
 /// The flattening of the vertices used by a triangle; the others are put at the origin.
 /// `topology`: that of `mesh`, if already derived; `flatten`: the entry point, for the
 /// multilevel start.
+/// `lscm`: the LSCM map of `mesh` (scaled to unit area), when already computed.
 pub(super) fn flatten_used(
     mesh: &TriMesh,
     topology: Option<Topology>,
     options: &FlattenOptions,
     progress: &mut dyn FnMut(&IterationLog),
     flatten: FlattenFn,
+    lscm: Option<Vec<[f64; 2]>>,
 ) -> Result<Flattening, FlattenError> {
     let (compact, old_of_new) = without_unreferenced(mesh);
     let Some(compact) = compact else {
-        return flatten_disc(mesh, topology, options, progress, flatten);
+        return flatten_disc(mesh, topology, options, progress, flatten, lscm);
     };
     let mut compact_options = options.clone();
     if let Start::Given(given) = &options.start {
@@ -52,7 +54,7 @@ pub(super) fn flatten_used(
         compact_options.start =
             Start::Given(old_of_new.iter().map(|&v| given[v as usize]).collect());
     }
-    let mut result = flatten_disc(&compact, None, &compact_options, progress, flatten)?;
+    let mut result = flatten_disc(&compact, None, &compact_options, progress, flatten, None)?;
     let mut uvs = vec![[0.0, 0.0]; mesh.positions.len()];
     for (new, &old) in old_of_new.iter().enumerate() {
         uvs[old as usize] = result.uvs[new];
@@ -62,13 +64,14 @@ pub(super) fn flatten_used(
 }
 
 /// The flattening of a mesh whose vertices are all used (`topology`: its topology, if
-/// already derived).
+/// already derived; `lscm`: its LSCM map, if already computed).
 fn flatten_disc(
     mesh: &TriMesh,
     topology: Option<Topology>,
     options: &FlattenOptions,
     progress: &mut dyn FnMut(&IterationLog),
     flatten: FlattenFn,
+    lscm: Option<Vec<[f64; 2]>>,
 ) -> Result<Flattening, FlattenError> {
     let clock = Instant::now();
     let disc = match topology {
@@ -86,6 +89,7 @@ fn flatten_disc(
         options,
         shared: SharedStart::NotTried,
         flatten,
+        lscm,
     };
     let first = match solve_disc(&mut context, progress, solve)? {
         SolveOutcome::Map(first) if first.boundary_crossings == 0 => return Ok(*first),
@@ -133,13 +137,15 @@ enum SolveOutcome {
 }
 
 /// What the solves of one disc share: the mesh, its disc, the options, the multilevel
-/// start (computed by the first solve that needs it) and the entry point (for it).
+/// start (computed by the first solve that needs it), the entry point (for it) and the
+/// LSCM map when it was computed before the solve.
 struct Context<'a> {
     mesh: &'a TriMesh,
     disc: &'a Disc<'a>,
     options: &'a FlattenOptions,
     shared: SharedStart,
     flatten: FlattenFn,
+    lscm: Option<Vec<[f64; 2]>>,
 }
 
 /// One solve of [`flatten_disc`]: with the boundary barrier for [`Solve::Barrier`]
@@ -168,6 +174,7 @@ fn solve_disc(
         barrier,
         &mut context.shared,
         context.flatten,
+        context.lscm.as_deref(),
     )?;
     start.check(mesh, options)?;
     if solve == Solve::UnlessStartCrosses && start.leads_to_overlap(boundary) {

@@ -12,7 +12,7 @@ use crate::measure::overlap::boundary_crossings;
 use crate::mesh::{Disc, TriMesh};
 use crate::param::element::RestTriangle;
 use crate::param::newton::NewtonSettings;
-use crate::param::{count_flipped, lscm, signed_uv_area, tutte};
+use crate::param::{count_flipped, lscm, make_admissible, signed_uv_area, tutte};
 use std::time::Instant;
 
 /// The flattening entry point, handed down to the multilevel start (which flattens a
@@ -45,7 +45,9 @@ pub(super) struct InitialMap {
 /// The initial map `options.start` asks for on `mesh` (`positions`: scaled to unit
 /// area). With the barrier (`barrier`) the start must not cross itself: LSCM and a
 /// given map fall back to mean-value coordinates, a multilevel start to LSCM. `shared`:
-/// the multilevel start, computed by the first solve that needs it.
+/// the multilevel start, computed by the first solve that needs it. `lscm`: the LSCM map
+/// of `mesh` on `positions` when already computed ([`crate::param::protrusions`]
+/// computes it to check the start), used instead of computing it again.
 pub(super) fn initial_map(
     mesh: &TriMesh,
     disc: &Disc,
@@ -54,9 +56,11 @@ pub(super) fn initial_map(
     barrier: bool,
     shared: &mut SharedStart,
     flatten: FlattenFn,
+    lscm: Option<&[[f64; 2]]>,
 ) -> Result<InitialMap, FlattenError> {
     let boundary = disc.boundary();
-    let lscm_or_fallback = |fallback: bool| lscm_start(mesh, disc, positions, barrier, fallback);
+    let lscm_or_fallback =
+        |fallback: bool| lscm_start(mesh, disc, positions, barrier, fallback, lscm);
     let mean_value = || -> Result<_, FlattenError> {
         Ok(InitialMap::plain(
             tutte::mean_value(positions, disc)?,
@@ -188,16 +192,21 @@ impl InitialMap {
     }
 }
 
-/// LSCM on the full mesh, made admissible; when it flips a triangle (or, with the
-/// barrier, crosses itself) and `fallback`, mean-value coordinates instead.
+/// LSCM on the full mesh (`cached`, when already computed), made admissible; when it
+/// flips a triangle (or, with the barrier, crosses itself) and `fallback`, mean-value
+/// coordinates instead.
 fn lscm_start(
     mesh: &TriMesh,
     disc: &Disc,
     positions: &[[f64; 3]],
     barrier: bool,
     fallback: bool,
+    cached: Option<&[[f64; 2]]>,
 ) -> Result<InitialMap, FlattenError> {
-    let mut uv = lscm::lscm(positions, disc)?.uv;
+    let mut uv = match cached {
+        Some(uv) => uv.to_vec(),
+        None => lscm::lscm(positions, disc)?.uv,
+    };
     let lscm_flipped = make_admissible(&mut uv, &mesh.triangles);
     // With the barrier, the start must not overlap itself either.
     let usable = lscm_flipped == 0 && (!barrier || boundary_crossings(&uv, disc.boundary()) == 0);
@@ -210,19 +219,6 @@ fn lscm_start(
         lscm_flipped,
         ..InitialMap::plain(uv, map)
     })
-}
-
-/// A reflected map is as good as any: mirrors `uv` when most triangles are negative.
-/// Returns the triangles still flipped or degenerate (0: admissible, §2.1.2).
-fn make_admissible(uv: &mut [[f64; 2]], triangles: &[[u32; 3]]) -> usize {
-    let negative = triangles
-        .iter()
-        .filter(|t| signed_uv_area([uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]]) < 0.0)
-        .count();
-    if 2 * negative > triangles.len() {
-        uv.iter_mut().for_each(|p| p[1] = -p[1]);
-    }
-    count_flipped(uv, triangles)
 }
 
 /// A multilevel start's crushed boundary contacts (a coarse slit's tip, its
