@@ -738,3 +738,54 @@ fn negative_numbers_in_options_reach_their_checks() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn closed_tentacles_are_cut_along_their_protrusions_and_the_report_says_so() {
+    // The failing case of issue 50: refused before ("both initial maps flipped
+    // triangles"), now one chart cut along the tentacles.
+    use surfmap::mesh::generate::{Tentacles, tentacles};
+    let dir = temp_dir("flatten-tentacles");
+    let mesh = tentacles(&Tentacles::default());
+    let input = dir.join("tentacles.obj");
+    surfmap::write_mesh(&input, &mesh).unwrap();
+    let (out, seams, report) = (
+        dir.join("flat.obj"),
+        dir.join("seams.obj"),
+        dir.join("r.json"),
+    );
+    let run = flatten(
+        &input,
+        &[
+            "--seams",
+            seams.to_str().unwrap(),
+            "--report",
+            report.to_str().unwrap(),
+        ],
+        &out,
+    );
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    let cuts = r["protrusion_cuts"].as_u64().unwrap();
+    let length = r["protrusion_seam_length"].as_f64().unwrap();
+    assert!((1..=8).contains(&cuts), "{cuts}");
+    assert!(length > 0.0 && r["seams"]["length"].as_f64().unwrap() > length);
+    let says = format!(
+        "cut open along seams (closed, genus 0), then cut along {cuts} protrusions (seam length {length:.4})"
+    );
+    assert_eq!(r["plan"], says.as_str());
+    assert!(
+        String::from_utf8_lossy(&run.stdout).contains(&says),
+        "{}",
+        String::from_utf8_lossy(&run.stdout)
+    );
+    assert_eq!(r["measures"]["charts"], 1);
+    assert_eq!(r["flipped_triangles"], 0);
+    assert_eq!(r["guarantee"], "bijective");
+    let input = read_mesh(&input).unwrap().mesh;
+    assert!(check_cut_output(&out, &seams, &input) > 0.0);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

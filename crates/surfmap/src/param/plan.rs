@@ -28,7 +28,8 @@ pub enum Cut {
     /// the surface cut along them must be a disc.
     Along(Vec<[u32; 2]>),
     /// Never: a mesh that is not a disc (once its holes are filled, if asked) is an
-    /// error.
+    /// error, and a disc is not cut along protrusions either
+    /// ([`super::protrusions`]): the map has one UV per vertex.
     Never,
 }
 

@@ -28,8 +28,9 @@
 //! ([`crate::mesh::generate::tentacles`]) reach 20 and more. A chart the multilevel
 //! start flattens (15k faces and more by default, where LSCM is not computed) is checked
 //! only when the solve reports that both starts flip, so large easy meshes pay nothing;
-//! a smaller chart's LSCM is computed once, checked, and handed to the solve as its
-//! start (the solve would compute the same map).
+//! a smaller chart's LSCM (and mean-value map, when LSCM flips) is computed once,
+//! checked, and handed to the solve as its start (the solve would compute the same
+//! maps).
 //!
 //! **The cut.** While the start is not admissible (at most [`MAX_PROTRUSION_CUTS`]
 //! times): of the crushed vertices (one of their triangles has `|ln σ|` above the bound
@@ -99,17 +100,26 @@ pub(crate) enum Refuse {
 }
 
 /// The disc to solve after [`cut_protrusions`]: cut open or as it was, what was cut, and
-/// its LSCM map (unit-area units) when computed.
+/// its initial maps when computed.
 pub(crate) struct Protruded {
     pub(crate) prepared: Prepared,
     pub(crate) cuts: Option<ProtrusionCuts>,
-    pub(crate) lscm: Option<Vec<[f64; 2]>>,
+    pub(crate) maps: Option<StartMaps>,
+}
+
+/// The initial maps of a disc computed to examine it, as computed (on the positions
+/// scaled to unit area, not mirrored): the solve starts from them instead of computing
+/// them again (it would compute the same maps).
+#[derive(Clone, Debug)]
+pub(crate) struct StartMaps {
+    pub(crate) lscm: Vec<[f64; 2]>,
+    /// Computed only when LSCM flips a triangle (then the solve falls back to it).
+    pub(crate) mean_value: Option<Vec<[f64; 2]>>,
 }
 
 /// The LSCM start of one disc, examined.
 struct Examined {
-    /// As computed (unit-area units, not mirrored): what the solve would compute.
-    lscm: Vec<[f64; 2]>,
+    maps: StartMaps,
     lscm_flipped: usize,
     /// Triangles mean-value coordinates flip (computed only when LSCM flips).
     mean_value_flipped: usize,
@@ -155,17 +165,19 @@ impl Examined {
             .iter()
             .filter(|c| c.is_finite())
             .fold(0.0f64, |a, &b| a.max(b));
-        let (mut mean_value_flipped, mut mean_value_first) = (0, None);
+        let (mut mean_value_flipped, mut mean_value_first, mut mean_value) = (0, None, None);
         if lscm_flipped > 0 {
-            let mut mv = tutte::mean_value(&positions, &disc)?;
+            let computed = tutte::mean_value(&positions, &disc)?;
+            let mut mv = computed.clone();
             mean_value_flipped = make_admissible(&mut mv, &mesh.triangles);
             mean_value_first = mesh
                 .triangles
                 .iter()
                 .position(|t| !(signed_uv_area(corners(&mv, t)) > 0.0));
+            mean_value = Some(computed);
         }
         Ok(Self {
-            lscm,
+            maps: StartMaps { lscm, mean_value },
             lscm_flipped,
             mean_value_flipped,
             mean_value_first,
@@ -213,7 +225,7 @@ fn cut_at_most(
         return Ok(Protruded {
             prepared,
             cuts: None,
-            lscm: None,
+            maps: None,
         });
     }
     let mut examined = Examined::of(&prepared.mesh)?;
@@ -221,7 +233,7 @@ fn cut_at_most(
         return Ok(Protruded {
             prepared,
             cuts: None,
-            lscm: Some(examined.lscm),
+            maps: Some(examined.maps),
         });
     }
     let mut report = ProtrusionCuts {
@@ -265,7 +277,7 @@ fn cut_at_most(
     Ok(Protruded {
         prepared: chart.into_prepared(),
         cuts,
-        lscm: Some(examined.lscm),
+        maps: Some(examined.maps),
     })
 }
 
@@ -408,6 +420,14 @@ mod tests {
             ..Default::default()
         });
         assert!(Examined::of(&mesh).unwrap().both_flip());
+        // Never cut: refused as before, naming protrusions as a cause.
+        let never = FlattenOptions::default().with_cut(crate::param::plan::Cut::Never);
+        let err = flatten(&mesh, &never).unwrap_err();
+        assert!(
+            matches!(err, FlattenError::NoAdmissibleStart { .. }),
+            "{err}"
+        );
+        assert!(err.to_string().contains("protrusions"), "{err}");
         let map = flatten(&mesh, &FlattenOptions::default()).unwrap();
         check_one_chart(&mesh, &map);
         let cuts = map.protrusion_cuts.as_ref().expect("cut along protrusions");

@@ -25,7 +25,7 @@ pub enum FlattenError {
     #[error("initial map: {0}")]
     InitialMap(#[from] InitialMapError),
     #[error(
-        "both initial maps flipped triangles (LSCM: {lscm}, mean-value: {mean_value}); the mesh geometry is probably broken (non-finite or coincident vertices)"
+        "both initial maps flipped triangles (LSCM: {lscm}, mean-value: {mean_value}); the mesh geometry is probably broken (non-finite or coincident vertices), or the surface has protrusions too long and thin for one chart, which only cutting along them can flatten (not with `Cut::Never` or an explicit start)"
     )]
     NoAdmissibleStart { lscm: usize, mean_value: usize },
     #[error("{}", no_start_after_cuts(*.cuts, *.lscm, *.mean_value, *.triangle))]

@@ -103,7 +103,9 @@ pub fn flatten_with_progress(
 
 /// The solve of the disc `prepared` (its first `input_faces` triangles the input's;
 /// `topology`: its topology, if derived), cut along protrusions first when its start
-/// cannot embed it ([`crate::param::protrusions`]): with the automatic start, a chart solved from
+/// cannot embed it ([`crate::param::protrusions`]; not with a given or explicit start,
+/// nor with [`Cut::Never`], whose map must stay one UV per vertex): with the automatic
+/// start, a chart solved from
 /// LSCM is checked before the solve (and its LSCM map reused by it), one solved from the
 /// multilevel start only when the solve finds no admissible single-level start. Returns
 /// the disc solved, and the flattening with [`Flattening::protrusion_cuts`].
@@ -114,7 +116,8 @@ fn solve_prepared(
     options: &FlattenOptions,
     progress: &mut dyn FnMut(&IterationLog),
 ) -> Result<(Prepared, Flattening), FlattenError> {
-    let Start::Auto { multilevel } = &options.start else {
+    let (Start::Auto { multilevel }, Cut::Auto | Cut::Along(_)) = (&options.start, &options.cut)
+    else {
         let result =
             solve::flatten_used(&prepared.mesh, topology, options, progress, flatten, None)?;
         return Ok((prepared, result));
@@ -139,7 +142,7 @@ fn solve_prepared(
 }
 
 /// The solve of a disc after [`cut_protrusions`] (`topology`: that of the disc before,
-/// if derived: used when it was not cut), from its LSCM map when computed.
+/// if derived: used when it was not cut), from its initial maps when computed.
 fn solve_protruded(
     protruded: Protruded,
     topology: Option<Topology>,
@@ -149,11 +152,11 @@ fn solve_protruded(
     let Protruded {
         prepared,
         cuts,
-        lscm,
+        maps,
     } = protruded;
     let topology = topology.filter(|_| cuts.is_none());
     let mut result =
-        solve::flatten_used(&prepared.mesh, topology, options, progress, flatten, lscm)?;
+        solve::flatten_used(&prepared.mesh, topology, options, progress, flatten, maps)?;
     result.protrusion_cuts = cuts;
     Ok((prepared, result))
 }

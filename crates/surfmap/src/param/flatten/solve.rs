@@ -22,6 +22,7 @@ use crate::param::element::{RestTriangle, rest_triangles};
 use crate::param::newton::{
     CROSSING_PERSISTENCE, IterationLog, NewtonSettings, NewtonSolver, NewtonTimings, StopReason,
 };
+use crate::param::protrusions::StartMaps;
 use crate::param::tutte;
 use std::time::Instant;
 
@@ -35,18 +36,18 @@ const SCAFFOLD_START_ENERGY: f64 = 1e4;
 /// The flattening of the vertices used by a triangle; the others are put at the origin.
 /// `topology`: that of `mesh`, if already derived; `flatten`: the entry point, for the
 /// multilevel start.
-/// `lscm`: the LSCM map of `mesh` (scaled to unit area), when already computed.
+/// `maps`: the initial maps of `mesh`, when already computed.
 pub(super) fn flatten_used(
     mesh: &TriMesh,
     topology: Option<Topology>,
     options: &FlattenOptions,
     progress: &mut dyn FnMut(&IterationLog),
     flatten: FlattenFn,
-    lscm: Option<Vec<[f64; 2]>>,
+    maps: Option<StartMaps>,
 ) -> Result<Flattening, FlattenError> {
     let (compact, old_of_new) = without_unreferenced(mesh);
     let Some(compact) = compact else {
-        return flatten_disc(mesh, topology, options, progress, flatten, lscm);
+        return flatten_disc(mesh, topology, options, progress, flatten, maps);
     };
     let mut compact_options = options.clone();
     if let Start::Given(given) = &options.start {
@@ -64,14 +65,14 @@ pub(super) fn flatten_used(
 }
 
 /// The flattening of a mesh whose vertices are all used (`topology`: its topology, if
-/// already derived; `lscm`: its LSCM map, if already computed).
+/// already derived; `maps`: its initial maps, if already computed).
 fn flatten_disc(
     mesh: &TriMesh,
     topology: Option<Topology>,
     options: &FlattenOptions,
     progress: &mut dyn FnMut(&IterationLog),
     flatten: FlattenFn,
-    lscm: Option<Vec<[f64; 2]>>,
+    maps: Option<StartMaps>,
 ) -> Result<Flattening, FlattenError> {
     let clock = Instant::now();
     let disc = match topology {
@@ -89,7 +90,7 @@ fn flatten_disc(
         options,
         shared: SharedStart::NotTried,
         flatten,
-        lscm,
+        maps,
     };
     let first = match solve_disc(&mut context, progress, solve)? {
         SolveOutcome::Map(first) if first.boundary_crossings == 0 => return Ok(*first),
@@ -138,14 +139,14 @@ enum SolveOutcome {
 
 /// What the solves of one disc share: the mesh, its disc, the options, the multilevel
 /// start (computed by the first solve that needs it), the entry point (for it) and the
-/// LSCM map when it was computed before the solve.
+/// initial maps when they were computed before the solve.
 struct Context<'a> {
     mesh: &'a TriMesh,
     disc: &'a Disc<'a>,
     options: &'a FlattenOptions,
     shared: SharedStart,
     flatten: FlattenFn,
-    lscm: Option<Vec<[f64; 2]>>,
+    maps: Option<StartMaps>,
 }
 
 /// One solve of [`flatten_disc`]: with the boundary barrier for [`Solve::Barrier`]
@@ -174,7 +175,7 @@ fn solve_disc(
         barrier,
         &mut context.shared,
         context.flatten,
-        context.lscm.as_deref(),
+        context.maps.as_ref(),
     )?;
     start.check(mesh, options)?;
     if solve == Solve::UnlessStartCrosses && start.leads_to_overlap(boundary) {

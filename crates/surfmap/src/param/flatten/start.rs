@@ -12,6 +12,8 @@ use crate::measure::overlap::boundary_crossings;
 use crate::mesh::{Disc, TriMesh};
 use crate::param::element::RestTriangle;
 use crate::param::newton::NewtonSettings;
+use crate::param::plan::Cut;
+use crate::param::protrusions::StartMaps;
 use crate::param::{count_flipped, lscm, make_admissible, signed_uv_area, tutte};
 use std::time::Instant;
 
@@ -45,9 +47,10 @@ pub(super) struct InitialMap {
 /// The initial map `options.start` asks for on `mesh` (`positions`: scaled to unit
 /// area). With the barrier (`barrier`) the start must not cross itself: LSCM and a
 /// given map fall back to mean-value coordinates, a multilevel start to LSCM. `shared`:
-/// the multilevel start, computed by the first solve that needs it. `lscm`: the LSCM map
-/// of `mesh` on `positions` when already computed ([`crate::param::protrusions`]
-/// computes it to check the start), used instead of computing it again.
+/// the multilevel start, computed by the first solve that needs it. `maps`: the LSCM
+/// (and mean-value) map of `mesh` on `positions` when already computed
+/// ([`crate::param::protrusions`] computes them to check the start), used instead of
+/// computing them again.
 pub(super) fn initial_map(
     mesh: &TriMesh,
     disc: &Disc,
@@ -56,11 +59,11 @@ pub(super) fn initial_map(
     barrier: bool,
     shared: &mut SharedStart,
     flatten: FlattenFn,
-    lscm: Option<&[[f64; 2]]>,
+    maps: Option<&StartMaps>,
 ) -> Result<InitialMap, FlattenError> {
     let boundary = disc.boundary();
     let lscm_or_fallback =
-        |fallback: bool| lscm_start(mesh, disc, positions, barrier, fallback, lscm);
+        |fallback: bool| lscm_start(mesh, disc, positions, barrier, fallback, maps);
     let mean_value = || -> Result<_, FlattenError> {
         Ok(InitialMap::plain(
             tutte::mean_value(positions, disc)?,
@@ -192,19 +195,19 @@ impl InitialMap {
     }
 }
 
-/// LSCM on the full mesh (`cached`, when already computed), made admissible; when it
-/// flips a triangle (or, with the barrier, crosses itself) and `fallback`, mean-value
-/// coordinates instead.
+/// LSCM on the full mesh, made admissible; when it flips a triangle (or, with the
+/// barrier, crosses itself) and `fallback`, mean-value coordinates instead. `cached`:
+/// either map, when already computed.
 fn lscm_start(
     mesh: &TriMesh,
     disc: &Disc,
     positions: &[[f64; 3]],
     barrier: bool,
     fallback: bool,
-    cached: Option<&[[f64; 2]]>,
+    cached: Option<&StartMaps>,
 ) -> Result<InitialMap, FlattenError> {
     let mut uv = match cached {
-        Some(uv) => uv.to_vec(),
+        Some(maps) => maps.lscm.clone(),
         None => lscm::lscm(positions, disc)?.uv,
     };
     let lscm_flipped = make_admissible(&mut uv, &mesh.triangles);
@@ -213,7 +216,11 @@ fn lscm_start(
     let (uv, map) = if usable || !fallback {
         (uv, StartMap::Lscm)
     } else {
-        (tutte::mean_value(positions, disc)?, StartMap::MeanValue)
+        let mean_value = match cached.and_then(|maps| maps.mean_value.clone()) {
+            Some(uv) => uv,
+            None => tutte::mean_value(positions, disc)?,
+        };
+        (mean_value, StartMap::MeanValue)
     };
     Ok(InitialMap {
         lscm_flipped,
@@ -306,6 +313,8 @@ fn multilevel_start(
                 options.bijective
             },
             max_distortion: None,
+            // One UV per coarse vertex: never cut (along protrusions).
+            cut: Cut::Never,
             ..options.clone()
         };
         let flat = flatten(&coarse, &coarse_options).map_err(|e| format!("coarse mesh: {e}"))?;
