@@ -12,6 +12,7 @@ time of the method.
 
 - surfmap: `surfmap flatten MESH -o OUT --report R.json` (default options); its time is
   the report's `time_total_s` (the whole library call, reading and writing excluded).
+  `--before BIN` runs a build from before the cuts along protrusions the same way.
 - xatlas: `Atlas.add_mesh` + `generate` (default chart options; its own charts, LSCM
   per chart and packing), timed around those calls.
 - libigl: `igl.cut_to_disk` leaves a closed genus-0 mesh uncut, so the mesh is cut
@@ -24,7 +25,7 @@ time of the method.
 Usage (the peers' interpreter, see ../shared/peers/README.md):
 
     /opt/peers-venv/bin/python scripts/protrusion_peers.py --surfmap target/release/surfmap \
-        /tmp/protrusions/tentacles_*.obj
+        [--before OLD/surfmap] /tmp/protrusions/tentacles_*.obj
 """
 
 from __future__ import annotations
@@ -63,6 +64,10 @@ def seam_length(V, F):
     return 0.5 * sum(float(np.linalg.norm(V[a] - V[c])) for a, c in b)
 
 
+def cross2(a, b):
+    return a[0] * b[1] - a[1] * b[0]
+
+
 def crossings(UV, F):
     """Pairs of non-adjacent boundary edges of the UV mesh that cross (0: no overlap)."""
     b = boundary_edges(F)
@@ -80,10 +85,10 @@ def crossings(UV, F):
             if set(b[i]) & set(b[j]):
                 continue
             r, s = seg[j]
-            d1 = np.cross(q - p, r - p)
-            d2 = np.cross(q - p, s - p)
-            d3 = np.cross(s - r, p - r)
-            d4 = np.cross(s - r, q - r)
+            d1 = cross2(q - p, r - p)
+            d2 = cross2(q - p, s - p)
+            d3 = cross2(s - r, p - r)
+            d4 = cross2(s - r, q - r)
             if d1 * d2 < 0 and d3 * d4 < 0:
                 count += 1
     return count
@@ -123,7 +128,10 @@ def run_surfmap(binary, path, work):
     Vm = np.zeros((len(vt), 3))
     Vm[Fm.ravel()] = V[F.ravel()]
     row = scored(V, F, cuv, UVm, Fm, Vm)
-    row.update(time=r["time_total_s"], note=f"{r['protrusion_cuts']} protrusion cuts")
+    cuts = r.get("protrusion_cuts")
+    note = f"{r['start']} start, {r['iterations']} iterations" + (
+        f", {cuts} protrusion cuts" if cuts is not None else "")
+    row.update(time=r["time_total_s"], note=note)
     return row
 
 
@@ -216,9 +224,11 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("meshes", nargs="+")
     ap.add_argument("--surfmap", default="target/release/surfmap")
+    ap.add_argument("--before", help="a surfmap binary built before the cuts along "
+                    "protrusions, run as the tool `before`")
     ap.add_argument("--tools", default="surfmap,xatlas,igl")
     args = ap.parse_args()
-    tools = args.tools.split(",")
+    tools = (["before"] if args.before else []) + args.tools.split(",")
     cols = ["charts", "seam", "flipped", "crossings", "D", "area_avg", "area_max", "time"]
     print("| mesh | F | tool | " + " | ".join(cols) + " | note |")
     print("|---|---:|---|" + "---:|" * len(cols) + "---|")
@@ -228,8 +238,9 @@ def main():
         for tool in tools:
             with tempfile.TemporaryDirectory() as work:
                 try:
-                    if tool == "surfmap":
-                        row = run_surfmap(args.surfmap, path, work)
+                    if tool in ("surfmap", "before"):
+                        binary = args.surfmap if tool == "surfmap" else args.before
+                        row = run_surfmap(binary, path, work)
                     elif tool == "xatlas":
                         row = run_xatlas(V, F)
                     else:

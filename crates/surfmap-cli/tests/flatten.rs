@@ -183,6 +183,24 @@ fn raw_scans_flatten_after_repair() {
 
 /// Signed area of every UV triangle of an OBJ with per-corner `vt`, and whether the
 /// corners' UVs are split exactly along the seams written by `--seams`.
+/// `surfmap flatten INPUT --seams DIR/seams.obj --report DIR/r.json -o DIR/cut.obj`: the
+/// run, and the output, seams and report paths.
+fn flatten_with_seams(input: &Path, dir: &Path) -> (Output, [std::path::PathBuf; 3]) {
+    let paths = ["cut.obj", "seams.obj", "r.json"].map(|name| dir.join(name));
+    let [out, seams, report] = &paths;
+    let run = flatten(
+        input,
+        &[
+            "--seams",
+            seams.to_str().unwrap(),
+            "--report",
+            report.to_str().unwrap(),
+        ],
+        out,
+    );
+    (run, paths)
+}
+
 fn check_cut_output(out: &Path, seams: &Path, input: &surfmap::TriMesh) -> f64 {
     let back = read_mesh(out).expect("our own output reads back").mesh;
     assert_eq!(
@@ -246,19 +264,7 @@ fn closed_and_higher_genus_meshes_are_cut_open_by_default() {
             "cut open along seams (genus 1, 1 boundary loop)",
         ),
     ] {
-        let out = dir.join("cut.obj");
-        let seams = dir.join("seams.obj");
-        let report = dir.join("r.json");
-        let run = flatten(
-            &data.join(file),
-            &[
-                "--seams",
-                seams.to_str().unwrap(),
-                "--report",
-                report.to_str().unwrap(),
-            ],
-            &out,
-        );
+        let (run, [out, seams, report]) = flatten_with_seams(&data.join(file), &dir);
         assert!(
             run.status.success(),
             "{file}: {}",
@@ -748,21 +754,7 @@ fn closed_tentacles_are_cut_along_their_protrusions_and_the_report_says_so() {
     let mesh = tentacles(&Tentacles::default());
     let input = dir.join("tentacles.obj");
     surfmap::write_mesh(&input, &mesh).unwrap();
-    let (out, seams, report) = (
-        dir.join("flat.obj"),
-        dir.join("seams.obj"),
-        dir.join("r.json"),
-    );
-    let run = flatten(
-        &input,
-        &[
-            "--seams",
-            seams.to_str().unwrap(),
-            "--report",
-            report.to_str().unwrap(),
-        ],
-        &out,
-    );
+    let (run, [out, seams, report]) = flatten_with_seams(&input, &dir);
     assert!(
         run.status.success(),
         "{}",

@@ -472,12 +472,7 @@ fn cut_paths(
             }
         })
         .collect();
-    let mut on_boundary = vec![false; n];
-    for l in &topology.boundary_loops {
-        l.vertices
-            .iter()
-            .for_each(|&v| on_boundary[v as usize] = true);
-    }
+    let mut on_boundary = topology.on_boundary(n);
     let graph = EdgeGraph::new(disc, topology);
     let candidate = |v: usize| !blocked[v] && weight[v] > 0.0;
     let mut paths = Vec::new();
@@ -517,17 +512,17 @@ fn cut_paths(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
-    use crate::measure::{MeasureOptions, distortion_report};
+    use crate::measure::{DistortionReport, MeasureOptions, distortion_report};
     use crate::mesh::generate::{bumpy_disc, cone, sphere, spherical_cap};
     use crate::param::flatten::{CutReason, Guarantee, OptionError, flatten};
 
-    /// Checks what every result must be: one UV triangle per input triangle, all
-    /// counter-clockwise, one chart without overlap, the input's UV per corner split
-    /// exactly along the reported seams, and the reported `D` the one an independent
-    /// measurement of the written corners gives.
-    fn check(mesh: &TriMesh, map: &Flattening) -> DistortionCuts {
+    /// Checks what every cut map must be: one UV triangle per input triangle, all
+    /// counter-clockwise, one chart whose boundary does not even touch itself, the
+    /// input's UV per corner split exactly along the reported seams; returns the
+    /// measures of the written corners.
+    pub(crate) fn one_chart(mesh: &TriMesh, map: &Flattening) -> DistortionReport {
         let corners = map.corner_uvs(&mesh.triangles);
         assert!(
             corners
@@ -549,12 +544,19 @@ mod tests {
             "{:?}",
             measured.boundary_overlap
         );
-        let cuts = map.distortion_cuts.clone().expect("a distortion report");
-        let d = measured.symmetric_dirichlet / 4.0;
-        assert!((cuts.after - d).abs() <= 1e-12 * d, "{} vs {d}", cuts.after);
         if let Some(seams) = &map.seams {
             crate::param::plan::tests::seams_split_exactly(mesh, seams);
         }
+        measured
+    }
+
+    /// [`one_chart`], and the reported `D` the one an independent measurement of the
+    /// written corners gives.
+    fn check(mesh: &TriMesh, map: &Flattening) -> DistortionCuts {
+        let measured = one_chart(mesh, map);
+        let cuts = map.distortion_cuts.clone().expect("a distortion report");
+        let d = measured.symmetric_dirichlet / 4.0;
+        assert!((cuts.after - d).abs() <= 1e-12 * d, "{} vs {d}", cuts.after);
         cuts
     }
 

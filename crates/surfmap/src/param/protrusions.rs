@@ -153,7 +153,7 @@ impl Examined {
             .zip(&rest)
             .map(|(t, r)| {
                 let c = corners(&uv, t).map(|p| [s * p[0], s * p[1]]);
-                if !(signed_uv_area(c) > 0.0) {
+                if signed_uv_area(c).is_nan() || signed_uv_area(c) <= 0.0 {
                     return f64::INFINITY;
                 }
                 let (s1, s2) = crate::measure::jacobian::signed_singular_values(jacobian(r, &c));
@@ -170,10 +170,10 @@ impl Examined {
             let computed = tutte::mean_value(&positions, &disc)?;
             let mut mv = computed.clone();
             mean_value_flipped = make_admissible(&mut mv, &mesh.triangles);
-            mean_value_first = mesh
-                .triangles
-                .iter()
-                .position(|t| !(signed_uv_area(corners(&mv, t)) > 0.0));
+            mean_value_first = mesh.triangles.iter().position(|t| {
+                let area = signed_uv_area(corners(&mv, t));
+                area.is_nan() || area <= 0.0
+            });
             mean_value = Some(computed);
         }
         Ok(Self {
@@ -305,12 +305,7 @@ fn protrusion_path(
             }
         }
     }
-    let mut on_boundary = vec![false; n];
-    for l in &topology.boundary_loops {
-        l.vertices
-            .iter()
-            .for_each(|&v| on_boundary[v as usize] = true);
-    }
+    let on_boundary = topology.on_boundary(n);
     let graph = EdgeGraph::new(disc, topology);
     let passable = |v: u32| !blocked[v as usize] || on_boundary[v as usize];
     let boundary: Vec<u32> = (0..n as u32).filter(|&v| on_boundary[v as usize]).collect();
@@ -331,34 +326,15 @@ fn protrusion_path(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::measure::{MeasureOptions, distortion_report};
     use crate::mesh::generate::{Octopus, Tentacles, octopus_disc, sphere, tentacles};
-    use crate::param::flatten::{CutReason, FlattenOptions, Flattening, Guarantee, flatten};
+    use crate::param::flatten::{CutReason, FlattenOptions, Flattening, flatten};
 
-    /// One chart (one disc after the cuts), flip-free and overlap-free, the UVs split
-    /// exactly along the reported seams; returns the map's mean symmetric Dirichlet
-    /// distortion `D` (1 for an isometry).
+    /// One chart (one disc after the cuts), flip-free and overlap-free, cut open, the
+    /// UVs split exactly along the reported seams; returns the map's mean symmetric
+    /// Dirichlet distortion `D` (1 for an isometry).
     fn check_one_chart(mesh: &TriMesh, map: &Flattening) -> f64 {
-        let corners = map.corner_uvs(&mesh.triangles);
-        assert!(corners.iter().all(|&c| signed_uv_area(c) > 0.0));
-        assert_eq!(map.guarantee, Guarantee::Bijective);
-        let measured = distortion_report(
-            &mesh.positions,
-            &mesh.triangles,
-            &corners,
-            &MeasureOptions::default(),
-        )
-        .unwrap();
-        assert_eq!(measured.charts, 1);
-        assert_eq!(measured.flipped_triangles, 0);
-        assert!(
-            measured.boundary_overlap.complete && measured.boundary_overlap.overlap_area == 0.0,
-            "{:?}",
-            measured.boundary_overlap
-        );
-        let seams = map.seams.as_ref().expect("cut open");
-        crate::param::plan::tests::seams_split_exactly(mesh, seams);
-        measured.symmetric_dirichlet / 4.0
+        assert!(map.seams.is_some(), "cut open");
+        crate::param::optcuts::tests::one_chart(mesh, map).symmetric_dirichlet / 4.0
     }
 
     /// The disc the plan makes of `mesh` with the default options.

@@ -11,7 +11,7 @@ use super::error::FlattenError;
 use super::options::{Bijective, FlattenOptions, Start};
 use super::result::{Flattening, Solved, StartMap, result_of};
 use super::start::{
-    FlattenFn, InitialMap, SharedStart, check_given_length, initial_map, relieve_contacts,
+    FlattenFn, InitialMap, SharedStart, Starts, check_given_length, initial_map, relieve_contacts,
 };
 use super::warm_start::arap_warm_start;
 use crate::energy::Energy;
@@ -88,9 +88,11 @@ fn flatten_disc(
         mesh,
         disc: &disc,
         options,
-        shared: SharedStart::NotTried,
+        starts: Starts {
+            multilevel: SharedStart::NotTried,
+            maps,
+        },
         flatten,
-        maps,
     };
     let first = match solve_disc(&mut context, progress, solve)? {
         SolveOutcome::Map(first) if first.boundary_crossings == 0 => return Ok(*first),
@@ -144,9 +146,8 @@ struct Context<'a> {
     mesh: &'a TriMesh,
     disc: &'a Disc<'a>,
     options: &'a FlattenOptions,
-    shared: SharedStart,
+    starts: Starts,
     flatten: FlattenFn,
-    maps: Option<StartMaps>,
 }
 
 /// One solve of [`flatten_disc`]: with the boundary barrier for [`Solve::Barrier`]
@@ -173,9 +174,8 @@ fn solve_disc(
         &positions,
         options,
         barrier,
-        &mut context.shared,
+        &mut context.starts,
         context.flatten,
-        context.maps.as_ref(),
     )?;
     start.check(mesh, options)?;
     if solve == Solve::UnlessStartCrosses && start.leads_to_overlap(boundary) {

@@ -32,6 +32,15 @@ pub(super) enum SharedStart {
     Tried(Option<Vec<[f64; 2]>>, Box<MultilevelReport>),
 }
 
+/// What the solves of one disc share for their starts: the multilevel start and the
+/// initial maps computed before the solve ([`crate::param::protrusions`] computes LSCM,
+/// and mean-value coordinates when LSCM flips, to check the start), used instead of
+/// computing them again.
+pub(super) struct Starts {
+    pub(super) multilevel: SharedStart,
+    pub(super) maps: Option<StartMaps>,
+}
+
 /// The initial map of a solve, before it is checked.
 pub(super) struct InitialMap {
     /// One UV per vertex: unit-area units for LSCM and mean-value coordinates, the mesh's
@@ -46,22 +55,20 @@ pub(super) struct InitialMap {
 
 /// The initial map `options.start` asks for on `mesh` (`positions`: scaled to unit
 /// area). With the barrier (`barrier`) the start must not cross itself: LSCM and a
-/// given map fall back to mean-value coordinates, a multilevel start to LSCM. `shared`:
-/// the multilevel start, computed by the first solve that needs it. `maps`: the LSCM
-/// (and mean-value) map of `mesh` on `positions` when already computed
-/// ([`crate::param::protrusions`] computes them to check the start), used instead of
-/// computing them again.
+/// given map fall back to mean-value coordinates, a multilevel start to LSCM. `starts`:
+/// the multilevel start, computed by the first solve that needs it, and the maps
+/// computed before the solve.
 pub(super) fn initial_map(
     mesh: &TriMesh,
     disc: &Disc,
     positions: &[[f64; 3]],
     options: &FlattenOptions,
     barrier: bool,
-    shared: &mut SharedStart,
+    starts: &mut Starts,
     flatten: FlattenFn,
-    maps: Option<&StartMaps>,
 ) -> Result<InitialMap, FlattenError> {
     let boundary = disc.boundary();
+    let (shared, maps) = (&mut starts.multilevel, starts.maps.as_ref());
     let lscm_or_fallback =
         |fallback: bool| lscm_start(mesh, disc, positions, barrier, fallback, maps);
     let mean_value = || -> Result<_, FlattenError> {
