@@ -434,6 +434,40 @@ mod tests {
     }
 
     #[test]
+    fn a_chart_the_multilevel_start_flattens_is_cut_only_when_no_start_embeds_it() {
+        use crate::param::flatten::{CoarseLevel, Multilevel, Start};
+        let options = FlattenOptions {
+            start: Start::Auto {
+                multilevel: Multilevel::Always(CoarseLevel::default()),
+            },
+            ..Default::default()
+        };
+        let mesh = tentacles(&Tentacles::default());
+        // The multilevel start embeds the tentacles (its coarse level is not crushed):
+        // no check, no cut.
+        let map = flatten(&mesh, &options).unwrap();
+        check_one_chart(&mesh, &map);
+        assert_eq!(map.start, crate::param::flatten::StartMap::Multilevel);
+        assert!(map.protrusion_cuts.is_none());
+        // Had it failed, the single-level starts would have been cut until they no
+        // longer both flip: the same tips first, and no more cuts than for a crush.
+        let prepared = topologically_cut(&mesh);
+        let faces = prepared.mesh.triangles.len();
+        let flipped = cut_protrusions(faces, prepared, Refuse::Flipped).unwrap();
+        let crushed =
+            cut_protrusions(faces, topologically_cut(&mesh), Refuse::CrushedOrFlipped).unwrap();
+        let (flipped, crushed) = (flipped.cuts.unwrap(), crushed.cuts.unwrap());
+        assert!(
+            flipped.cuts >= 1 && flipped.cuts <= crushed.cuts,
+            "{flipped:?}"
+        );
+        assert_eq!(
+            flipped.from_vertices[..],
+            crushed.from_vertices[..flipped.cuts]
+        );
+    }
+
+    #[test]
     fn easy_meshes_are_not_cut_and_keep_their_map() {
         // Tubes 10 rows long: tips shrunk by e^{−8.4}, below the bound (the default
         // octopus, 14 rows, reaches e^{−11.4} and is cut).
