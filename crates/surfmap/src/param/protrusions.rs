@@ -4,13 +4,16 @@
 //! **Why.** A conformal map (LSCM, thesis §3.1.1) shrinks a thin protrusion
 //! exponentially along its length: a tube of radius `ρ` and length `ℓ` maps to a strip
 //! whose scale falls by about `e^{−ℓ/ρ}` towards its tip (the tube is conformally a
-//! half-infinite cylinder). On a closed body with tentacles 11–23 radii long, the tips
-//! shrink by `e^{−11}`..`e^{−23}`: their UV triangles have areas of `10⁻¹⁰`..`10⁻²⁰`
-//! against the chart's 1, below what double precision resolves next to coordinates of
-//! order 1, so LSCM flips or degenerates them, and mean-value coordinates (onto a
-//! circle, injective in exact arithmetic) crush them the same way. Nothing is wrong with
-//! the geometry: the chart is too stretched for one embedding. Cut open along the
-//! protrusion, a tube becomes a strip of width `2πρ`, which maps with bounded scale.
+//! half-infinite cylinder). On a closed body with tentacles 30–50 radii long
+//! ([`crate::mesh::generate::tentacles`]), the tips shrink by `e^{−30}`..`e^{−50}`:
+//! their UV triangles have areas below `10⁻²⁶` against the chart's 1, below what double
+//! precision resolves next to coordinates of order 1, so LSCM flips or degenerates them,
+//! and mean-value coordinates (onto a circle, injective in exact arithmetic) crush them
+//! the same way. Nothing is wrong with the geometry: the chart is too stretched for one
+//! embedding. Shorter protrusions (10–30 radii) still embed, but crushed: the solve
+//! keeps much of the crush (mean symmetric Dirichlet distortion 2.8–4.9 on tentacles
+//! 12–24 radii long, docs/bench/protrusions.md). Cut open along the protrusion, a tube
+//! becomes a strip of width `2πρ`, which maps with bounded scale.
 //!
 //! **The criterion.** The LSCM start of the disc the solver flattens (after the plan's
 //! fill and cut, [`super::plan`]), scaled to the surface's area as the solve scales it,
@@ -22,10 +25,12 @@
 //! - both starts flip: LSCM flips or degenerates a triangle, and so do mean-value
 //!   coordinates (the solve's fallback).
 //!
-//! The bound 10 leaves every mesh of `../shared/data` uncut (their starts reach at most
-//! 8: [`super::flatten`]'s progressive iterations, which handle crushes up to there,
-//! measure at 8 none of them crushed), while the generated tentacles
-//! ([`crate::mesh::generate::tentacles`]) reach 20 and more. A chart the multilevel
+//! The bound 10 leaves every mesh of `../shared/data` uncut (their flattenings are byte
+//! for byte those from before the check, docs/bench/protrusions.md; the progressive
+//! iterations of the solve count none of their starts crushed at 8), while the
+//! generated tentacles 12–30 radii long reach 12–33, and the default
+//! [`crate::mesh::generate::octopus_disc`] 11.4 (tubes of 12 rows: 9.9). A chart the
+//! multilevel
 //! start flattens (15k faces and more by default, where LSCM is not computed) is checked
 //! only when the solve reports that both starts flip, so large easy meshes pay nothing;
 //! a smaller chart's LSCM (and mean-value map, when LSCM flips) is computed once,
@@ -39,9 +44,10 @@
 //! few rows before the cap, and a cut from there leaves the rest of the tube crushed,
 //! 12 cuts for 8 tubes) — then the shortest edge path from it to the chart's boundary
 //! (Dijkstra on edge lengths; not through a filled hole's vertices), the chart opened
-//! along it
-//! ([`crate::mesh::cut::open_along`]; the path hangs off the boundary, so the chart stays
-//! one disc), and LSCM again. Cost: one LSCM solve and one Dijkstra per cut.
+//! along it ([`crate::mesh::cut::open_along`]; the path hangs off the boundary, so the
+//! chart stays one disc), and LSCM again. Cost: one LSCM solve and one Dijkstra per cut.
+//! With [`super::plan::Cut::Never`] (a map of one UV per vertex), or a given or explicit
+//! start, nothing is checked or cut.
 //!
 //! If after the cuts both starts still flip, the flattening is refused with
 //! [`FlattenError::NoAdmissibleStartAfterCuts`], which names the flips, the cuts and a
