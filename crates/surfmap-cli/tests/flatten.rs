@@ -183,6 +183,24 @@ fn raw_scans_flatten_after_repair() {
 
 /// Signed area of every UV triangle of an OBJ with per-corner `vt`, and whether the
 /// corners' UVs are split exactly along the seams written by `--seams`.
+/// `surfmap flatten INPUT --seams DIR/seams.obj --report DIR/r.json -o DIR/cut.obj`: the
+/// run, and the output, seams and report paths.
+fn flatten_with_seams(input: &Path, dir: &Path) -> (Output, [std::path::PathBuf; 3]) {
+    let paths = ["cut.obj", "seams.obj", "r.json"].map(|name| dir.join(name));
+    let [out, seams, report] = &paths;
+    let run = flatten(
+        input,
+        &[
+            "--seams",
+            seams.to_str().unwrap(),
+            "--report",
+            report.to_str().unwrap(),
+        ],
+        out,
+    );
+    (run, paths)
+}
+
 fn check_cut_output(out: &Path, seams: &Path, input: &surfmap::TriMesh) -> f64 {
     let back = read_mesh(out).expect("our own output reads back").mesh;
     assert_eq!(
@@ -246,19 +264,7 @@ fn closed_and_higher_genus_meshes_are_cut_open_by_default() {
             "cut open along seams (genus 1, 1 boundary loop)",
         ),
     ] {
-        let out = dir.join("cut.obj");
-        let seams = dir.join("seams.obj");
-        let report = dir.join("r.json");
-        let run = flatten(
-            &data.join(file),
-            &[
-                "--seams",
-                seams.to_str().unwrap(),
-                "--report",
-                report.to_str().unwrap(),
-            ],
-            &out,
-        );
+        let (run, [out, seams, report]) = flatten_with_seams(&data.join(file), &dir);
         assert!(
             run.status.success(),
             "{file}: {}",
@@ -736,5 +742,42 @@ fn negative_numbers_in_options_reach_their_checks() {
         "{}",
         String::from_utf8_lossy(&run.stderr)
     );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn closed_tentacles_are_cut_along_their_protrusions_and_the_report_says_so() {
+    // The failing case of issue 50: refused before ("both initial maps flipped
+    // triangles"), now one chart cut along the tentacles.
+    use surfmap::mesh::generate::{Tentacles, tentacles};
+    let dir = temp_dir("flatten-tentacles");
+    let mesh = tentacles(&Tentacles::default());
+    let input = dir.join("tentacles.obj");
+    surfmap::write_mesh(&input, &mesh).unwrap();
+    let (run, [out, seams, report]) = flatten_with_seams(&input, &dir);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&report).unwrap()).unwrap();
+    let cuts = r["protrusion_cuts"].as_u64().unwrap();
+    let length = r["protrusion_seam_length"].as_f64().unwrap();
+    assert!((1..=8).contains(&cuts), "{cuts}");
+    assert!(length > 0.0 && r["seams"]["length"].as_f64().unwrap() > length);
+    let says = format!(
+        "cut open along seams (closed, genus 0), then cut along {cuts} protrusions (seam length {length:.4})"
+    );
+    assert_eq!(r["plan"], says.as_str());
+    assert!(
+        String::from_utf8_lossy(&run.stdout).contains(&says),
+        "{}",
+        String::from_utf8_lossy(&run.stdout)
+    );
+    assert_eq!(r["measures"]["charts"], 1);
+    assert_eq!(r["flipped_triangles"], 0);
+    assert_eq!(r["guarantee"], "bijective");
+    let input = read_mesh(&input).unwrap().mesh;
+    assert!(check_cut_output(&out, &seams, &input) > 0.0);
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -106,7 +106,10 @@ pub fn flatten_error_worded(
         FlattenError::NotADisc(defects) => mesh_error_worded(message, &defects, wording),
         FlattenError::Index(_)
         | FlattenError::Degenerate(_)
-        | FlattenError::NoAdmissibleStart { .. } => mesh_error_worded(message, &[], wording),
+        | FlattenError::NoAdmissibleStart { .. }
+        | FlattenError::NoAdmissibleStartAfterCuts { .. } => {
+            mesh_error_worded(message, &[], wording)
+        }
         FlattenError::Cut(CutError::Defects(defects)) => {
             mesh_error_worded(message, &defects, wording)
         }

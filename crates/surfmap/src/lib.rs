@@ -127,8 +127,8 @@ pub use output::{FlatMesh, UvLayout, flatten_to_mesh};
 pub use param::flatten::{
     Bijective, CoarseLevel, Cut, CutStop, DistortionCuts, EnergyKind, FlattenError, FlattenOptions,
     FlattenSettings, Flattening, Guarantee, IterationLog, MaxDistortion, Multilevel,
-    MultilevelKind, NewtonSettings, Preset, Seams, SettingsError, Start, StartKind, StartMap,
-    StopReason, flatten, flatten_with_progress,
+    MultilevelKind, NewtonSettings, Preset, ProtrusionCuts, Seams, SettingsError, Start, StartKind,
+    StartMap, StopReason, flatten, flatten_with_progress,
 };
 pub use param::normalize_uvs;
 pub use param::plan::{Plan, plan};

@@ -218,6 +218,11 @@ pub struct FlattenReport<'a> {
     /// The distortion-driven cutting ([`crate::FlattenOptions::max_distortion`]): bound,
     /// mean symmetric Dirichlet distortion before and after, rounds, seam length added.
     pub distortion_cuts: Option<&'a crate::DistortionCuts>,
+    /// Cuts along protrusions made because no single chart could be embedded
+    /// ([`crate::param::protrusions`]; 0 when none), their seam length, and the details.
+    pub protrusion_cuts: usize,
+    pub protrusion_seam_length: f64,
+    pub protrusions: Option<&'a crate::ProtrusionCuts>,
     /// Initial map used: `lscm`, `mean_value`, `given` or `multilevel`.
     pub start: StartMap,
     /// The multilevel start's coarse level, re-insertion and timings (when tried).
@@ -276,6 +281,9 @@ impl<'a> FlattenReport<'a> {
             plan: r.describe_plan(),
             seams: r.seams.as_ref(),
             distortion_cuts: r.distortion_cuts.as_ref(),
+            protrusion_cuts: r.protrusion_cuts.as_ref().map_or(0, |c| c.cuts),
+            protrusion_seam_length: r.protrusion_cuts.as_ref().map_or(0.0, |c| c.seam_length),
+            protrusions: r.protrusion_cuts.as_ref(),
             start: r.start,
             multilevel: r.multilevel.as_ref(),
             lscm_flipped_triangles: r.lscm_flipped,

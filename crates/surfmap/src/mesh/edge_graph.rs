@@ -78,4 +78,25 @@ impl EdgeGraph {
         }
         (distance, parent, None)
     }
+
+    /// The shortest path (as [`Self::shortest_paths`]) from `from` to the first vertex
+    /// where `stop` is true: its edges, `[low, high]` vertex pairs, from that vertex back
+    /// to `from`; `None` when no such vertex is reached.
+    pub(crate) fn path_to(
+        &self,
+        from: u32,
+        weight: impl Fn(u32, u32, f64) -> f64,
+        passable: impl Fn(u32) -> bool,
+        stop: impl Fn(u32) -> bool,
+    ) -> Option<Vec<[u32; 2]>> {
+        let (_, parent, end) = self.shortest_paths(&[from], weight, passable, stop);
+        let mut v = end?;
+        let mut path = Vec::new();
+        while v != from {
+            let p = parent[v as usize];
+            path.push([p.min(v), p.max(v)]);
+            v = p;
+        }
+        Some(path)
+    }
 }

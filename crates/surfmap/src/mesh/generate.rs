@@ -485,6 +485,169 @@ pub fn octopus_disc(shape: &Octopus) -> TriMesh {
     TriMesh::new(positions, triangles)
 }
 
+/// Shape of a [`tentacles`] body.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tentacles {
+    /// Number of tentacles (≥ 1), evenly spaced around the body's equator.
+    pub arms: usize,
+    /// Side of the square window of the body's grid a tentacle grows from, in quads
+    /// (≥ 1): a tentacle has `4·window` vertices around.
+    pub window: usize,
+    /// Tentacle length over its radius: a conformal map shrinks a tentacle's tip by
+    /// about `e^{−length}` against its base.
+    pub length: f64,
+    /// Segments around the body (raised to `arms·(window + 1)` so that windows do not
+    /// touch); the body has `segments / 2` latitude bands.
+    pub segments: usize,
+}
+
+impl Default for Tentacles {
+    /// Eight tentacles of 8 vertices around and 36 radii long on a body of 48 × 24
+    /// segments: 8,096 triangles, tips shrunk by about e^{−36} in a conformal map, so
+    /// that both initial maps flip triangles (the failing case of issue 50).
+    fn default() -> Self {
+        Self {
+            arms: 8,
+            window: 2,
+            length: 36.0,
+            segments: 48,
+        }
+    }
+}
+
+/// A closed genus-0 surface with long thin tentacles (issue 50): the unit sphere as a
+/// latitude–longitude grid (`segments` around, `segments / 2` bands, one vertex per
+/// pole), with `arms` square windows of `window × window` quads around the equator
+/// removed, and from every window's boundary loop a tube of radius
+/// `ρ = 0.35·window·h` (`h = 2π/segments`, the grid's spacing at the equator) along the
+/// window's outward normal, `length·ρ` long in rows `2πρ/(4·window)` apart (roughly
+/// square quads), capped by one tip vertex. Every vertex of a tube row sits at the
+/// angle around the axis of its window-boundary vertex, so the tube does not twist.
+/// Triangles are oriented outward (checked per triangle against the sphere's centre or
+/// the tube's axis); the tubes' vertices follow the sphere's (the grid vertices inside
+/// the windows left out), arm by arm, row by row.
+pub fn tentacles(shape: &Tentacles) -> TriMesh {
+    use crate::vec3::{cross3, dot3, sub3};
+    let arms = shape.arms.max(1);
+    let w = shape.window.max(1);
+    let segments = shape.segments.max(arms * (w + 1)).max(2 * w + 4);
+    let bands = (segments / 2).max(w + 2);
+    // Grid vertex (ring r in 1..bands, column c) and the poles 0 (north) and 1 (south).
+    let id = |r: usize, c: usize| (2 + (r - 1) * segments + c % segments) as u32;
+    let mut positions = vec![[0.0, 0.0, 1.0], [0.0, 0.0, -1.0]];
+    for r in 1..bands {
+        let theta = std::f64::consts::PI * r as f64 / bands as f64;
+        for c in 0..segments {
+            let phi = TAU * c as f64 / segments as f64;
+            positions.push([
+                theta.sin() * phi.cos(),
+                theta.sin() * phi.sin(),
+                theta.cos(),
+            ]);
+        }
+    }
+    let r0 = (bands - w) / 2;
+    let column = |a: usize| a * segments / arms;
+    let in_window = |r: usize, c: usize| {
+        (r0..r0 + w).contains(&r) && (0..arms).any(|a| (column(a)..column(a) + w).contains(&c))
+    };
+    // Triangles with the point they must face away from.
+    let mut faces: Vec<([u32; 3], [f64; 3])> = Vec::new();
+    let origin = [0.0; 3];
+    for c in 0..segments {
+        faces.push(([0, id(1, c), id(1, c + 1)], origin));
+        faces.push(([1, id(bands - 1, c + 1), id(bands - 1, c)], origin));
+        for r in 1..bands - 1 {
+            if !in_window(r, c) {
+                let (a, b, p, q) = (id(r, c), id(r, c + 1), id(r + 1, c), id(r + 1, c + 1));
+                faces.push(([a, q, b], origin));
+                faces.push(([a, p, q], origin));
+            }
+        }
+    }
+    let h = TAU / segments as f64;
+    let rho = 0.35 * w as f64 * h;
+    let around = 4 * w;
+    let spacing = TAU * rho / around as f64;
+    let rows = ((shape.length.max(0.0) * rho / spacing).round() as usize).max(1);
+    for a in 0..arms {
+        let c0 = column(a);
+        // The window's boundary loop, once around.
+        let mut base: Vec<u32> = (0..w).map(|k| id(r0, c0 + k)).collect();
+        base.extend((0..w).map(|k| id(r0 + k, c0 + w)));
+        base.extend((0..w).map(|k| id(r0 + w, c0 + w - k)));
+        base.extend((0..w).map(|k| id(r0 + w - k, c0)));
+        let theta = std::f64::consts::PI * (r0 as f64 + 0.5 * w as f64) / bands as f64;
+        let phi = TAU * (c0 as f64 + 0.5 * w as f64) / segments as f64;
+        let axis = [
+            theta.sin() * phi.cos(),
+            theta.sin() * phi.sin(),
+            theta.cos(),
+        ];
+        let e1 = [-phi.sin(), phi.cos(), 0.0];
+        let e2 = [
+            theta.cos() * phi.cos(),
+            theta.cos() * phi.sin(),
+            -theta.sin(),
+        ];
+        let angles: Vec<f64> = base
+            .iter()
+            .map(|&v| {
+                let d = sub3(positions[v as usize], axis);
+                dot3(d, e2).atan2(dot3(d, e1))
+            })
+            .collect();
+        let at = |s: f64, radius: f64, angle: f64| -> [f64; 3] {
+            let (cos, sin) = (angle.cos(), angle.sin());
+            [0, 1, 2].map(|k| (1.0 + s) * axis[k] + radius * (cos * e1[k] + sin * e2[k]))
+        };
+        let mut previous = base;
+        for i in 1..=rows {
+            let s = i as f64 * spacing;
+            let row: Vec<u32> = angles
+                .iter()
+                .map(|&angle| {
+                    positions.push(at(s, rho, angle));
+                    (positions.len() - 1) as u32
+                })
+                .collect();
+            let inside = axis.map(|x| x * (1.0 + s - 0.5 * spacing));
+            for j in 0..around {
+                let (p, q) = (previous[j], previous[(j + 1) % around]);
+                let (x, y) = (row[j], row[(j + 1) % around]);
+                faces.push(([p, q, y], inside));
+                faces.push(([p, y, x], inside));
+            }
+            previous = row;
+        }
+        let end = 1.0 + rows as f64 * spacing;
+        positions.push(axis.map(|x| x * (end + spacing)));
+        let tip = (positions.len() - 1) as u32;
+        for j in 0..around {
+            faces.push((
+                [previous[j], previous[(j + 1) % around], tip],
+                axis.map(|x| x * end),
+            ));
+        }
+    }
+    let triangles: Vec<[u32; 3]> = faces
+        .into_iter()
+        .map(|(t, inside)| {
+            let [a, b, c] = t.map(|v| positions[v as usize]);
+            let centroid = [0, 1, 2].map(|k| (a[k] + b[k] + c[k]) / 3.0);
+            let normal = cross3(sub3(b, a), sub3(c, a));
+            if dot3(normal, sub3(centroid, inside)) >= 0.0 {
+                t
+            } else {
+                [t[0], t[2], t[1]]
+            }
+        })
+        .collect();
+    // Without the grid vertices inside the windows.
+    let (mesh, _) = super::repair::drop_unreferenced(&TriMesh::new(positions, triangles));
+    mesh
+}
+
 /// The boundary loop of a generated disc, surface on the left (counter-clockwise when
 /// seen from the normal side), starting at its smallest vertex index. For tests that
 /// must not depend on [`super::Topology`]; `None` if the boundary is not one loop.
@@ -610,6 +773,21 @@ mod tests {
                 1e-12,
             );
         }
+        // The tentacle body: a closed sphere with 8 tubes, every triangle outward: the
+        // volume is the ball's and 8 cylinders' of radius ρ = 0.35·2·2π/48 and length
+        // 36ρ (the inscribed polygons a little less).
+        let body = tentacles(&Tentacles::default());
+        assert_eq!(body.triangles.len(), 8096);
+        assert_eq!(body.positions.len(), 8096 / 2 + 2, "every vertex used");
+        assert!((0..body.num_triangles()).all(|t| body.triangle_area(t) > 1e-6));
+        let rho = 0.35 * 2.0 * TAU / 48.0;
+        let pi = std::f64::consts::PI;
+        check(
+            &body,
+            0,
+            4.0 / 3.0 * pi + 8.0 * pi * rho * rho * 36.0 * rho,
+            0.03,
+        );
     }
 
     #[test]

@@ -195,6 +195,14 @@ impl Topology {
     pub fn is_disc(&self) -> bool {
         self.genus() == Some(0) && self.boundary_loops.len() == 1
     }
+    /// For each of `num_vertices` vertices, whether a boundary loop passes through it.
+    pub fn on_boundary(&self, num_vertices: usize) -> Vec<bool> {
+        let mut on = vec![false; num_vertices];
+        for l in &self.boundary_loops {
+            l.vertices.iter().for_each(|&v| on[v as usize] = true);
+        }
+        on
+    }
 }
 
 /// Boundary loops: connected components of the graph of edges used by exactly one

@@ -15,6 +15,7 @@ pub mod multilevel;
 pub mod newton;
 pub mod optcuts;
 pub mod plan;
+pub mod protrusions;
 pub mod relief;
 pub mod scaffold;
 pub mod tutte;
@@ -40,6 +41,19 @@ pub fn count_flipped(uvs: &[[f64; 2]], triangles: &[[u32; 3]]) -> usize {
             area.is_nan() || area <= 0.0
         })
         .count()
+}
+
+/// A reflected map is as good as any: mirrors `uv` when most triangles are negative.
+/// Returns the triangles still flipped or degenerate (0: admissible, §2.1.2).
+pub(crate) fn make_admissible(uv: &mut [[f64; 2]], triangles: &[[u32; 3]]) -> usize {
+    let negative = triangles
+        .iter()
+        .filter(|t| signed_uv_area([uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]]) < 0.0)
+        .count();
+    if 2 * negative > triangles.len() {
+        uv.iter_mut().for_each(|p| p[1] = -p[1]);
+    }
+    count_flipped(uv, triangles)
 }
 
 /// Why an initial map ([`lscm`], [`tutte`]) could not be computed.

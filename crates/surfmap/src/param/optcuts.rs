@@ -183,18 +183,91 @@ pub fn mean_symmetric_dirichlet(
     Ok((mean, per_triangle))
 }
 
-/// The chart being cut: the disc the solver flattens, and the way back to the mesh the
-/// plan prepared (holes filled; its vertices are the input's, then the fill's).
+/// A chart being cut open (here, and along protrusions by [`super::protrusions`]): the
+/// disc the solver flattens, and the way back to the mesh the plan prepared (holes
+/// filled; its vertices are the input's, then the fill's).
 #[derive(Clone)]
-struct Chart {
-    disc: TriMesh,
+pub(crate) struct Chart {
+    pub(crate) disc: TriMesh,
     /// For every disc vertex, its vertex in the prepared mesh.
-    vertex_of: Vec<u32>,
+    pub(crate) vertex_of: Vec<u32>,
     /// All seams (topological and added), prepared-mesh vertex pairs, sorted.
-    seams: Vec<[u32; 2]>,
-    /// Seam edges and length added by the distortion cuts.
-    added_edges: usize,
-    added_length: f64,
+    pub(crate) seams: Vec<[u32; 2]>,
+    /// Seam edges and length added by cutting the chart.
+    pub(crate) added_edges: usize,
+    pub(crate) added_length: f64,
+    /// Whether the prepared mesh was cut already (for its topology).
+    had_cut: bool,
+}
+
+impl Chart {
+    /// The prepared disc, before any cut of its own.
+    pub(crate) fn new(prepared: Prepared) -> Self {
+        let had_cut = prepared.opened.is_some();
+        let (vertex_of, seams) = match prepared.opened {
+            Some(opened) => (opened.original_vertex, opened.seams),
+            None => (
+                (0..prepared.mesh.positions.len() as u32).collect(),
+                Vec::new(),
+            ),
+        };
+        Self {
+            disc: prepared.mesh,
+            vertex_of,
+            seams,
+            added_edges: 0,
+            added_length: 0.0,
+            had_cut,
+        }
+    }
+
+    /// The chart split along `path` (disc vertex pairs; `topology`: the disc's), and for
+    /// every vertex of the new disc its vertex in this one.
+    pub(crate) fn split(
+        &self,
+        topology: &Topology,
+        path: &[[u32; 2]],
+    ) -> Result<(Chart, Vec<u32>), FlattenError> {
+        let opened = open_along(&self.disc, topology, path)?;
+        let length = crate::mesh::cut::seam_length(&self.disc.positions, path);
+        let mut seams: Vec<[u32; 2]> = path
+            .iter()
+            .map(|e| {
+                let [a, b] = e.map(|v| self.vertex_of[v as usize]);
+                [a.min(b), a.max(b)]
+            })
+            .chain(self.seams.iter().copied())
+            .collect();
+        seams.sort_unstable();
+        seams.dedup();
+        let chart = Chart {
+            vertex_of: opened
+                .original_vertex
+                .iter()
+                .map(|&v| self.vertex_of[v as usize])
+                .collect(),
+            disc: opened.mesh,
+            seams,
+            added_edges: self.added_edges + path.len(),
+            added_length: self.added_length + length,
+            had_cut: self.had_cut,
+        };
+        Ok((chart, opened.original_vertex))
+    }
+
+    /// Back to what the plan's mapping back reads: the disc, and the cut when there is
+    /// one.
+    pub(crate) fn into_prepared(self) -> Prepared {
+        let opened = (self.had_cut || self.added_edges > 0).then(|| OpenedMesh {
+            mesh: TriMesh::default(),
+            original_vertex: self.vertex_of,
+            seams: self.seams,
+        });
+        Prepared {
+            mesh: self.disc,
+            opened,
+        }
+    }
 }
 
 /// Cuts the flattened disc `prepared` (its flattening `first`) until the distortion of
@@ -236,21 +309,7 @@ pub(crate) fn cut_to_bound(
         first.distortion_cuts = Some(report);
         return Ok((prepared, first));
     }
-    let had_cut = prepared.opened.is_some();
-    let (vertex_of, seams) = match prepared.opened {
-        Some(opened) => (opened.original_vertex, opened.seams),
-        None => (
-            (0..prepared.mesh.positions.len() as u32).collect(),
-            Vec::new(),
-        ),
-    };
-    let mut chart = Chart {
-        disc: prepared.mesh,
-        vertex_of,
-        seams,
-        added_edges: 0,
-        added_length: 0.0,
-    };
+    let mut chart = Chart::new(prepared);
     let mut best = (chart.clone(), first);
     let mut current_uvs = best.1.uvs.clone();
     let mut stalled = 0;
@@ -265,31 +324,11 @@ pub(crate) fn cut_to_bound(
         }
         let from: Vec<u32> = paths.iter().map(|p| p.0).collect();
         let path: Vec<[u32; 2]> = paths.into_iter().flat_map(|p| p.1).collect();
-        let opened = open_along(&chart.disc, &topology, &path)?;
-        let length = crate::mesh::cut::seam_length(&chart.disc.positions, &path);
-        let warm = open_slit(&opened, &current_uvs);
-        let mut seams: Vec<[u32; 2]> = path
-            .iter()
-            .map(|e| {
-                let [a, b] = e.map(|v| chart.vertex_of[v as usize]);
-                [a.min(b), a.max(b)]
-            })
-            .chain(chart.seams.iter().copied())
-            .collect();
-        seams.sort_unstable();
-        seams.dedup();
         let from_vertices = from.iter().map(|&v| chart.vertex_of[v as usize]).collect();
-        chart = Chart {
-            vertex_of: opened
-                .original_vertex
-                .iter()
-                .map(|&v| chart.vertex_of[v as usize])
-                .collect(),
-            disc: opened.mesh,
-            seams,
-            added_edges: chart.added_edges + path.len(),
-            added_length: chart.added_length + length,
-        };
+        let length = crate::mesh::cut::seam_length(&chart.disc.positions, &path);
+        let (next, old_vertex) = chart.split(&topology, &path)?;
+        let warm = open_slit(&next.disc, &old_vertex, &current_uvs);
+        chart = next;
         let round_options = FlattenOptions {
             start: Start::Given(warm),
             max_distortion: None,
@@ -341,37 +380,19 @@ pub(crate) fn cut_to_bound(
     report.seam_edges_added = chart.added_edges;
     report.seam_length_added = chart.added_length;
     result.distortion_cuts = Some(report);
-    let opened = (had_cut || chart.added_edges > 0).then(|| OpenedMesh {
-        mesh: TriMesh::default(),
-        original_vertex: chart.vertex_of,
-        seams: chart.seams,
-    });
-    Ok((
-        Prepared {
-            mesh: chart.disc,
-            opened,
-        },
-        result,
-    ))
+    Ok((chart.into_prepared(), result))
 }
 
-/// The start map of the disc `opened` cut from the flattened disc with UVs `uvs`: the
-/// copies of every split vertex moved a little into their own side (a tenth of the way
-/// to the mean of their neighbours, less if that flips a triangle), so the two sides of
-/// the new slit neither coincide nor cross — a start the boundary barrier accepts.
-fn open_slit(opened: &OpenedMesh, uvs: &[[f64; 2]]) -> Vec<[f64; 2]> {
-    let mesh = &opened.mesh;
-    let slit: Vec<[f64; 2]> = opened
-        .original_vertex
-        .iter()
-        .map(|&v| uvs[v as usize])
-        .collect();
+/// The start map of the disc `mesh` cut from the flattened disc with UVs `uvs`
+/// (`old_vertex`: every vertex's vertex there): the copies of every split vertex moved a
+/// little into their own side (a tenth of the way to the mean of their neighbours, less
+/// if that flips a triangle), so the two sides of the new slit neither coincide nor
+/// cross — a start the boundary barrier accepts.
+fn open_slit(mesh: &TriMesh, old_vertex: &[u32], uvs: &[[f64; 2]]) -> Vec<[f64; 2]> {
+    let slit: Vec<[f64; 2]> = old_vertex.iter().map(|&v| uvs[v as usize]).collect();
     let mut copies = vec![0u32; uvs.len()];
-    opened
-        .original_vertex
-        .iter()
-        .for_each(|&v| copies[v as usize] += 1);
-    let split = |v: u32| copies[opened.original_vertex[v as usize] as usize] > 1;
+    old_vertex.iter().for_each(|&v| copies[v as usize] += 1);
+    let split = |v: u32| copies[old_vertex[v as usize] as usize] > 1;
     // Mean of each split vertex's neighbours (each edge counted from both faces).
     let mut sum = vec![[0.0f64; 2]; slit.len()];
     let mut count = vec![0u32; slit.len()];
@@ -451,12 +472,7 @@ fn cut_paths(
             }
         })
         .collect();
-    let mut on_boundary = vec![false; n];
-    for l in &topology.boundary_loops {
-        l.vertices
-            .iter()
-            .for_each(|&v| on_boundary[v as usize] = true);
-    }
+    let mut on_boundary = topology.on_boundary(n);
     let graph = EdgeGraph::new(disc, topology);
     let candidate = |v: usize| !blocked[v] && weight[v] > 0.0;
     let mut paths = Vec::new();
@@ -479,19 +495,16 @@ fn cut_paths(
         } else if score(from) < NEXT_PATH_SCORE * first_score {
             break;
         }
-        let (_, parent, end) = graph.shortest_paths(
-            &[from as u32],
+        let Some(path) = graph.path_to(
+            from as u32,
             |a, b, length| length / (0.5 * (distortion[a as usize] + distortion[b as usize])),
             passable,
             |v| on_boundary[v as usize],
-        );
-        let Some(mut v) = end else { break };
-        let mut path = Vec::new();
-        while v != from as u32 {
-            let p = parent[v as usize];
-            path.push([p.min(v), p.max(v)]);
-            on_boundary[p as usize] = true;
-            v = p;
+        ) else {
+            break;
+        };
+        for e in &path {
+            e.iter().for_each(|&v| on_boundary[v as usize] = true);
         }
         paths.push((from as u32, path));
     }
@@ -499,17 +512,17 @@ fn cut_paths(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
-    use crate::measure::{MeasureOptions, distortion_report};
+    use crate::measure::{DistortionReport, MeasureOptions, distortion_report};
     use crate::mesh::generate::{bumpy_disc, cone, sphere, spherical_cap};
     use crate::param::flatten::{CutReason, Guarantee, OptionError, flatten};
 
-    /// Checks what every result must be: one UV triangle per input triangle, all
-    /// counter-clockwise, one chart without overlap, the input's UV per corner split
-    /// exactly along the reported seams, and the reported `D` the one an independent
-    /// measurement of the written corners gives.
-    fn check(mesh: &TriMesh, map: &Flattening) -> DistortionCuts {
+    /// Checks what every cut map must be: one UV triangle per input triangle, all
+    /// counter-clockwise, one chart whose boundary does not even touch itself, the
+    /// input's UV per corner split exactly along the reported seams; returns the
+    /// measures of the written corners.
+    pub(crate) fn one_chart(mesh: &TriMesh, map: &Flattening) -> DistortionReport {
         let corners = map.corner_uvs(&mesh.triangles);
         assert!(
             corners
@@ -531,12 +544,19 @@ mod tests {
             "{:?}",
             measured.boundary_overlap
         );
-        let cuts = map.distortion_cuts.clone().expect("a distortion report");
-        let d = measured.symmetric_dirichlet / 4.0;
-        assert!((cuts.after - d).abs() <= 1e-12 * d, "{} vs {d}", cuts.after);
         if let Some(seams) = &map.seams {
             crate::param::plan::tests::seams_split_exactly(mesh, seams);
         }
+        measured
+    }
+
+    /// [`one_chart`], and the reported `D` the one an independent measurement of the
+    /// written corners gives.
+    fn check(mesh: &TriMesh, map: &Flattening) -> DistortionCuts {
+        let measured = one_chart(mesh, map);
+        let cuts = map.distortion_cuts.clone().expect("a distortion report");
+        let d = measured.symmetric_dirichlet / 4.0;
+        assert!((cuts.after - d).abs() <= 1e-12 * d, "{} vs {d}", cuts.after);
         cuts
     }
 

@@ -28,7 +28,8 @@ pub enum Cut {
     /// the surface cut along them must be a disc.
     Along(Vec<[u32; 2]>),
     /// Never: a mesh that is not a disc (once its holes are filled, if asked) is an
-    /// error.
+    /// error, and a disc is not cut along protrusions either
+    /// ([`super::protrusions`]): the map has one UV per vertex.
     Never,
 }
 
@@ -45,6 +46,11 @@ pub enum CutReason {
     /// ([`super::flatten::FlattenOptions::max_distortion`]); a surface cut for its
     /// topology keeps that reason when distortion cuts are added.
     Distortion,
+    /// A disc cut only along its protrusions, because no single chart of it could be
+    /// embedded in floating point ([`super::protrusions`]; what was cut is in
+    /// [`super::flatten::Flattening::protrusion_cuts`]); a surface cut for its topology
+    /// keeps that reason when protrusion cuts are added.
+    Protrusions,
 }
 
 /// What [`super::flatten`] does before the solve (see the module docs).
@@ -73,6 +79,7 @@ impl Plan {
         let cut = self.cut.as_ref().map(|reason| match reason {
             CutReason::Given => "cut open along the given seams".to_string(),
             CutReason::Distortion => "cut open to lower the distortion".to_string(),
+            CutReason::Protrusions => "cut along protrusions".to_string(),
             CutReason::Topology {
                 boundary_loops,
                 genus,

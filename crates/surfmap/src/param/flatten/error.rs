@@ -25,9 +25,19 @@ pub enum FlattenError {
     #[error("initial map: {0}")]
     InitialMap(#[from] InitialMapError),
     #[error(
-        "both initial maps flipped triangles (LSCM: {lscm}, mean-value: {mean_value}); the mesh geometry is probably broken (non-finite or coincident vertices)"
+        "both initial maps flipped triangles (LSCM: {lscm}, mean-value: {mean_value}); the mesh geometry is probably broken (non-finite or coincident vertices), or the surface has protrusions too long and thin for one chart, which only cutting along them can flatten (not with `Cut::Never` or an explicit start)"
     )]
     NoAdmissibleStart { lscm: usize, mean_value: usize },
+    #[error("{}", no_start_after_cuts(*.cuts, *.lscm, *.mean_value, *.triangle))]
+    NoAdmissibleStartAfterCuts {
+        /// Cuts along protrusions made ([`crate::param::protrusions`]).
+        cuts: usize,
+        /// Triangles each start flips or degenerates after them.
+        lscm: usize,
+        mean_value: usize,
+        /// An input triangle the mean-value start flips, when it is one of the input's.
+        triangle: Option<usize>,
+    },
     #[error(
         "the LSCM start flips or degenerates {0} triangles; use `Start::Auto` (falls back to mean-value coordinates, injective by construction)"
     )]
@@ -52,6 +62,26 @@ pub enum FlattenError {
     FlippedResult(usize),
     #[error("measuring the distortion for the distortion bound: {0}")]
     Distortion(#[from] crate::measure::MeasureError),
+}
+
+/// The message of [`FlattenError::NoAdmissibleStartAfterCuts`].
+fn no_start_after_cuts(
+    cuts: usize,
+    lscm: usize,
+    mean_value: usize,
+    triangle: Option<usize>,
+) -> String {
+    let cut = match cuts {
+        0 => "with no protrusion left to cut along".to_string(),
+        1 => "after 1 cut along a protrusion".to_string(),
+        n => format!("after {n} cuts along protrusions"),
+    };
+    let at = triangle.map_or_else(String::new, |t| {
+        format!(", triangle {t} (0-based) among them")
+    });
+    format!(
+        "no initial map embeds the mesh {cut}: LSCM flips or degenerates {lscm} triangles and mean-value coordinates {mean_value}{at}. Mean-value coordinates flip only where triangles are too small or thin for floating point next to the rest of the chart: look for nearly coincident vertices and needle or sliver triangles there (`repair::drop_degenerate`, remeshing), or give seams that open that region (`Cut::Along`)"
+    )
 }
 
 impl From<NotADisc> for FlattenError {

@@ -26,7 +26,8 @@ mod warm_start;
 
 use crate::mesh::{Topology, TriMesh};
 use crate::param::optcuts;
-use crate::param::plan::{map_back, plan_with_topology, prepare};
+use crate::param::plan::{Prepared, map_back, plan_with_topology, prepare};
+use crate::param::protrusions::{Protruded, Refuse, cut_protrusions};
 use std::time::Instant;
 
 /// Flattens a disc-topology mesh (module docs) with `options`.
@@ -49,13 +50,6 @@ pub fn flatten_with_progress(
     mesh.check_indices()?;
     let topology = Topology::new(mesh);
     let mut plan = plan_with_topology(mesh, &topology, options)?;
-    if plan.is_disc_as_is() && options.max_distortion.is_none() {
-        let mut result = solve::flatten_used(mesh, Some(topology), options, progress, flatten)?;
-        result.plan = plan;
-        result.time_total = clock.elapsed().as_secs_f64();
-        return Ok(result);
-    }
-    drop(topology);
     if matches!(options.start, Start::Given(_)) && !plan.is_disc_as_is() {
         return Err(match plan.cut {
             None => FlattenError::GivenStartWithFilledHoles(plan.holes_to_fill),
@@ -64,21 +58,39 @@ pub fn flatten_with_progress(
     }
     // The fill's vertices come after the original ones and the cut's copies after
     // those: mapping back drops them (the holes stay open in the map).
-    let mut prepared = prepare(mesh, &mut plan, options)?;
+    let (prepared, topology) = if plan.is_disc_as_is() {
+        let disc = TriMesh::new(mesh.positions.clone(), mesh.triangles.clone());
+        (
+            Prepared {
+                mesh: disc,
+                opened: None,
+            },
+            Some(topology),
+        )
+    } else {
+        drop(topology);
+        (prepare(mesh, &mut plan, options)?, None)
+    };
     let time_prepare = clock.elapsed().as_secs_f64();
-    let mut result = solve::flatten_used(&prepared.mesh, None, options, progress, flatten)?;
+    let input_faces = mesh.triangles.len();
+    let (mut prepared, mut result) =
+        solve_prepared(input_faces, prepared, topology, options, progress)?;
     if let Some(bound) = &options.max_distortion {
-        (prepared, result) = optcuts::cut_to_bound(
-            mesh.triangles.len(),
-            prepared,
-            result,
-            bound,
-            options,
-            progress,
-        )?;
+        let protrusion_cuts = result.protrusion_cuts.take();
+        (prepared, result) =
+            optcuts::cut_to_bound(input_faces, prepared, result, bound, options, progress)?;
+        result.protrusion_cuts = protrusion_cuts;
     }
-    // Seams with no topological reason were cut for the distortion bound.
-    let reason = plan.cut.clone().unwrap_or(CutReason::Distortion);
+    // Seams with no topological reason were cut along protrusions or for the
+    // distortion bound.
+    let reason = plan
+        .cut
+        .clone()
+        .unwrap_or(if result.protrusion_cuts.is_some() {
+            CutReason::Protrusions
+        } else {
+            CutReason::Distortion
+        });
     let (uvs, seams) = map_back(mesh, prepared, reason, std::mem::take(&mut result.uvs));
     result.uvs = uvs;
     result.seams = seams;
@@ -87,6 +99,66 @@ pub fn flatten_with_progress(
     result.time_prepare = time_prepare;
     result.time_total = clock.elapsed().as_secs_f64();
     Ok(result)
+}
+
+/// The solve of the disc `prepared` (its first `input_faces` triangles the input's;
+/// `topology`: its topology, if derived), cut along protrusions first when its start
+/// cannot embed it ([`crate::param::protrusions`]; not with a given or explicit start,
+/// nor with [`Cut::Never`], whose map must stay one UV per vertex): with the automatic
+/// start, a chart solved from
+/// LSCM is checked before the solve (and its LSCM map reused by it), one solved from the
+/// multilevel start only when the solve finds no admissible single-level start. Returns
+/// the disc solved, and the flattening with [`Flattening::protrusion_cuts`].
+fn solve_prepared(
+    input_faces: usize,
+    prepared: Prepared,
+    topology: Option<Topology>,
+    options: &FlattenOptions,
+    progress: &mut dyn FnMut(&IterationLog),
+) -> Result<(Prepared, Flattening), FlattenError> {
+    let (Start::Auto { multilevel }, Cut::Auto | Cut::Along(_)) = (&options.start, &options.cut)
+    else {
+        let result =
+            solve::flatten_used(&prepared.mesh, topology, options, progress, flatten, None)?;
+        return Ok((prepared, result));
+    };
+    if multilevel
+        .coarse_level(prepared.mesh.triangles.len())
+        .is_none()
+    {
+        let protruded = cut_protrusions(input_faces, prepared, Refuse::CrushedOrFlipped)?;
+        return solve_protruded(protruded, topology, options, progress);
+    }
+    // The multilevel start does not compute LSCM: a large chart is checked only when no
+    // start embeds it (the single-level fallback's error), then cut and solved again.
+    match solve::flatten_used(&prepared.mesh, topology, options, progress, flatten, None) {
+        Ok(result) => Ok((prepared, result)),
+        Err(FlattenError::NoAdmissibleStart { .. }) => {
+            let protruded = cut_protrusions(input_faces, prepared, Refuse::Flipped)?;
+            solve_protruded(protruded, None, options, progress)
+        }
+        Err(e) => Err(e),
+    }
+}
+
+/// The solve of a disc after [`cut_protrusions`] (`topology`: that of the disc before,
+/// if derived: used when it was not cut), from its initial maps when computed.
+fn solve_protruded(
+    protruded: Protruded,
+    topology: Option<Topology>,
+    options: &FlattenOptions,
+    progress: &mut dyn FnMut(&IterationLog),
+) -> Result<(Prepared, Flattening), FlattenError> {
+    let Protruded {
+        prepared,
+        cuts,
+        maps,
+    } = protruded;
+    let topology = topology.filter(|_| cuts.is_none());
+    let mut result =
+        solve::flatten_used(&prepared.mesh, topology, options, progress, flatten, maps)?;
+    result.protrusion_cuts = cuts;
+    Ok((prepared, result))
 }
 
 /// The flattening of `mesh`'s vertices used by a triangle (the others at the origin),
@@ -98,12 +170,13 @@ pub(crate) fn flatten_used(
     options: &FlattenOptions,
     progress: &mut dyn FnMut(&IterationLog),
 ) -> Result<Flattening, FlattenError> {
-    solve::flatten_used(mesh, topology, options, progress, flatten)
+    solve::flatten_used(mesh, topology, options, progress, flatten, None)
 }
 
 pub use crate::param::newton::{IterationLog, NewtonSettings, NewtonTimings, StopReason};
 pub use crate::param::optcuts::{CutRound, CutStop, DistortionCuts, MaxDistortion};
 pub use crate::param::plan::{Cut, CutReason, Seams};
+pub use crate::param::protrusions::ProtrusionCuts;
 pub use error::FlattenError;
 pub use options::{Bijective, CoarseLevel, FlattenOptions, Multilevel, OptionError, Start};
 pub use result::{Flattening, Guarantee, MultilevelReport, StartMap};

@@ -9,6 +9,7 @@ use crate::param::count_flipped;
 use crate::param::newton::{IterationLog, NewtonTimings, StopReason};
 use crate::param::optcuts::DistortionCuts;
 use crate::param::plan::{Plan, Seams};
+use crate::param::protrusions::ProtrusionCuts;
 use serde::Serialize;
 use std::time::Instant;
 
@@ -126,6 +127,10 @@ pub struct Flattening {
     /// bound holds. The other fields describe the solve of the map returned (the best
     /// one found), [`Self::time_total`] every round.
     pub distortion_cuts: Option<DistortionCuts>,
+    /// The cuts along protrusions made because no single chart could be embedded
+    /// ([`crate::param::protrusions`]): how many, their seam length, where they start.
+    /// `None` when the start was admissible without them.
+    pub protrusion_cuts: Option<ProtrusionCuts>,
 }
 
 impl Flattening {
@@ -154,22 +159,35 @@ impl Flattening {
     }
 
     /// What was done around the solve, for people: the plan ([`Plan::describe`]),
-    /// followed by the distortion cuts when the map kept some
-    /// ([`FlattenOptions::max_distortion`](super::FlattenOptions::max_distortion)): `disc as is`, `cut open to lower the
-    /// distortion`, `cut open along seams (closed, genus 0), then cut open to lower the
-    /// distortion`.
+    /// followed by the cuts along protrusions ([`Self::protrusion_cuts`]) and the
+    /// distortion cuts when the map kept some
+    /// ([`FlattenOptions::max_distortion`](super::FlattenOptions::max_distortion)):
+    /// `disc as is`, `cut open to lower the distortion`, `cut open along seams (closed,
+    /// genus 0), then cut along 6 protrusions (seam length 12.3456)`, `cut open along
+    /// seams (closed, genus 0), then cut open to lower the distortion`.
     pub fn describe_plan(&self) -> String {
-        let distortion_cuts = self
+        let plan = (!self.plan.is_disc_as_is()).then(|| self.plan.describe());
+        let protrusions = self.protrusion_cuts.as_ref().map(|c| {
+            format!(
+                "cut along {} protrusion{} (seam length {:.4})",
+                c.cuts,
+                if c.cuts == 1 { "" } else { "s" },
+                c.seam_length
+            )
+        });
+        let distortion = self
             .distortion_cuts
             .as_ref()
-            .is_some_and(|c| c.seam_edges_added > 0);
-        match (distortion_cuts, self.plan.is_disc_as_is()) {
-            (false, _) => self.plan.describe(),
-            (true, true) => "cut open to lower the distortion".to_string(),
-            (true, false) => format!(
-                "{}, then cut open to lower the distortion",
-                self.plan.describe()
-            ),
+            .is_some_and(|c| c.seam_edges_added > 0)
+            .then(|| "cut open to lower the distortion".to_string());
+        let parts: Vec<String> = [plan, protrusions, distortion]
+            .into_iter()
+            .flatten()
+            .collect();
+        if parts.is_empty() {
+            self.plan.describe()
+        } else {
+            parts.join(", then ")
         }
     }
 
@@ -274,5 +292,6 @@ pub(super) fn result_of(
         newton_timings: solved.newton_timings,
         multilevel: solved.multilevel,
         distortion_cuts: None,
+        protrusion_cuts: None,
     })
 }

@@ -11,7 +11,7 @@ use super::error::FlattenError;
 use super::options::{Bijective, FlattenOptions, Start};
 use super::result::{Flattening, Solved, StartMap, result_of};
 use super::start::{
-    FlattenFn, InitialMap, SharedStart, check_given_length, initial_map, relieve_contacts,
+    FlattenFn, InitialMap, SharedStart, Starts, check_given_length, initial_map, relieve_contacts,
 };
 use super::warm_start::arap_warm_start;
 use crate::energy::Energy;
@@ -22,6 +22,7 @@ use crate::param::element::{RestTriangle, rest_triangles};
 use crate::param::newton::{
     CROSSING_PERSISTENCE, IterationLog, NewtonSettings, NewtonSolver, NewtonTimings, StopReason,
 };
+use crate::param::protrusions::StartMaps;
 use crate::param::tutte;
 use std::time::Instant;
 
@@ -35,16 +36,18 @@ const SCAFFOLD_START_ENERGY: f64 = 1e4;
 /// The flattening of the vertices used by a triangle; the others are put at the origin.
 /// `topology`: that of `mesh`, if already derived; `flatten`: the entry point, for the
 /// multilevel start.
+/// `maps`: the initial maps of `mesh`, when already computed.
 pub(super) fn flatten_used(
     mesh: &TriMesh,
     topology: Option<Topology>,
     options: &FlattenOptions,
     progress: &mut dyn FnMut(&IterationLog),
     flatten: FlattenFn,
+    maps: Option<StartMaps>,
 ) -> Result<Flattening, FlattenError> {
     let (compact, old_of_new) = without_unreferenced(mesh);
     let Some(compact) = compact else {
-        return flatten_disc(mesh, topology, options, progress, flatten);
+        return flatten_disc(mesh, topology, options, progress, flatten, maps);
     };
     let mut compact_options = options.clone();
     if let Start::Given(given) = &options.start {
@@ -52,7 +55,7 @@ pub(super) fn flatten_used(
         compact_options.start =
             Start::Given(old_of_new.iter().map(|&v| given[v as usize]).collect());
     }
-    let mut result = flatten_disc(&compact, None, &compact_options, progress, flatten)?;
+    let mut result = flatten_disc(&compact, None, &compact_options, progress, flatten, None)?;
     let mut uvs = vec![[0.0, 0.0]; mesh.positions.len()];
     for (new, &old) in old_of_new.iter().enumerate() {
         uvs[old as usize] = result.uvs[new];
@@ -62,13 +65,14 @@ pub(super) fn flatten_used(
 }
 
 /// The flattening of a mesh whose vertices are all used (`topology`: its topology, if
-/// already derived).
+/// already derived; `maps`: its initial maps, if already computed).
 fn flatten_disc(
     mesh: &TriMesh,
     topology: Option<Topology>,
     options: &FlattenOptions,
     progress: &mut dyn FnMut(&IterationLog),
     flatten: FlattenFn,
+    maps: Option<StartMaps>,
 ) -> Result<Flattening, FlattenError> {
     let clock = Instant::now();
     let disc = match topology {
@@ -84,7 +88,10 @@ fn flatten_disc(
         mesh,
         disc: &disc,
         options,
-        shared: SharedStart::NotTried,
+        starts: Starts {
+            multilevel: SharedStart::NotTried,
+            maps,
+        },
         flatten,
     };
     let first = match solve_disc(&mut context, progress, solve)? {
@@ -133,12 +140,13 @@ enum SolveOutcome {
 }
 
 /// What the solves of one disc share: the mesh, its disc, the options, the multilevel
-/// start (computed by the first solve that needs it) and the entry point (for it).
+/// start (computed by the first solve that needs it), the entry point (for it) and the
+/// initial maps when they were computed before the solve.
 struct Context<'a> {
     mesh: &'a TriMesh,
     disc: &'a Disc<'a>,
     options: &'a FlattenOptions,
-    shared: SharedStart,
+    starts: Starts,
     flatten: FlattenFn,
 }
 
@@ -166,7 +174,7 @@ fn solve_disc(
         &positions,
         options,
         barrier,
-        &mut context.shared,
+        &mut context.starts,
         context.flatten,
     )?;
     start.check(mesh, options)?;

@@ -12,7 +12,9 @@ use crate::measure::overlap::boundary_crossings;
 use crate::mesh::{Disc, TriMesh};
 use crate::param::element::RestTriangle;
 use crate::param::newton::NewtonSettings;
-use crate::param::{count_flipped, lscm, signed_uv_area, tutte};
+use crate::param::plan::Cut;
+use crate::param::protrusions::StartMaps;
+use crate::param::{count_flipped, lscm, make_admissible, signed_uv_area, tutte};
 use std::time::Instant;
 
 /// The flattening entry point, handed down to the multilevel start (which flattens a
@@ -30,6 +32,15 @@ pub(super) enum SharedStart {
     Tried(Option<Vec<[f64; 2]>>, Box<MultilevelReport>),
 }
 
+/// What the solves of one disc share for their starts: the multilevel start and the
+/// initial maps computed before the solve ([`crate::param::protrusions`] computes LSCM,
+/// and mean-value coordinates when LSCM flips, to check the start), used instead of
+/// computing them again.
+pub(super) struct Starts {
+    pub(super) multilevel: SharedStart,
+    pub(super) maps: Option<StartMaps>,
+}
+
 /// The initial map of a solve, before it is checked.
 pub(super) struct InitialMap {
     /// One UV per vertex: unit-area units for LSCM and mean-value coordinates, the mesh's
@@ -44,19 +55,22 @@ pub(super) struct InitialMap {
 
 /// The initial map `options.start` asks for on `mesh` (`positions`: scaled to unit
 /// area). With the barrier (`barrier`) the start must not cross itself: LSCM and a
-/// given map fall back to mean-value coordinates, a multilevel start to LSCM. `shared`:
-/// the multilevel start, computed by the first solve that needs it.
+/// given map fall back to mean-value coordinates, a multilevel start to LSCM. `starts`:
+/// the multilevel start, computed by the first solve that needs it, and the maps
+/// computed before the solve.
 pub(super) fn initial_map(
     mesh: &TriMesh,
     disc: &Disc,
     positions: &[[f64; 3]],
     options: &FlattenOptions,
     barrier: bool,
-    shared: &mut SharedStart,
+    starts: &mut Starts,
     flatten: FlattenFn,
 ) -> Result<InitialMap, FlattenError> {
     let boundary = disc.boundary();
-    let lscm_or_fallback = |fallback: bool| lscm_start(mesh, disc, positions, barrier, fallback);
+    let (shared, maps) = (&mut starts.multilevel, starts.maps.as_ref());
+    let lscm_or_fallback =
+        |fallback: bool| lscm_start(mesh, disc, positions, barrier, fallback, maps);
     let mean_value = || -> Result<_, FlattenError> {
         Ok(InitialMap::plain(
             tutte::mean_value(positions, disc)?,
@@ -189,40 +203,36 @@ impl InitialMap {
 }
 
 /// LSCM on the full mesh, made admissible; when it flips a triangle (or, with the
-/// barrier, crosses itself) and `fallback`, mean-value coordinates instead.
+/// barrier, crosses itself) and `fallback`, mean-value coordinates instead. `cached`:
+/// either map, when already computed.
 fn lscm_start(
     mesh: &TriMesh,
     disc: &Disc,
     positions: &[[f64; 3]],
     barrier: bool,
     fallback: bool,
+    cached: Option<&StartMaps>,
 ) -> Result<InitialMap, FlattenError> {
-    let mut uv = lscm::lscm(positions, disc)?.uv;
+    let mut uv = match cached {
+        Some(maps) => maps.lscm.clone(),
+        None => lscm::lscm(positions, disc)?.uv,
+    };
     let lscm_flipped = make_admissible(&mut uv, &mesh.triangles);
     // With the barrier, the start must not overlap itself either.
     let usable = lscm_flipped == 0 && (!barrier || boundary_crossings(&uv, disc.boundary()) == 0);
     let (uv, map) = if usable || !fallback {
         (uv, StartMap::Lscm)
     } else {
-        (tutte::mean_value(positions, disc)?, StartMap::MeanValue)
+        let mean_value = match cached.and_then(|maps| maps.mean_value.clone()) {
+            Some(uv) => uv,
+            None => tutte::mean_value(positions, disc)?,
+        };
+        (mean_value, StartMap::MeanValue)
     };
     Ok(InitialMap {
         lscm_flipped,
         ..InitialMap::plain(uv, map)
     })
-}
-
-/// A reflected map is as good as any: mirrors `uv` when most triangles are negative.
-/// Returns the triangles still flipped or degenerate (0: admissible, §2.1.2).
-fn make_admissible(uv: &mut [[f64; 2]], triangles: &[[u32; 3]]) -> usize {
-    let negative = triangles
-        .iter()
-        .filter(|t| signed_uv_area([uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]]) < 0.0)
-        .count();
-    if 2 * negative > triangles.len() {
-        uv.iter_mut().for_each(|p| p[1] = -p[1]);
-    }
-    count_flipped(uv, triangles)
 }
 
 /// A multilevel start's crushed boundary contacts (a coarse slit's tip, its
@@ -310,6 +320,8 @@ fn multilevel_start(
                 options.bijective
             },
             max_distortion: None,
+            // One UV per coarse vertex: never cut (along protrusions).
+            cut: Cut::Never,
             ..options.clone()
         };
         let flat = flatten(&coarse, &coarse_options).map_err(|e| format!("coarse mesh: {e}"))?;
