@@ -119,6 +119,25 @@ pub fn worded_flatten_error(e: &FlattenError, wording: surfmap::report::DefectWo
              to mean-value coordinates, injective by construction)"
         ),
         FlattenError::Option(o) => option_message(o),
+        FlattenError::NoAdmissibleStart { lscm, mean_value } => {
+            surfmap::param::flatten::no_start_message(
+                *lscm,
+                *mean_value,
+                "cut=\"auto\" or seams=...; the default cut=\"never\" keeps one UV per vertex",
+            )
+        }
+        FlattenError::NoAdmissibleStartAfterCuts {
+            cuts,
+            lscm,
+            mean_value,
+            triangle,
+        } => surfmap::param::flatten::no_start_after_cuts_message(
+            *cuts,
+            *lscm,
+            *mean_value,
+            *triangle,
+            ("surfmap.repair(V, F, drop_degenerate=True)", "seams=..."),
+        ),
         other => other.to_string(),
     }
 }

@@ -114,6 +114,25 @@ pub fn worded_flatten_error(
              to mean-value coordinates, injective by construction)"
         ),
         FlattenError::Option(o) => option_message(o),
+        FlattenError::NoAdmissibleStart { lscm, mean_value } => {
+            surfmap::param::flatten::no_start_message(
+                *lscm,
+                *mean_value,
+                "`surfmap flatten` does, writing seams; the other commands need one UV per vertex",
+            )
+        }
+        FlattenError::NoAdmissibleStartAfterCuts {
+            cuts,
+            lscm,
+            mean_value,
+            triangle,
+        } => surfmap::param::flatten::no_start_after_cuts_message(
+            *cuts,
+            *lscm,
+            *mean_value,
+            *triangle,
+            ("--drop-degenerate", "--cut-along"),
+        ),
         _ => return None,
     })
 }
@@ -169,5 +188,37 @@ mod tests {
                 assert!(text.contains(" --"), "{text}");
             }
         }
+    }
+
+    /// The refusals of a mesh no start embeds name what to do on the command line.
+    #[test]
+    fn no_start_refusals_name_flags_not_library_names() {
+        let after_cuts = FlattenError::NoAdmissibleStartAfterCuts {
+            cuts: 3,
+            lscm: 12,
+            mean_value: 2,
+            triangle: Some(7),
+        };
+        let text = worded_flatten_error(&after_cuts, defect_message).unwrap();
+        assert!(
+            text.contains("--drop-degenerate") && text.contains("--cut-along"),
+            "{text}"
+        );
+        assert!(text.contains("after 3 cuts along protrusions") && text.contains("triangle 7"));
+        let never = FlattenError::NoAdmissibleStart {
+            lscm: 12,
+            mean_value: 2,
+        };
+        let text_never = worded_flatten_error(&never, defect_message).unwrap();
+        assert!(
+            text_never.contains("`surfmap flatten` does"),
+            "{text_never}"
+        );
+        for t in [&text, &text_never] {
+            assert!(!t.contains("::"), "{t}");
+        }
+        // The library's own wording names its API.
+        assert!(after_cuts.to_string().contains("`Cut::Along`"));
+        assert!(never.to_string().contains("`Cut::Auto` or `Cut::Along`"));
     }
 }

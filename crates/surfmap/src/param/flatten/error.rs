@@ -24,11 +24,9 @@ pub enum FlattenError {
     Solve(#[from] SolveError),
     #[error("initial map: {0}")]
     InitialMap(#[from] InitialMapError),
-    #[error(
-        "both initial maps flipped triangles (LSCM: {lscm}, mean-value: {mean_value}); the mesh geometry is probably broken (non-finite or coincident vertices), or the surface has protrusions too long and thin for one chart, which only cutting along them can flatten (not with `Cut::Never` or an explicit start)"
-    )]
+    #[error("{}", no_start_message(*.lscm, *.mean_value, "`Cut::Auto` or `Cut::Along`"))]
     NoAdmissibleStart { lscm: usize, mean_value: usize },
-    #[error("{}", no_start_after_cuts(*.cuts, *.lscm, *.mean_value, *.triangle))]
+    #[error("{}", no_start_after_cuts_message(*.cuts, *.lscm, *.mean_value, *.triangle, RUST_REMEDIES))]
     NoAdmissibleStartAfterCuts {
         /// Cuts along protrusions made ([`crate::param::protrusions`]).
         cuts: usize,
@@ -65,11 +63,29 @@ pub enum FlattenError {
 }
 
 /// The message of [`FlattenError::NoAdmissibleStartAfterCuts`].
-fn no_start_after_cuts(
+/// What [`FlattenError::NoAdmissibleStart`] says, `cutting` naming how to let the flattening
+/// cut (the front ends word it as their flags or keywords).
+pub fn no_start_message(lscm: usize, mean_value: usize, cutting: &str) -> String {
+    format!(
+        "both initial maps flipped triangles (LSCM: {lscm}, mean-value: {mean_value}); the mesh geometry is probably broken (non-finite or coincident vertices), or the surface has protrusions too long and thin for one chart, which only cutting along them can flatten ({cutting}; not with an explicit start)"
+    )
+}
+
+/// How [`no_start_after_cuts_message`] names its remedies: dropping degenerate triangles,
+/// and giving seams.
+pub type Remedies<'a> = (&'a str, &'a str);
+
+/// The library's names of the remedies.
+const RUST_REMEDIES: Remedies<'static> = ("`repair::drop_degenerate`", "`Cut::Along`");
+
+/// What [`FlattenError::NoAdmissibleStartAfterCuts`] says, its remedies named by
+/// `remedies` (the front ends word them as their flags or keywords).
+pub fn no_start_after_cuts_message(
     cuts: usize,
     lscm: usize,
     mean_value: usize,
     triangle: Option<usize>,
+    (drop_degenerate, seams): Remedies<'_>,
 ) -> String {
     let cut = match cuts {
         0 => "with no protrusion left to cut along".to_string(),
@@ -80,7 +96,7 @@ fn no_start_after_cuts(
         format!(", triangle {t} (0-based) among them")
     });
     format!(
-        "no initial map embeds the mesh {cut}: LSCM flips or degenerates {lscm} triangles and mean-value coordinates {mean_value}{at}. Mean-value coordinates flip only where triangles are too small or thin for floating point next to the rest of the chart: look for nearly coincident vertices and needle or sliver triangles there (`repair::drop_degenerate`, remeshing), or give seams that open that region (`Cut::Along`)"
+        "no initial map embeds the mesh {cut}: LSCM flips or degenerates {lscm} triangles and mean-value coordinates {mean_value}{at}. Mean-value coordinates flip only where triangles are too small or thin for floating point next to the rest of the chart: look for nearly coincident vertices and needle or sliver triangles there ({drop_degenerate}, remeshing), or give seams that open that region ({seams})"
     )
 }
 
