@@ -119,25 +119,13 @@ pub fn worded_flatten_error(e: &FlattenError, wording: surfmap::report::DefectWo
              to mean-value coordinates, injective by construction)"
         ),
         FlattenError::Option(o) => option_message(o),
-        FlattenError::NoAdmissibleStart { lscm, mean_value } => {
-            surfmap::param::flatten::no_start_message(
-                *lscm,
-                *mean_value,
+        e @ (FlattenError::NoAdmissibleStart { .. }
+        | FlattenError::NoAdmissibleStartAfterCuts { .. }) => e
+            .no_start_worded(
                 "cut=\"auto\" or seams=...; the default cut=\"never\" keeps one UV per vertex",
+                ("surfmap.repair(V, F, drop_degenerate=True)", "seams=..."),
             )
-        }
-        FlattenError::NoAdmissibleStartAfterCuts {
-            cuts,
-            lscm,
-            mean_value,
-            triangle,
-        } => surfmap::param::flatten::no_start_after_cuts_message(
-            *cuts,
-            *lscm,
-            *mean_value,
-            *triangle,
-            ("surfmap.repair(V, F, drop_degenerate=True)", "seams=..."),
-        ),
+            .unwrap_or_default(),
         other => other.to_string(),
     }
 }

@@ -114,25 +114,13 @@ pub fn worded_flatten_error(
              to mean-value coordinates, injective by construction)"
         ),
         FlattenError::Option(o) => option_message(o),
-        FlattenError::NoAdmissibleStart { lscm, mean_value } => {
-            surfmap::param::flatten::no_start_message(
-                *lscm,
-                *mean_value,
+        e @ (FlattenError::NoAdmissibleStart { .. }
+        | FlattenError::NoAdmissibleStartAfterCuts { .. }) => e
+            .no_start_worded(
                 "`surfmap flatten` does, writing seams; the other commands need one UV per vertex",
+                ("--drop-degenerate", "--cut-along"),
             )
-        }
-        FlattenError::NoAdmissibleStartAfterCuts {
-            cuts,
-            lscm,
-            mean_value,
-            triangle,
-        } => surfmap::param::flatten::no_start_after_cuts_message(
-            *cuts,
-            *lscm,
-            *mean_value,
-            *triangle,
-            ("--drop-degenerate", "--cut-along"),
-        ),
+            .unwrap_or_default(),
         _ => return None,
     })
 }

@@ -63,9 +63,32 @@ pub enum FlattenError {
 }
 
 /// The message of [`FlattenError::NoAdmissibleStartAfterCuts`].
+impl FlattenError {
+    /// The message of [`FlattenError::NoAdmissibleStart`] or
+    /// [`FlattenError::NoAdmissibleStartAfterCuts`] with a front end's words: `cutting` how
+    /// to let the flattening cut, `remedies` its names for dropping degenerate triangles
+    /// and for giving seams. `None` for every other error.
+    pub fn no_start_worded(&self, cutting: &str, remedies: Remedies<'_>) -> Option<String> {
+        match *self {
+            FlattenError::NoAdmissibleStart { lscm, mean_value } => {
+                Some(no_start_message(lscm, mean_value, cutting))
+            }
+            FlattenError::NoAdmissibleStartAfterCuts {
+                cuts,
+                lscm,
+                mean_value,
+                triangle,
+            } => Some(no_start_after_cuts_message(
+                cuts, lscm, mean_value, triangle, remedies,
+            )),
+            _ => None,
+        }
+    }
+}
+
 /// What [`FlattenError::NoAdmissibleStart`] says, `cutting` naming how to let the flattening
 /// cut (the front ends word it as their flags or keywords).
-pub fn no_start_message(lscm: usize, mean_value: usize, cutting: &str) -> String {
+fn no_start_message(lscm: usize, mean_value: usize, cutting: &str) -> String {
     format!(
         "both initial maps flipped triangles (LSCM: {lscm}, mean-value: {mean_value}); the mesh geometry is probably broken (non-finite or coincident vertices), or the surface has protrusions too long and thin for one chart, which only cutting along them can flatten ({cutting}; not with an explicit start)"
     )
@@ -80,7 +103,7 @@ const RUST_REMEDIES: Remedies<'static> = ("`repair::drop_degenerate`", "`Cut::Al
 
 /// What [`FlattenError::NoAdmissibleStartAfterCuts`] says, its remedies named by
 /// `remedies` (the front ends word them as their flags or keywords).
-pub fn no_start_after_cuts_message(
+fn no_start_after_cuts_message(
     cuts: usize,
     lscm: usize,
     mean_value: usize,

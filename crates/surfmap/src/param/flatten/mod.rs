@@ -177,7 +177,7 @@ pub use crate::param::newton::{IterationLog, NewtonSettings, NewtonTimings, Stop
 pub use crate::param::optcuts::{CutRound, CutStop, DistortionCuts, MaxDistortion};
 pub use crate::param::plan::{Cut, CutReason, Seams};
 pub use crate::param::protrusions::ProtrusionCuts;
-pub use error::{FlattenError, Remedies, no_start_after_cuts_message, no_start_message};
+pub use error::{FlattenError, Remedies};
 pub use options::{Bijective, CoarseLevel, FlattenOptions, Multilevel, OptionError, Start};
 pub use result::{Flattening, Guarantee, MultilevelReport, StartMap};
 pub use settings::{EnergyKind, FlattenSettings, MultilevelKind, Preset, SettingsError, StartKind};
