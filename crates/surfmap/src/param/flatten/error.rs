@@ -62,7 +62,6 @@ pub enum FlattenError {
     Distortion(#[from] crate::measure::MeasureError),
 }
 
-/// The message of [`FlattenError::NoAdmissibleStartAfterCuts`].
 impl FlattenError {
     /// The message of [`FlattenError::NoAdmissibleStart`] or
     /// [`FlattenError::NoAdmissibleStartAfterCuts`] with a front end's words: `cutting` how
