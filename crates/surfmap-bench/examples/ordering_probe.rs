@@ -1,5 +1,6 @@
-//! One vertex ordering for all per-vertex systems versus AMD on each system: ordering
-//! time, rest of the symbolic phase, fill of `L`, numeric factorization time.
+//! One vertex ordering for all per-vertex systems (AMD or METIS nested dissection on the
+//! vertex graph) versus AMD on each system: ordering time, rest of the symbolic phase,
+//! fill of `L`, numeric factorization time.
 //! `cargo run --release -p surfmap-bench --example ordering_probe -- MESH [LEVELS]`
 use std::time::Instant;
 use surfmap::linsolve::{Ordering, SpdSystem, Unknowns, VertexOrdering};
@@ -121,6 +122,8 @@ fn main() {
         push(j, 0, i, 1);
     }
     let (t_vertex, vo) = time(|| VertexOrdering::of_triangles(nv, &mesh.triangles).unwrap());
+    let (t_nd, nd) = time(|| VertexOrdering::nested_dissection(nv, &mesh.triangles).unwrap());
+    println!("vertex nested dissection (METIS): {t_nd:.4} s");
     // The vertex order implied by AMD on the LSCM system: each vertex where its first
     // unknown is eliminated (pinned vertices last).
     let lscm_amd = VertexOrdering::of_graph(m, &lscm).unwrap();
@@ -163,6 +166,7 @@ fn main() {
             ("amd (in faer)", Ordering::Amd),
             ("own amd, custom", Ordering::Custom(own)),
             ("vertex expanded", expanded),
+            ("vertex METIS nd", nd.expand(per, dof).unwrap()),
             ("from lscm amd", from_lscm.expand(per, dof).unwrap()),
         ] {
             let (s, nnz, num, first) = measure(dim, entries, &ord);

@@ -366,7 +366,7 @@ pub fn solve<D: Density + ?Sized>(
             r.area = weight;
             combined_rest.push(r);
         }
-        let ordering = VertexOrdering::of_triangles(all.len(), &combined)?;
+        let ordering = VertexOrdering::fill_reducing(all.len(), &combined)?;
         let mut solver = NewtonSolver::new(
             all.len(),
             &combined,
