@@ -191,8 +191,8 @@ fn solve_disc(
             None => VertexOrdering::fill_reducing(mesh.positions.len(), &mesh.triangles),
         },
     );
-    let vertex_ordering = ordering?;
-    context.ordering = Some(vertex_ordering.clone());
+    // Kept in the context for a second solve of the same disc.
+    let vertex_ordering = &*context.ordering.insert(ordering?);
     let mut start = start?;
     start.check(mesh, options)?;
     if solve == Solve::UnlessStartCrosses && start.leads_to_overlap(boundary) {
@@ -248,7 +248,7 @@ fn solve_disc(
             barrier.then_some(boundary),
             &objective,
             (p0, p1),
-            &vertex_ordering,
+            vertex_ordering,
         )?;
     }
     if barrier && start.map == StartMap::Multilevel {
@@ -265,7 +265,7 @@ fn solve_disc(
         start,
         solve,
         warm_start_iterations,
-        &vertex_ordering,
+        vertex_ordering,
         progress,
     )
 }
