@@ -141,7 +141,9 @@ fn landmarks(d: &Bound<'_, PyDict>) -> PyResult<Landmarks> {
 /// covered fractions, area ratio); a verdict other than ok and the doubts about single
 /// features (``report["warnings"]``) are also raised as ``RuntimeWarning``. A match whose
 /// verdict is not ok first tries other starts (``report["confidence"]["recovery"]``;
-/// ``recover=False``: ``--no-recover``); ``strict=True`` raises ``MatchNotTrusted`` for
+/// ``recover=False``: ``--no-recover``). Where one face's mouth is open and the other's
+/// closed the lip arcs lead (``report["alignment"]["mouth"]``; ``open_mouth=False``:
+/// ``--no-open-mouth``); ``strict=True`` raises ``MatchNotTrusted`` for
 /// it, the match on the exception (``correspondence``, ``report``). A value
 /// the command line would refuse raises ``ValueError`` naming the argument.
 ///
@@ -161,7 +163,7 @@ fn landmarks(d: &Bound<'_, PyDict>) -> PyResult<Landmarks> {
 /// >>> report["alignment"]["method"], report["options"]["weights"]["features"]
 /// ('features', 10.0)
 #[pyfunction]
-#[pyo3(name = "match", signature = (VA, FA, VB, FB, *, landmarks=None, features_a=None, features_b=None, size=None, align=None, features_start=None, keep_folds=None, rim_fit_rings=None, complete_rings=None, pin_landmarks=None, scale_b=None, budget=None, hole_features=None, whole_hole_rims=None, fill_holes=None, beta=None, position_weight=None, similarity_search=None, search_candidates=None, search_level=None, rim_tolerance=None, relief=None, crop_overlap=None, strict=None, recover=None))]
+#[pyo3(name = "match", signature = (VA, FA, VB, FB, *, landmarks=None, features_a=None, features_b=None, size=None, align=None, features_start=None, keep_folds=None, rim_fit_rings=None, complete_rings=None, pin_landmarks=None, scale_b=None, budget=None, hole_features=None, whole_hole_rims=None, fill_holes=None, beta=None, position_weight=None, similarity_search=None, search_candidates=None, search_level=None, rim_tolerance=None, relief=None, crop_overlap=None, strict=None, recover=None, open_mouth=None))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub fn match_meshes<'py>(
     py: Python<'py>,
@@ -194,6 +196,7 @@ pub fn match_meshes<'py>(
     crop_overlap: Option<&str>,
     strict: Option<bool>,
     recover: Option<bool>,
+    open_mouth: Option<bool>,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>)> {
     // As the command line's `--features-a` and `--features-b` (each requires the other).
     match (features_a.is_some(), features_b.is_some()) {
@@ -289,6 +292,7 @@ pub fn match_meshes<'py>(
     adv.relief = relief.unwrap_or(adv.relief);
     adv.search_level = search_level.unwrap_or(adv.search_level);
     adv.recover = recover.unwrap_or(adv.recover);
+    adv.open_mouth = open_mouth.unwrap_or(adv.open_mouth);
     match search_candidates.as_deref() {
         None => {}
         Some(&[deg, scale]) => adv.search_candidates = [deg, scale],

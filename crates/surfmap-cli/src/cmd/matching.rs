@@ -193,6 +193,13 @@ pub struct Args {
     /// starts (the alignment's other poses in space, the start turned).
     #[arg(long)]
     pub no_recover: bool,
+    /// Keep the weights as given when one face's mouth is open and the other's closed
+    /// (lip gap over mouth width ≥ 0.4 and at least twice the other's). By default the
+    /// lip arcs then lead: the feature weight ×40 and the automatic position weight
+    /// capped at 1000, so that the chin follows the jaw (match.json:
+    /// `alignment.mouth`).
+    #[arg(long)]
+    pub no_open_mouth: bool,
     /// Exit with code 3 when the match's verdict is not `ok` (doubtful or failed; the
     /// match is still written, its verdict and reasons in match.json's `confidence`).
     #[arg(long)]
@@ -257,6 +264,7 @@ fn match_options(args: &Args) -> Result<MatchOptions, OptionError> {
             Some(other) => return Err(OptionError::SearchCandidates(other.to_vec())),
         },
         recover: !args.no_recover,
+        open_mouth: !args.no_open_mouth,
     };
     o.validate()?;
     Ok(o)

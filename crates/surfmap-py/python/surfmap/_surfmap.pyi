@@ -179,4 +179,5 @@ def match(
     crop_overlap: Optional[Literal["auto", "off"]] = None,
     strict: Optional[bool] = None,
     recover: Optional[bool] = None,
+    open_mouth: Optional[bool] = None,
 ) -> Tuple[FloatArray, Report]: ...

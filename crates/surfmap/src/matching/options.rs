@@ -173,6 +173,10 @@ pub struct Advanced {
     /// start turned, the whole match made again from the most promising. Not with
     /// [`Align::None`], where the user fixed the start.
     pub recover: bool,
+    /// When a mouth opens between the surfaces (one much more open than the other), let
+    /// the lip arcs lead: features weighted more, the automatic position weight capped
+    /// (`crate::matching::align::mouth`).
+    pub open_mouth: bool,
 }
 
 impl Default for Advanced {
@@ -185,6 +189,7 @@ impl Default for Advanced {
             search_level: SEARCH_LEVEL,
             search_candidates: [0.0, 0.0],
             recover: true,
+            open_mouth: true,
         }
     }
 }

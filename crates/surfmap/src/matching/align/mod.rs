@@ -9,6 +9,7 @@
 //! across the surfaces and added to their features ([`holes`]).
 
 pub(crate) mod holes;
+pub(crate) mod mouth;
 pub(crate) mod score;
 
 use serde::Serialize;
@@ -138,6 +139,7 @@ pub(crate) fn align(p: &mut Prepared<'_>, options: &MatchOptions) -> Result<Star
                 energy_space: f64::NAN,
                 kept: false,
             }),
+            mouth: None,
         };
         (
             s,
@@ -155,6 +157,7 @@ pub(crate) fn align(p: &mut Prepared<'_>, options: &MatchOptions) -> Result<Star
             left_out: vec![],
             search: None,
             features_in_space: None,
+            mouth: None,
         };
         (s, Similarity3::identity(), report, None)
     } else {
@@ -234,6 +237,30 @@ pub(crate) fn pair_holes(
             options.split_ratio(),
         )?;
     }
+    // A mouth that opens between the surfaces: the lip arcs lead ([`mouth`]).
+    let found = mouth::mouth_openings(
+        &p.a,
+        &p.b,
+        &start.report.hole_pairs,
+        &start.report.split_holes,
+    );
+    let openings = found.map(|(_, o)| o);
+    let opens = options.advanced.open_mouth && mouth::opens(openings);
+    // From the options each time: a start paired again keeps no earlier change.
+    start.betas.features = options.betas().features;
+    start.betas.position = options.position_weight.weight(start.shape_residual);
+    if opens {
+        start.betas.features *= mouth::OPEN_FEATURE_FACTOR;
+        if options.position_weight == PositionWeight::Auto {
+            start.betas.position = start.betas.position.min(mouth::OPEN_POSITION_WEIGHT);
+        }
+    }
+    start.report.mouth = openings.map(|(a, b)| MouthOpening {
+        a,
+        b,
+        opens,
+        feature_weight: start.betas.features,
+    });
     Ok(())
 }
 
@@ -318,6 +345,22 @@ pub struct AlignmentReport {
     /// With features: the second start from their alignment refined in space, and
     /// which start the solve went on from (`MatchOptions::features_in_space`).
     pub features_in_space: Option<FeatureStarts>,
+    /// The mouth's openings when a hole pair was split at its corners, and whether the
+    /// weights were changed for a mouth that opens ([`mouth`]).
+    pub mouth: Option<MouthOpening>,
+}
+
+/// How open the mouth is on A and on B ([`mouth`]: arc gap over corner distance).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct MouthOpening {
+    pub a: f64,
+    pub b: f64,
+    /// A mouth opens between the surfaces (and `--no-open-mouth` was not given): features weighted
+    /// [`mouth::OPEN_FEATURE_FACTOR`] times more, the automatic position weight capped
+    /// at [`mouth::OPEN_POSITION_WEIGHT`].
+    pub opens: bool,
+    /// The feature weight used (the position weight used is the report's).
+    pub feature_weight: f64,
 }
 
 impl AlignmentReport {
@@ -549,6 +592,7 @@ fn plane_from_pose(
         left_out: vec![],
         search: None,
         features_in_space: None,
+        mouth: None,
     };
     Ok((s, motion, report, rigid.plane_rms / unit))
 }
