@@ -15,8 +15,13 @@
 //! and CPU time of the whole `flatten` call (CPU: all threads of the process, from
 //! `/proc/self/task/*/schedstat`, so a shared machine's load shows in the wall column
 //! only). `--log` prints every iteration of the last run; `--bijective-off` solves
-//! without the boundary barrier (`Bijective::Off`); `--save DIR` writes each mesh there as
-//! `NAME.obj` (for the generated ones: to give them to peers).
+//! without the boundary barrier (`Bijective::Off`); `--uncut` never cuts the disc
+//! (`Cut::Never`: one UV per vertex, as `match` and Python's default need);
+//! `--multilevel` forces the multilevel start (`Multilevel::Always`); `--save DIR` writes
+//! each mesh there as `NAME.obj` (for the generated ones: to give them to peers).
+//! `coarse`: Newton iterations on the multilevel start's coarse level (0 without one;
+//! not in `all`); `elastic`: the energy per unit area without the boundary barrier
+//! (`energy` includes it after a barrier solve).
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -58,6 +63,27 @@ fn octopus(path: &std::path::Path) -> Option<surfmap::TriMesh> {
     Some(octopus_disc(&shape))
 }
 
+/// The elastic energy per unit area of the returned map (without the boundary barrier,
+/// which [`surfmap::Flattening::energy`] includes after a barrier solve), on the solved
+/// disc's corners: comparable between runs whose barriers differ.
+fn elastic_energy(
+    mesh: &surfmap::TriMesh,
+    r: &surfmap::Flattening,
+    energy: &surfmap::Energy,
+) -> f64 {
+    use surfmap::param::element::{energy as element_energy, rest_triangles};
+    let (positions, scale) = mesh.unit_area_positions();
+    let Ok(rest) = rest_triangles(&positions, &mesh.triangles) else {
+        return f64::NAN;
+    };
+    let energy = energy.without_continuation();
+    r.corner_uvs(&mesh.triangles)
+        .iter()
+        .zip(&rest)
+        .map(|(c, rest)| element_energy(rest, &c.map(|p| [p[0] / scale, p[1] / scale]), &energy))
+        .sum()
+}
+
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
@@ -72,7 +98,19 @@ fn main() {
     }
     let print_log = args.iter().any(|a| a == "--log");
     let bijective_off = args.iter().any(|a| a == "--bijective-off");
-    args.retain(|a| a != "--log" && a != "--bijective-off");
+    let uncut = args.iter().any(|a| a == "--uncut");
+    let multilevel = args.iter().any(|a| a == "--multilevel");
+    args.retain(|a| {
+        !matches!(
+            a.as_str(),
+            "--log" | "--bijective-off" | "--uncut" | "--multilevel"
+        )
+    });
+    let mut coarse_vertices = None;
+    if let Some(i) = args.iter().position(|a| a == "--coarse-vertices") {
+        coarse_vertices = Some(args[i + 1].parse::<usize>().expect("--coarse-vertices N"));
+        args.drain(i..i + 2);
+    }
     let mut save = None;
     if let Some(i) = args.iter().position(|a| a == "--save") {
         save = Some(PathBuf::from(&args[i + 1]));
@@ -108,8 +146,19 @@ fn main() {
             .collect()
     };
     println!(
-        "{:<22} {:>6} {:<44} {:>7} {:>5} {:>5} {:>10} {:>9} {:>8} {:>8}",
-        "mesh", "F", "plan", "barrier", "iters", "all", "energy", "guarantee", "wall_s", "cpu_s"
+        "{:<22} {:>6} {:<44} {:>7} {:>5} {:>5} {:>6} {:>10} {:>10} {:>9} {:>8} {:>8}",
+        "mesh",
+        "F",
+        "plan",
+        "barrier",
+        "iters",
+        "all",
+        "coarse",
+        "energy",
+        "elastic",
+        "guarantee",
+        "wall_s",
+        "cpu_s"
     );
     for (path, cut_holes) in &meshes {
         let mesh = match octopus(path) {
@@ -130,6 +179,17 @@ fn main() {
         let mut options = FlattenOptions::default().with_fill_holes(!cut_holes);
         if bijective_off {
             options = options.with_bijective(surfmap::Bijective::Off);
+        }
+        if uncut {
+            options = options.with_cut(surfmap::Cut::Never);
+        }
+        if multilevel {
+            options = options.with_start(surfmap::Start::Auto {
+                multilevel: surfmap::Multilevel::Always(surfmap::CoarseLevel {
+                    vertices: coarse_vertices,
+                    ..Default::default()
+                }),
+            });
         }
         let (mut walls, mut cpus) = (Vec::new(), Vec::new());
         let mut last = None;
@@ -160,20 +220,24 @@ fn main() {
         } else {
             name.to_string()
         };
+        let coarse = r.multilevel.as_ref().map_or(0, |m| m.coarse_iterations);
         println!(
-            "{:<22} {:>6} {:<44} {:>7} {:>5} {:>5} {:>10.6} {:>9} {:>8.3} {:>8.3}",
+            "{:<22} {:>6} {:<44} {:>7} {:>5} {:>5} {:>6} {:>10.6} {:>10.6} {:>9} {:>8.3} {:>8.3}",
             name,
             mesh.triangles.len(),
             r.plan.describe().chars().take(44).collect::<String>(),
             if r.barrier { "yes" } else { "no" },
             r.iterations,
             all,
+            coarse,
             r.energy,
+            elastic_energy(&mesh, &r, &options.energy),
             format!("{:?}", r.guarantee),
             median(walls),
             median(cpus),
         );
         if print_log {
+            println!("  start: {}", r.start_description());
             println!("  {:?}", r.newton_timings);
             println!(
                 "  {:>4} {:>5} {:>14} {:>10} {:>10} {:>9} {:>10}",

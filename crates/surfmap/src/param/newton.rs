@@ -139,6 +139,12 @@ pub struct NewtonSolver<'m> {
     /// A boundary loop whose crossing for the given number of iterations in a row ends
     /// [`Self::minimize`] ([`StopReason::BoundaryCrossed`]).
     watched_boundary: Option<(Vec<u32>, usize)>,
+    /// The last iterate whose watched boundary did not cross itself (empty until one
+    /// was checked; [`Self::take_last_uncrossed`]).
+    last_uncrossed: Vec<[f64; 2]>,
+    /// The relative stopping threshold with the barrier ([`BARRIER_RELATIVE_TOLERANCE`]
+    /// unless set, [`Self::set_barrier_relative_tolerance`]).
+    barrier_relative_tolerance: f64,
     /// The barrier's pair terms at the last assembly ([`PairTerm`]).
     pairs: Vec<PairTerm>,
     /// The fill-reducing ordering of the unknowns, kept to re-analyse the pattern.
@@ -303,6 +309,8 @@ impl<'m> NewtonSolver<'m> {
             best: vec![[0.0; 2]; nv],
             barrier: None,
             watched_boundary: None,
+            last_uncrossed: Vec::new(),
+            barrier_relative_tolerance: BARRIER_RELATIVE_TOLERANCE,
             pairs: Vec::new(),
             ordering,
             extra: Vec::new(),
@@ -333,20 +341,34 @@ impl<'m> NewtonSolver<'m> {
         self.watched_boundary = Some((boundary, persistence.max(1)));
     }
 
+    /// The last iterate of [`Self::minimize`] whose watched boundary
+    /// ([`Self::stop_when_boundary_crosses`]) did not cross itself, if one was checked
+    /// (a flip-free, crossing-free map: a start for the barrier solve).
+    pub fn take_last_uncrossed(&mut self) -> Option<Vec<[f64; 2]>> {
+        Some(std::mem::take(&mut self.last_uncrossed)).filter(|uv| !uv.is_empty())
+    }
+
     /// Adds the boundary barrier `barrier` to the energy, and its contact bound to the
     /// line search (the bijective mode, [`super::barrier`]).
     pub fn set_barrier(&mut self, barrier: BoundaryBarrier) {
         self.barrier = Some(barrier);
     }
 
+    /// Sets the relative stopping threshold with the barrier (default
+    /// [`BARRIER_RELATIVE_TOLERANCE`]).
+    pub fn set_barrier_relative_tolerance(&mut self, tolerance: f64) {
+        self.barrier_relative_tolerance = tolerance;
+    }
+
     /// The stopping threshold on `λ²/2`: the settings' tolerance, or with the barrier
     /// (whose Hessian is approximated, so convergence is linear near contacts) at least
-    /// [`BARRIER_RELATIVE_TOLERANCE`] of the energy.
+    /// [`BARRIER_RELATIVE_TOLERANCE`] of the energy (or the threshold set by
+    /// [`Self::set_barrier_relative_tolerance`]).
     fn tolerance(&self, settings: &NewtonSettings, energy: f64) -> f64 {
         match self.barrier {
             Some(_) => settings
                 .tolerance
-                .max(BARRIER_RELATIVE_TOLERANCE * energy.abs()),
+                .max(self.barrier_relative_tolerance * energy.abs()),
             None => settings.tolerance,
         }
     }
@@ -636,6 +658,8 @@ impl<'m> NewtonSolver<'m> {
                     }
                 } else {
                     crossing_iterations = 0;
+                    self.last_uncrossed.clear();
+                    self.last_uncrossed.extend_from_slice(uv);
                 }
             }
         }

@@ -122,6 +122,11 @@ pub struct Flattening {
     pub newton_timings: NewtonTimings,
     /// The multilevel start, when it was tried.
     pub multilevel: Option<MultilevelReport>,
+    /// Whether the barrier solve started from the last crossing-free iterate of the
+    /// unconstrained solve instead of the start map: for a crushed start (the progressive
+    /// iterations ran), whose unconstrained solve ended because its boundary crossed
+    /// itself. [`Self::start`] is then the map that solve started from.
+    pub barrier_resumed: bool,
     /// What the distortion-driven cutting did ([`FlattenOptions::max_distortion`](super::FlattenOptions::max_distortion)):
     /// the distortion before and after, the rounds, the seam length added, whether the
     /// bound holds. The other fields describe the solve of the map returned (the best
@@ -138,7 +143,7 @@ impl Flattening {
     /// `multilevel (N coarse vertices)` (`…, K crushed boundary contacts relieved` when
     /// [`MultilevelReport::relief`] opened some).
     pub fn start_description(&self) -> String {
-        match self.start {
+        let start = match self.start {
             StartMap::Lscm => "lscm".to_string(),
             StartMap::MeanValue if self.lscm_flipped > 0 => {
                 format!("mean-value (LSCM flipped {})", self.lscm_flipped)
@@ -155,6 +160,13 @@ impl Flattening {
                 },
                 None => "multilevel".to_string(),
             },
+        };
+        if self.barrier_resumed {
+            format!(
+                "{start}, barrier solve from the unconstrained solve's last crossing-free iterate"
+            )
+        } else {
+            start
         }
     }
 
@@ -241,6 +253,7 @@ pub(super) struct Solved {
     pub(super) time_newton: f64,
     pub(super) newton_timings: NewtonTimings,
     pub(super) multilevel: Option<MultilevelReport>,
+    pub(super) barrier_resumed: bool,
 }
 
 /// The flattening of the solved map `uv` (normalized units; `scale` back to the
@@ -291,6 +304,7 @@ pub(super) fn result_of(
         time_total: clock.elapsed().as_secs_f64(),
         newton_timings: solved.newton_timings,
         multilevel: solved.multilevel,
+        barrier_resumed: solved.barrier_resumed,
         distortion_cuts: None,
         protrusion_cuts: None,
     })

@@ -94,6 +94,7 @@ fn flatten_disc(
         },
         flatten,
         ordering: None,
+        resume: None,
     };
     let first = match solve_disc(&mut context, progress, solve)? {
         SolveOutcome::Map(first) if first.boundary_crossings == 0 => return Ok(*first),
@@ -151,6 +152,35 @@ struct Context<'a> {
     flatten: FlattenFn,
     /// The fill-reducing vertex ordering, once a solve computed it.
     ordering: Option<VertexOrdering>,
+    /// The start of the barrier solve when the unconstrained solve found one
+    /// ([`Resume`]).
+    resume: Option<Resume>,
+}
+
+/// The relative stopping threshold of a barrier solve from a [`Resume`] (the default,
+/// `BARRIER_RELATIVE_TOLERANCE` in `param::newton`, is 10⁻⁴). The energy of these
+/// discs is 8–17 times an isometry's (the tubes cannot flatten), and the decrement of
+/// the projected Hessian underestimates what is left there: measured on the tube discs
+/// `octopus:6,8,30,1` / `8,6,20,1` / `8,8,20,1` (docs/bench/hard_discs.md), at 10⁻⁴ the
+/// resumed solve stops 0.05 % / 0.05 % / 0.005 % above the minimum it converges to at
+/// 10⁻⁹ (the one the solve from the crushed start reaches), at 10⁻⁵ within 0.001 %, for
+/// 8 / 4 / 1 more iterations. The solve from the crushed start keeps 10⁻⁴: it reaches
+/// the tail already slowed to steps that the decrement measures better.
+const RESUMED_BARRIER_RELATIVE_TOLERANCE: f64 = 1e-5;
+
+/// The last crossing-free iterate of an unconstrained solve from a crushed start that
+/// ended because its boundary crossed itself (normalized and pinned as that solve's
+/// iterates are), and the start map it came from: the barrier solve starts from it
+/// instead of the crushed start. The crushed phase (the energy falling by a factor 2–4
+/// per Newton step, each step cut by the first flip) is then taken once, not once per
+/// solve.
+struct Resume {
+    uv: Vec<[f64; 2]>,
+    map: StartMap,
+    lscm_flipped: usize,
+    /// The crushed start (scaled and pinned, before any warm start): the barrier's
+    /// reach and weight are set from its boundary, as for a barrier solve from it.
+    crushed: Vec<[f64; 2]>,
 }
 
 /// One solve of [`flatten_disc`]: with the boundary barrier for [`Solve::Barrier`]
@@ -195,12 +225,29 @@ fn solve_disc(
     let vertex_ordering = &*context.ordering.insert(ordering?);
     let mut start = start?;
     start.check(mesh, options)?;
+    let resume = context.resume.take().filter(|_| barrier);
+    if let Some(resume) = &resume {
+        start.uv.clone_from(&resume.uv);
+        (start.map, start.lscm_flipped) = (resume.map, resume.lscm_flipped);
+    }
     if solve == Solve::UnlessStartCrosses && start.leads_to_overlap(boundary) {
         return Ok(SolveOutcome::StartCrosses {
             time: clock.elapsed().as_secs_f64(),
         });
     }
-    let (p0, p1) = start.scale_and_pin(mesh, boundary, scale);
+    let (p0, p1) = if resume.is_some() {
+        // In normalized units already.
+        start.pin(boundary)
+    } else {
+        start.scale_and_pin(mesh, boundary, scale)
+    };
+    // What the barrier is measured on: the crushed start of a resumed solve, else this
+    // start (kept for a resume when an unconstrained solve crosses).
+    let barrier_reference = match (&resume, solve) {
+        (Some(resume), _) => Some(resume.crushed.clone()),
+        (None, Solve::UnlessStartCrosses) => Some(start.uv.clone()),
+        _ => None,
+    };
     // A multilevel start is already close to the minimum: no warm start, and no
     // continuation (the coarse level did both).
     let objective = if start.map == StartMap::Multilevel {
@@ -219,8 +266,12 @@ fn solve_disc(
         scale,
         clock,
         barrier,
+        resumed: resume.is_some(),
+        barrier_reference,
     };
-    if let Some(map) = solving.scaffold_if_crushed(&mut start, progress)? {
+    if resume.is_none()
+        && let Some(map) = solving.scaffold_if_crushed(&mut start, progress)?
+    {
         return Ok(SolveOutcome::Map(Box::new(map)));
     }
     // A mean-value start for the barrier solve gets its ears opened before the warm
@@ -228,7 +279,7 @@ fn solve_disc(
     // crushed-start test above: the scaffold is measured from the plain mean-value map).
     // Measured: ICT id002 opened with seams 29 → 16 barrier iterations, id000 12 → 11,
     // holes opened 14 → 13 (BENCHMARKS.md, "Hard discs").
-    if barrier && start.map == StartMap::MeanValue {
+    if barrier && start.map == StartMap::MeanValue && resume.is_none() {
         tutte::open_ears(&positions, disc, &mut start.uv);
     }
     // ARAP warm start: only as search directions, accepted when flip-free and when they
@@ -238,6 +289,7 @@ fn solve_disc(
     // into contact.
     let mut warm_start_iterations = 0;
     if options.warm_start
+        && resume.is_none()
         && start.map != StartMap::Multilevel
         && (!barrier || start.map == StartMap::MeanValue)
     {
@@ -261,13 +313,15 @@ fn solve_disc(
             &options.newton,
         );
     }
-    solving.newton(
+    let (outcome, resume) = solving.newton(
         start,
         solve,
         warm_start_iterations,
         vertex_ordering,
         progress,
-    )
+    )?;
+    context.resume = resume;
+    Ok(outcome)
 }
 
 /// A solve from its start on: what the scaffold and Newton stages read.
@@ -285,6 +339,10 @@ struct Solving<'a> {
     /// Started with the solve.
     clock: Instant,
     barrier: bool,
+    /// Whether the start is a [`Resume`].
+    resumed: bool,
+    /// The map whose boundary sets the barrier's reach and weight (`None`: the start).
+    barrier_reference: Option<Vec<[f64; 2]>>,
 }
 
 impl Solving<'_> {
@@ -345,6 +403,7 @@ impl Solving<'_> {
             time_newton,
             newton_timings: NewtonTimings::default(),
             multilevel: start.multilevel.take(),
+            barrier_resumed: false,
         };
         let map = result_of(
             &start.uv,
@@ -365,7 +424,7 @@ impl Solving<'_> {
         warm_start_iterations: usize,
         vertex_ordering: &VertexOrdering,
         progress: &mut dyn FnMut(&IterationLog),
-    ) -> Result<SolveOutcome, FlattenError> {
+    ) -> Result<(SolveOutcome, Option<Resume>), FlattenError> {
         let InitialMap {
             mut uv,
             map,
@@ -382,8 +441,15 @@ impl Solving<'_> {
         )?;
         if self.barrier {
             solver.set_barrier(
-                BoundaryBarrier::new(self.boundary, &uv).with_faces(&self.mesh.triangles),
+                BoundaryBarrier::new(
+                    self.boundary,
+                    self.barrier_reference.as_deref().unwrap_or(&uv),
+                )
+                .with_faces(&self.mesh.triangles),
             );
+            if self.resumed {
+                solver.set_barrier_relative_tolerance(RESUMED_BARRIER_RELATIVE_TOLERANCE);
+            }
         } else if solve == Solve::UnlessStartCrosses {
             // The bijective mode solves again with the barrier when the result overlaps
             // itself; an iterate whose boundary crosses already says it will
@@ -413,6 +479,16 @@ impl Solving<'_> {
             &mut record,
         )?;
         let time_newton = self.clock.elapsed().as_secs_f64() - time_start;
+        let resume = (minimized.progressive > 0 && minimized.stop == StopReason::BoundaryCrossed)
+            .then(|| solver.take_last_uncrossed())
+            .flatten()
+            .zip(self.barrier_reference)
+            .map(|(uv, crushed)| Resume {
+                uv,
+                map,
+                lscm_flipped,
+                crushed,
+            });
         let solved = Solved {
             start: map,
             lscm_flipped,
@@ -427,6 +503,7 @@ impl Solving<'_> {
             time_newton,
             newton_timings: solver.timings,
             multilevel,
+            barrier_resumed: self.resumed,
         };
         let map = result_of(
             &uv,
@@ -436,7 +513,7 @@ impl Solving<'_> {
             self.clock,
             solved,
         )?;
-        Ok(SolveOutcome::Map(Box::new(map)))
+        Ok((SolveOutcome::Map(Box::new(map)), resume))
     }
 }
 
@@ -448,6 +525,8 @@ struct Minimized {
     iterations: usize,
     /// α values of the continuation stages solved (empty without continuation).
     continuation: Vec<[f64; 3]>,
+    /// Progressive iterations among them (0: the start was not crushed).
+    progressive: usize,
 }
 
 /// Minimizes `objective` from `uv` with `solver`: directly, or for Litke's energy with a
@@ -475,6 +554,7 @@ fn minimize(
             energy,
             iterations: before + iterations,
             continuation: Vec::new(),
+            progressive: before,
         });
     };
     let (stop0, it0, e0) = solver.minimize(uv, from, settings, 0, clock, record)?;
@@ -513,6 +593,7 @@ fn minimize(
         energy: last.1,
         iterations,
         continuation,
+        progressive: 0,
     })
 }
 

@@ -200,6 +200,14 @@ impl InitialMap {
         align_pins(uv, p0, p1);
         (p0, p1)
     }
+
+    /// Pins the start as [`Self::scale_and_pin`] does, without scaling it (a map in
+    /// the solve's normalized units already).
+    pub(super) fn pin(&mut self, boundary: &[u32]) -> (u32, u32) {
+        let (p0, p1) = farthest_pair(&self.uv, boundary);
+        align_pins(&mut self.uv, p0, p1);
+        (p0, p1)
+    }
 }
 
 /// LSCM on the full mesh, made admissible; when it flips a triangle (or, with the
