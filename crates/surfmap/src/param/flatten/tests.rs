@@ -279,3 +279,55 @@ fn a_crushed_start_gets_progressive_iterations_and_fewer_newton_steps() {
     assert_eq!(map.flipped_triangles, 0);
     assert_eq!(map.boundary_crossings, 0);
 }
+
+#[test]
+fn an_uncut_tube_disc_resumes_its_barrier_solve_in_few_iterations_at_no_higher_energy() {
+    // Issue 50, item 1: tubes of 6 edges around and 20 rows (length ≈ 10.5 diameters),
+    // never cut (one UV per vertex, as `match` and Python's default need). The crushed
+    // LSCM start's unconstrained solve overlaps, so a barrier solve follows; it starts
+    // from that solve's last crossing-free iterate instead of the crushed start again.
+    // The reference: the barrier solve from the crushed start itself (`Bijective::Always`,
+    // the solve `WhenOverlapping` ran second before the resume: 61 of 81 iterations).
+    use crate::mesh::generate::{Octopus, octopus_disc};
+    use crate::param::plan::Cut;
+    let mesh = octopus_disc(&Octopus {
+        width: 6,
+        length: 20,
+        ..Octopus::default()
+    });
+    let never = FlattenOptions::default().with_cut(Cut::Never);
+    let mut all = 0;
+    let map =
+        flatten_with_progress(&mesh, &never, &mut |l| all += usize::from(l.iteration > 0)).unwrap();
+    assert!(
+        map.barrier && map.barrier_resumed,
+        "{}",
+        map.start_description()
+    );
+    assert!(
+        map.start_description()
+            .ends_with("barrier solve from the unconstrained solve's last crossing-free iterate"),
+        "{}",
+        map.start_description()
+    );
+    assert!(map.converged, "{:?}", map.stop_reason);
+    assert!(map.iterations <= 40, "{} iterations", map.iterations);
+    assert!(all <= 60, "{all} iterations in all");
+    assert_eq!(map.flipped_triangles, 0);
+    assert_eq!(map.boundary_crossings, 0);
+    assert!(map.seams.is_none() && map.protrusion_cuts.is_none());
+    let reference = flatten(&mesh, &never.clone().with_bijective(Bijective::Always)).unwrap();
+    assert!(!reference.barrier_resumed);
+    assert!(
+        map.iterations < reference.iterations,
+        "{} against {}",
+        map.iterations,
+        reference.iterations
+    );
+    assert!(
+        map.energy <= reference.energy,
+        "{} against {}",
+        map.energy,
+        reference.energy
+    );
+}
