@@ -16,7 +16,9 @@
 //! accuracy"). The cap holds over the whole face: capped only within `r` mouth widths
 //! of A's rim (full weight beyond, smoothly between) it was worse — `r` = 0.5–1.3:
 //! 1.43–1.62 % on seeds 10 and 12, `r` = 1.5–2.5: 1.28 / 1.05 — as the face held
-//! beyond holds the chin back. Elsewhere the position term is what makes matches of
+//! beyond holds the chin back; so was a full weight kept where A, placed by the rigid
+//! alignment, already lies on B (factor `f + (1 − f)·exp(−(d/w)²)`, `d` the distance to
+//! B, `w` 0.2–0.5 mouth widths: 1.40–1.57 % on seeds 10, 12, 13). Elsewhere the position term is what makes matches of
 //! different faces close, so the change applies only when a mouth opens:
 //!
 //! **Opening.** A rim split at its corners ([`super::holes::split_rim_pair`]: upper and
