@@ -8,10 +8,12 @@ position (the pair's ground truth, read here by the benchmark only — never by 
 matcher). Errors are Euclidean, in % of the face width (A's extent across the face, x).
 Vertices whose counterpart was cropped away from B have no truth and are not scored;
 vertices the match leaves unmatched are scored where the rig put them (moved by the
-harmonic extension of the matched displacements).
+harmonic extension of the matched displacements). "lips p95": the p95 over A's vertices
+within 8 % of the face width (1.5 cm on the ICT crops) of A's mouth rim (the hole loop
+with the lowest centroid; y is up in the ICT frame, which A keeps).
 
     /opt/peers-venv/bin/python scripts/bench_rig.py --pairs /tmp/surfmap_pairs \
-        --surfmap target/release/surfmap [--out /tmp/surfmap_rig]
+        --surfmap target/release/surfmap [--out /tmp/surfmap_rig] [--only jawopen]
 """
 import argparse
 import json
@@ -35,18 +37,38 @@ def read_obj_vertices(path):
     return np.array(v)
 
 
+def mouth_rim(VA, FA):
+    """A's mouth rim: of the boundary loops but the longest (the outer rim), the one whose
+    centroid is lowest (y)."""
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+    e = np.sort(np.r_[FA[:, [0, 1]], FA[:, [1, 2]], FA[:, [2, 0]]], axis=1)
+    u, count = np.unique(e, axis=0, return_counts=True)
+    b = u[count == 1]
+    n = len(VA)
+    g = sp.coo_matrix((np.ones(len(b)), (b[:, 0], b[:, 1])), shape=(n, n))
+    _, label = connected_components(g, directed=False)
+    on = np.unique(b.ravel())
+    loops = [on[label[on] == c] for c in np.unique(label[on])]
+    holes = sorted(loops, key=len)[:-1]
+    return min(holes, key=lambda lp: VA[lp, 1].mean()) if holes else None
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--pairs", required=True)
     ap.add_argument("--surfmap", default=os.path.join(HERE, "..", "target", "release", "surfmap"))
     ap.add_argument("--out", default="/tmp/surfmap_rig")
+    ap.add_argument("--only", default=None, help="comma-separated substrings of pair names")
     args = ap.parse_args()
     index = json.load(open(os.path.join(args.pairs, "index.json")))
-    print("| pair | matched | mean error (% width) | p95 (% width) | max (% width) |")
-    print("|---|---:|---:|---:|---:|")
+    print("| pair | matched | mean error (% width) | p95 (% width) | max (% width) | lips p95 (% width) |")
+    print("|---|---:|---:|---:|---:|---:|")
     means = []
     for e in index:
         if e["track"] != "expression":
+            continue
+        if args.only and not any(o in e["dir"] for o in args.only.split(",")):
             continue
         d = os.path.join(args.pairs, e["dir"])
         out = os.path.join(args.out, e["dir"])
@@ -66,7 +88,14 @@ def main():
         corr = np.load(os.path.join(out, "match", "correspondence.npy"))
         matched = (corr[:, 0] >= 0).mean()
         means.append(err.mean())
-        print(f"| {e['dir']} | {100 * matched:.1f}% | {err.mean():.2f} | {np.percentile(err, 95):.2f} | {err.max():.2f} |",
+        lips = "–"
+        rim = mouth_rim(pair.VA, pair.FA)
+        if rim is not None:
+            from scipy.spatial import cKDTree
+            near = cKDTree(pair.VA[rim]).query(pair.VA[valid])[0] < 0.08 * width
+            if near.any():
+                lips = f"{np.percentile(err[near], 95):.2f}"
+        print(f"| {e['dir']} | {100 * matched:.1f}% | {err.mean():.2f} | {np.percentile(err, 95):.2f} | {err.max():.2f} | {lips} |",
               flush=True)
     print(f"\nmean over the expression pairs: {np.mean(means):.2f}% of the face width")
 
