@@ -30,6 +30,7 @@
 
 use super::super::prepare::surface::MatchSurface;
 use super::holes::HolePair;
+use crate::vec3::{norm3, sub3};
 
 /// Least opening (arc gap over corner distance) of the more open mouth.
 pub(crate) const OPEN_MIN: f64 = 0.4;
@@ -133,7 +134,7 @@ fn resample(points: &[[f64; 3]], count: usize) -> Vec<[f64; 3]> {
 }
 
 fn dist(p: [f64; 3], q: [f64; 3]) -> f64 {
-    ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
+    norm3(sub3(p, q))
 }
 
 #[cfg(test)]
