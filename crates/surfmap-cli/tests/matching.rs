@@ -1135,10 +1135,9 @@ fn landmarks_that_moved_with_the_jaw_are_refined_in_space() {
     // scale (1.079; from space 0.993); by default the coarsest level is also solved
     // from their alignment refined in space, and the start that ends lower is kept (and
     // said so); the match is as good as from the plane start alone (`--features-start
-    // plane`). Measured before the open-mouth weights (`align::mouth`): both 95.2 % of
-    // A within 0.05 of its counterpart, 99.2 % matched, the space start kept; plane
-    // 95.3 %, 98.9 %. With them: the two starts end within 0.2 % of each other (the
-    // features' kept), both and plane 98.4 % within 0.05, 99.0 % matched.
+    // plane`). Measured: both 95.2 % of A within 0.05 of its counterpart, 99.2 %
+    // matched, the space start kept; plane 95.3 %, 98.9 %. (With landmarks the
+    // open-mouth weights, `align::mouth`, do not apply.)
     // On these whole faces the solve recovers from either start; on the referee's
     // cropped, remeshed pair the plane start left 566 vertices unmatched (BENCHMARKS.md,
     // "Two starts with landmarks").

@@ -245,7 +245,10 @@ pub(crate) fn pair_holes(
         &start.report.split_holes,
     );
     let openings = found.map(|(_, o)| o);
-    let opens = options.advanced.open_mouth && mouth::opens(openings);
+    // Not with landmarks or features given: there the lip arcs weighted up made the
+    // jaw-open pairs worse ([`mouth`]).
+    let guided = given(&p.features_a) + given(&p.features_b) > 0;
+    let opens = options.advanced.open_mouth && !guided && mouth::opens(openings);
     // From the options each time: a start paired again keeps no earlier change.
     start.betas.features = options.betas().features;
     start.betas.position = options.position_weight.weight(start.shape_residual);
@@ -355,7 +358,8 @@ pub struct AlignmentReport {
 pub struct MouthOpening {
     pub a: f64,
     pub b: f64,
-    /// A mouth opens between the surfaces (and `--no-open-mouth` was not given): features weighted
+    /// A mouth opens between the surfaces, no landmarks or features were given, and
+    /// `--no-open-mouth` was not: features weighted
     /// [`mouth::OPEN_FEATURE_FACTOR`] times more, the automatic position weight capped
     /// at [`mouth::OPEN_POSITION_WEIGHT`].
     pub opens: bool,
