@@ -11,23 +11,24 @@
 //! followed only 40–50 % of the jaw's motion, and the lower-lip rim stayed 2 cm from
 //! B's). The thesis's answer is the feature curves: with the lip arcs weighted
 //! [`OPEN_FEATURE_FACTOR`] times more and the position weight capped at
-//! [`OPEN_POSITION_WEIGHT`], the same pairs follow the motion fully (0.97–1.02 of it)
-//! and the rig's jaw-open key comes 20–30 % closer to the truth (BENCHMARKS.md, "rig
-//! accuracy"). The cap holds over the whole face: capped only within `r` mouth widths
-//! of A's rim (full weight beyond, smoothly between) it was worse — `r` = 0.5–1.3:
-//! 1.43–1.62 % on seeds 10 and 12, `r` = 1.5–2.5: 1.28 / 1.05 — as the face held
-//! beyond holds the chin back; so was a full weight kept where A, placed by the rigid
-//! alignment, already lies on B (factor `f + (1 − f)·exp(−(d/w)²)`, `d` the distance to
-//! B, `w` 0.2–0.5 mouth widths: 1.40–1.57 % on seeds 10, 12, 13).
+//! [`OPEN_POSITION_WEIGHT`], the same pairs follow the motion fully (0.97–1.02 of it),
+//! and the rig's jaw-open key comes closer to the truth on every referee seed tried
+//! (7, 10–13: 1.31–1.52 → 1.05–1.32 % of the face width; BENCHMARKS.md, "Rig accuracy").
+//! Elsewhere the position term is what makes matches of different faces close, so the
+//! change applies only when a mouth opens. The cap holds over the whole face: capped
+//! only within `r` mouth widths of A's rim (full weight beyond, smoothly between) it was
+//! worse — `r` = 0.5–1.3: 1.43–1.62 % on seeds 10 and 12, `r` = 1.5–2.5: 1.28 / 1.05 —
+//! as the face held beyond holds the chin back; so was a full weight kept where A,
+//! placed by the rigid alignment, already lies on B (factor `f + (1 − f)·exp(−(d/w)²)`,
+//! `d` the distance to B, `w` 0.2–0.5 mouth widths: 1.40–1.57 % on seeds 10, 12, 13).
 //!
 //! **Not with landmarks or features given.** With the referee's seven landmarks the same
 //! weights made the jaw-open key worse — seeds 7 / 10 / 13: 1.43 / 1.53 / 1.45 % before,
 //! 1.87 / 1.55 / 1.97 % with only the rims weighted up (landmarks kept at theirs), seed
-//! 10 1.57 % with every feature weighted up:
-//! the landmarks' plane start (its scale off by the mouth corners that moved with the
-//! jaw) then wins the comparison of the two starts, and its lower lip stays 1.3 cm from
-//! B's. So the rule applies only when the hole rims are the only guidance. Elsewhere the position term is what makes matches of
-//! different faces close, so the change applies only when a mouth opens:
+//! 10 1.57 % with every feature weighted up: the landmarks' plane start (its scale off
+//! by the mouth corners that moved with the jaw) then wins the comparison of the two
+//! starts, and its lower lip stays 1.3 cm from B's. So the rule applies only when the
+//! hole rims are the only guidance.
 //!
 //! **Opening.** A rim split at its corners ([`super::holes::split_rim_pair`]: upper and
 //! lower arc) has the opening `o` = the mean distance between its arcs, resampled corner
