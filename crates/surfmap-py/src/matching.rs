@@ -142,7 +142,8 @@ fn landmarks(d: &Bound<'_, PyDict>) -> PyResult<Landmarks> {
 /// features (``report["warnings"]``) are also raised as ``RuntimeWarning``. A match whose
 /// verdict is not ok first tries other starts (``report["confidence"]["recovery"]``;
 /// ``recover=False``: ``--no-recover``). Where one face's mouth is open and the other's
-/// closed, without landmarks or features, the lip arcs lead (``report["alignment"]["mouth"]``; ``open_mouth=False``:
+/// closed, the lip arcs lead (with landmarks or features, from their alignment refined in
+/// space alone; ``report["alignment"]["mouth"]``; ``open_mouth=False``:
 /// ``--no-open-mouth``); ``strict=True`` raises ``MatchNotTrusted`` for
 /// it, the match on the exception (``correspondence``, ``report``). A value
 /// the command line would refuse raises ``ValueError`` naming the argument.

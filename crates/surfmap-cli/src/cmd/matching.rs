@@ -194,10 +194,11 @@ pub struct Args {
     #[arg(long)]
     pub no_recover: bool,
     /// Keep the weights as given when one face's mouth is open and the other's closed
-    /// (lip gap over mouth width ≥ 0.4 and at least twice the other's). By default,
-    /// without landmarks or features, the lip arcs then lead: the feature weight ×40
-    /// and the automatic position weight capped at 1000, so that the chin follows the
-    /// jaw (match.json: `alignment.mouth`).
+    /// (lip gap over mouth width ≥ 0.4 and at least twice the other's). By default the
+    /// lip arcs then lead: the feature weight ×40 and the automatic position weight
+    /// capped at 1000, so that the chin follows the jaw; with landmarks or features the
+    /// solve starts from their alignment refined in space alone (match.json:
+    /// `alignment.mouth`).
     #[arg(long)]
     pub no_open_mouth: bool,
     /// Exit with code 3 when the match's verdict is not `ok` (doubtful or failed; the

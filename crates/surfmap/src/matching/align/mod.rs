@@ -226,29 +226,51 @@ pub(crate) fn pair_holes(
     options: &MatchOptions,
 ) -> Result<(), MatchError> {
     let given = |f: &Option<FeatureFile>| f.as_ref().map_or(0, |f| f.features.len());
-    p.a.keep_features(given(&p.features_a));
-    p.b.keep_features(given(&p.features_b));
-    if options.hole_features != HoleFeatures::Off {
-        (start.report.hole_pairs, start.report.split_holes) = add_hole_features(
-            &mut p.a,
-            &mut p.b,
-            &start.plane,
-            options.hole_features,
-            options.split_ratio(),
-        )?;
-    }
-    // A mouth that opens between the surfaces: the lip arcs lead ([`mouth`]).
-    let found = mouth::mouth_openings(
-        &p.a,
-        &p.b,
-        &start.report.hole_pairs,
-        &start.report.split_holes,
-    );
-    let openings = found.map(|(_, o)| o);
-    // Not with landmarks or features given: there the lip arcs weighted up made the
-    // jaw-open pairs worse ([`mouth`]).
     let guided = given(&p.features_a) + given(&p.features_b) > 0;
-    let opens = options.advanced.open_mouth && !guided && mouth::opens(openings);
+    let pair = |p: &mut Prepared<'_>, start: &mut Start| -> Result<(), MatchError> {
+        p.a.keep_features(given(&p.features_a));
+        p.b.keep_features(given(&p.features_b));
+        if options.hole_features != HoleFeatures::Off {
+            (start.report.hole_pairs, start.report.split_holes) = add_hole_features(
+                &mut p.a,
+                &mut p.b,
+                &start.plane,
+                options.hole_features,
+                options.split_ratio(),
+            )?;
+        }
+        Ok(())
+    };
+    pair(p, start)?;
+    // A mouth that opens between the surfaces: the lip arcs lead ([`mouth`]).
+    let openings = |p: &Prepared<'_>, start: &Start| {
+        mouth::mouth_openings(
+            &p.a,
+            &p.b,
+            &start.report.hole_pairs,
+            &start.report.split_holes,
+        )
+        .map(|(_, o)| o)
+    };
+    let mut found = openings(p, start);
+    // With landmarks or features, only from their alignment refined in space, alone: the
+    // features' plane similarity, its scale off by the mouth corners that moved with the
+    // jaw, makes the weights below worse ([`mouth`]).
+    let opens =
+        options.advanced.open_mouth && mouth::opens(found) && (!guided || start.in_space.is_some());
+    let mut start_in_space = false;
+    if opens
+        && guided
+        && let Some((plane, motion)) = start.in_space.take()
+    {
+        (start.plane, start.motion) = (plane, motion);
+        if let Some(f) = start.report.features_in_space.as_mut() {
+            f.kept = true;
+        }
+        start_in_space = true;
+        pair(p, start)?;
+        found = openings(p, start).or(found);
+    }
     // From the options each time: a start paired again keeps no earlier change.
     start.betas.features = options.betas().features;
     start.betas.position = options.position_weight.weight(start.shape_residual);
@@ -258,10 +280,11 @@ pub(crate) fn pair_holes(
             start.betas.position = start.betas.position.min(mouth::OPEN_POSITION_WEIGHT);
         }
     }
-    start.report.mouth = openings.map(|(a, b)| MouthOpening {
+    start.report.mouth = found.map(|(a, b)| MouthOpening {
         a,
         b,
         opens,
+        start_in_space,
         feature_weight: start.betas.features,
     });
     Ok(())
@@ -358,11 +381,15 @@ pub struct AlignmentReport {
 pub struct MouthOpening {
     pub a: f64,
     pub b: f64,
-    /// A mouth opens between the surfaces, no landmarks or features were given, and
-    /// `--no-open-mouth` was not: features weighted
-    /// [`mouth::OPEN_FEATURE_FACTOR`] times more, the automatic position weight capped
-    /// at [`mouth::OPEN_POSITION_WEIGHT`].
+    /// A mouth opens between the surfaces (and `--no-open-mouth` was not given; with
+    /// landmarks or features, their alignment refined in space exists): features
+    /// weighted [`mouth::OPEN_FEATURE_FACTOR`] times more, the automatic position weight
+    /// capped at [`mouth::OPEN_POSITION_WEIGHT`].
     pub opens: bool,
+    /// With landmarks or features: the solve started from their alignment refined in
+    /// space alone, not from their plane similarity too (`features_in_space` then has no
+    /// energies: the two starts were not compared).
+    pub start_in_space: bool,
     /// The feature weight used (the position weight used is the report's).
     pub feature_weight: f64,
 }

@@ -22,13 +22,18 @@
 //! placed by the rigid alignment, already lies on B (factor `f + (1 − f)·exp(−(d/w)²)`,
 //! `d` the distance to B, `w` 0.2–0.5 mouth widths: 1.40–1.57 % on seeds 10, 12, 13).
 //!
-//! **Not with landmarks or features given.** With the referee's seven landmarks the same
-//! weights made the jaw-open key worse — seeds 7 / 10 / 13: 1.43 / 1.53 / 1.45 % before,
-//! 1.87 / 1.55 / 1.97 % with only the rims weighted up (landmarks kept at theirs), seed
-//! 10 1.57 % with every feature weighted up: the landmarks' plane start (its scale off
-//! by the mouth corners that moved with the jaw) then wins the comparison of the two
-//! starts, and its lower lip stays 1.3 cm from B's. So the rule applies only when the
-//! hole rims are the only guidance.
+//! **With landmarks or features: from their alignment refined in space, alone.** With
+//! the referee's seven landmarks the same weights, applied to the better of the two
+//! starts as before, made the jaw-open key worse — seeds 7 / 10 / 13: 1.43 / 1.53 /
+//! 1.45 % before, 1.87 / 1.55 / 1.97 % with only the rims weighted up: the landmarks'
+//! plane similarity (its scale off by the mouth corners that moved with the jaw) then
+//! wins the comparison of the two starts, and its lower lip stays 1.3 cm from B's. So
+//! when a mouth opens and the landmarks' alignment refined in space exists, the solve
+//! starts from it alone (the two starts are not compared) with the weights above: rig
+//! jaw key 1.45 / 1.43 / 1.53 → 1.34 / 1.40 / 1.14 % (lips p95 6.25 / 6.36 / 6.17 →
+//! 3.37 / 5.60 / 4.56 %), the referee's jaw pair 94.0 / 93.9 / 93.5 → 97.4 / 94.9 /
+//! 98.9 % within 0.05. Kept comparing the two starts it was 2.03 / 1.96 / 1.57 %. With
+//! no alignment in space (`--features-start plane`) the rule does not apply.
 //!
 //! **Opening.** A rim split at its corners ([`super::holes::split_rim_pair`]: upper and
 //! lower arc) has the opening `o` = the mean distance between its arcs, resampled corner

@@ -50,6 +50,9 @@ impl MatchReport {
     };
         let in_space = match &report.alignment.features_in_space {
             None => String::new(),
+            Some(_) if report.alignment.mouth.is_some_and(|m| m.start_in_space) => {
+                ", the features' alignment refined in space (alone, as the mouth opens)".into()
+            }
             Some(f) => format!(
                 ", the features' alignment refined in space {} (coarsest level's energy {:.4e} from the features' start, {:.4e} from it)",
                 if f.kept { "kept" } else { "not kept" },
