@@ -60,6 +60,8 @@ def main():
     ap.add_argument("--surfmap", default=os.path.join(HERE, "..", "target", "release", "surfmap"))
     ap.add_argument("--out", default="/tmp/surfmap_rig")
     ap.add_argument("--only", default=None, help="comma-separated substrings of pair names")
+    ap.add_argument("--landmarks", action="store_true", help="match with the pair's landmarks.json")
+    ap.add_argument("--extra", default="", help="extra arguments for surfmap match (one string)")
     args = ap.parse_args()
     index = json.load(open(os.path.join(args.pairs, "index.json")))
     print("| pair | matched | mean error (% width) | p95 (% width) | max (% width) | lips p95 (% width) |")
@@ -73,7 +75,9 @@ def main():
         d = os.path.join(args.pairs, e["dir"])
         out = os.path.join(args.out, e["dir"])
         a, b = os.path.join(d, "A.obj"), os.path.join(d, "B.obj")
-        subprocess.run([args.surfmap, "match", a, b, "-o", os.path.join(out, "match"), "-q"], check=True)
+        subprocess.run([args.surfmap, "match", a, b, "-o", os.path.join(out, "match"), "-q"]
+                       + (["--landmarks", os.path.join(d, "landmarks.json")] if args.landmarks else [])
+                       + args.extra.split(), check=True)
         keys = os.path.join(out, "keys")
         subprocess.run([args.surfmap, "rig", a, b, "--match", os.path.join(out, "match"), "-o",
                         os.path.join(out, "rig.glb"), "--keys-dir", keys, "--names", "key", "-q"], check=True)
