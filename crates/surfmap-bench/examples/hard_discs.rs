@@ -197,7 +197,18 @@ fn main() {
             let mut all = 0usize;
             let (c0, t0) = (cpu_seconds(), Instant::now());
             let result = flatten_with_progress(&mesh, &options, &mut |l| {
-                all += usize::from(l.iteration > 0)
+                all += usize::from(l.iteration > 0);
+                if std::env::var_os("PROGRESS").is_some() {
+                    eprintln!(
+                        "{:3} {:2} {:14.6} {:10.3e} {:10.3e} {:10.3e}",
+                        l.iteration,
+                        l.stage,
+                        l.energy,
+                        l.newton_decrement,
+                        l.step,
+                        l.flip_free_step
+                    );
+                }
             });
             walls.push(t0.elapsed().as_secs_f64());
             cpus.push(cpu_seconds() - c0);

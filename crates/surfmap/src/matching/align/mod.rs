@@ -256,20 +256,32 @@ pub(crate) fn pair_holes(
     // With landmarks or features, only from their alignment refined in space, alone: the
     // features' plane similarity, its scale off by the mouth corners that moved with the
     // jaw, makes the weights below worse ([`mouth`]).
-    let opens =
+    let mut opens =
         options.advanced.open_mouth && mouth::opens(found) && (!guided || start.in_space.is_some());
     let mut start_in_space = false;
     if opens
         && guided
         && let Some((plane, motion)) = start.in_space.take()
     {
+        let plane_start = (start.plane, start.motion);
         (start.plane, start.motion) = (plane, motion);
-        if let Some(f) = start.report.features_in_space.as_mut() {
-            f.kept = true;
-        }
-        start_in_space = true;
         pair(p, start)?;
-        found = openings(p, start).or(found);
+        let refound = openings(p, start);
+        if mouth::opens(refound) {
+            found = refound;
+            start_in_space = true;
+            if let Some(f) = start.report.features_in_space.as_mut() {
+                f.kept = true;
+            }
+        } else {
+            // The rims paired from the start in space do not show the mouth opening
+            // (another hole taken for the mouth, or none): the rule's premise is gone
+            // there, so the plane start and its pairing come back, without the rule.
+            (start.plane, start.motion) = plane_start;
+            start.in_space = Some((plane, motion));
+            pair(p, start)?;
+            opens = false;
+        }
     }
     // From the options each time: a start paired again keeps no earlier change.
     start.betas.features = options.betas().features;
