@@ -14,7 +14,9 @@
 //! iterations of all solves together, the energy, the guarantee, and the median wall
 //! and CPU time of the whole `flatten` call (CPU: all threads of the process, from
 //! `/proc/self/task/*/schedstat`, so a shared machine's load shows in the wall column
-//! only). `--log` prints every iteration of the last run; `--bijective-off` solves
+//! only). `--log` prints every iteration of the last run's returned solve, `--log-all`
+//! every iteration of every solve of every run as it happens (iteration, stage, energy,
+//! decrement, step, flip-free bound; on stderr); `--bijective-off` solves
 //! without the boundary barrier (`Bijective::Off`); `--uncut` never cuts the disc
 //! (`Cut::Never`: one UV per vertex, as `match` and Python's default need);
 //! `--multilevel` forces the multilevel start (`Multilevel::Always`); `--save DIR` writes
@@ -97,13 +99,14 @@ fn main() {
         args.drain(i..i + 2);
     }
     let print_log = args.iter().any(|a| a == "--log");
+    let print_all = args.iter().any(|a| a == "--log-all");
     let bijective_off = args.iter().any(|a| a == "--bijective-off");
     let uncut = args.iter().any(|a| a == "--uncut");
     let multilevel = args.iter().any(|a| a == "--multilevel");
     args.retain(|a| {
         !matches!(
             a.as_str(),
-            "--log" | "--bijective-off" | "--uncut" | "--multilevel"
+            "--log" | "--log-all" | "--bijective-off" | "--uncut" | "--multilevel"
         )
     });
     let mut coarse_vertices = None;
@@ -198,7 +201,7 @@ fn main() {
             let (c0, t0) = (cpu_seconds(), Instant::now());
             let result = flatten_with_progress(&mesh, &options, &mut |l| {
                 all += usize::from(l.iteration > 0);
-                if std::env::var_os("PROGRESS").is_some() {
+                if print_all {
                     eprintln!(
                         "{:3} {:2} {:14.6} {:10.3e} {:10.3e} {:10.3e}",
                         l.iteration,
