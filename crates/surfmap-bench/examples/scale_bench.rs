@@ -4,15 +4,13 @@
 //! without it (same run; the multilevel run first, so the peak memory line of the
 //! first run is its own).
 //!
-//! `cargo run --release -p surfmap-bench --example scale_bench -- MESH LEVELS [multi|single|both|krylov]`
-//! (`krylov`: multilevel with and without inexact Newton steps,
-//! `NewtonSettings::krylov_max_iterations` 0).
+//! `cargo run --release -p surfmap-bench --example scale_bench -- MESH LEVELS [multi|single|both]`
 //! e.g. `../shared/data/faces/face_bff.obj 3` (34k → 2.2M faces).
 
 use surfmap::mesh::io::read_mesh;
 use surfmap::mesh::subdivide::subdivide_midpoint;
 use surfmap::param::count_flipped;
-use surfmap::{CoarseLevel, FlattenOptions, Multilevel, NewtonSettings, Start, flatten};
+use surfmap::{CoarseLevel, FlattenOptions, Multilevel, Start, flatten};
 
 fn peak_rss_mib() -> f64 {
     std::fs::read_to_string("/proc/self/status")
@@ -47,24 +45,15 @@ fn main() {
     );
     let which = args.get(2).map_or("both", String::as_str);
     let on = Multilevel::Always(CoarseLevel::default());
-    let krylov = NewtonSettings::default().krylov_max_iterations;
-    let runs: Vec<(&str, Multilevel, usize)> = match which {
-        "single" => vec![("single-level", Multilevel::Never, krylov)],
-        "multi" => vec![("multilevel", on, krylov)],
-        "krylov" => vec![
-            ("multilevel", on, krylov),
-            ("multilevel without inexact Newton steps", on, 0),
-        ],
-        _ => vec![
-            ("multilevel", on, krylov),
-            ("single-level", Multilevel::Never, krylov),
-        ],
+    let runs: Vec<(&str, Multilevel)> = match which {
+        "single" => vec![("single-level", Multilevel::Never)],
+        "multi" => vec![("multilevel", on)],
+        _ => vec![("multilevel", on), ("single-level", Multilevel::Never)],
     };
     let mut totals = Vec::new();
-    for (name, multilevel, krylov_max_iterations) in runs {
+    for (name, multilevel) in runs {
         let t = std::time::Instant::now();
-        let mut options = FlattenOptions::default().with_start(Start::Auto { multilevel });
-        options.newton.krylov_max_iterations = krylov_max_iterations;
+        let options = FlattenOptions::default().with_start(Start::Auto { multilevel });
         let r = flatten(&mesh, &options).expect("flattened");
         let total = t.elapsed().as_secs_f64();
         totals.push(total);
@@ -91,11 +80,9 @@ fn main() {
         }
     }
     if totals.len() == 2 {
-        let what = if which == "krylov" {
-            "without / with inexact Newton steps"
-        } else {
-            "single-level / multilevel"
-        };
-        println!("{what} time: {:.2}×", totals[1] / totals[0]);
+        println!(
+            "single-level / multilevel time: {:.2}×",
+            totals[1] / totals[0]
+        );
     }
 }

@@ -110,10 +110,6 @@ pub struct SpdSystem {
     l_values: Vec<f64>,
     factor_scratch: MemBuffer,
     factorized: bool,
-    /// Whether `l_values` hold a factorization (the last one succeeded), even if the
-    /// values changed since: a preconditioner for the new values
-    /// ([`SpdSystem::solve_with_held_factor`]).
-    factor_held: bool,
 }
 
 impl std::fmt::Debug for SpdSystem {
@@ -192,7 +188,6 @@ impl SpdSystem {
                 l_values,
                 factor_scratch,
                 factorized: false,
-                factor_held: false,
             },
             slots,
         ))
@@ -345,14 +340,8 @@ impl SpdSystem {
             stack,
             Default::default(),
         ) {
-            Ok(_) => {
-                self.factor_held = true;
-                Ok(())
-            }
-            Err(LltError::NonPositivePivot { index }) => {
-                self.factor_held = false;
-                Err(index)
-            }
+            Ok(_) => Ok(()),
+            Err(LltError::NonPositivePivot { index }) => Err(index),
         }
     }
 
@@ -361,25 +350,6 @@ impl SpdSystem {
         if !self.factorized {
             return Err(SolveError::NotFactorized);
         }
-        self.solve_with_factor(rhs)
-    }
-
-    /// Whether a factorization is held, of the current values or of earlier ones.
-    pub fn holds_factor(&self) -> bool {
-        self.factor_held
-    }
-
-    /// Solve in place with the last successful factorization even when the values have
-    /// changed since ([`SpdSystem::values_mut`]): `rhs ← (L_k L_kᵀ)⁻¹ rhs` for the
-    /// matrix `A_k` factorized then — a preconditioner for the current `A`.
-    pub fn solve_with_held_factor(&self, rhs: &mut [f64]) -> Result<(), SolveError> {
-        if !self.factor_held {
-            return Err(SolveError::NotFactorized);
-        }
-        self.solve_with_factor(rhs)
-    }
-
-    fn solve_with_factor(&self, rhs: &mut [f64]) -> Result<(), SolveError> {
         check_len(self.n, rhs.len())?;
         if let Some((index, &value)) = rhs.iter().enumerate().find(|(_, v)| !v.is_finite()) {
             return Err(SolveError::NonFiniteRhs { index, value });

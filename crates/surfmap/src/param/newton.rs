@@ -97,13 +97,9 @@ pub struct NewtonSettings {
     /// estimate at the new point is below this fraction of the last decrement; 0 never
     /// (every step factorizes anew). See [`CHORD_CONTRACTION`].
     pub chord_contraction: f64,
-    /// Chord and inexact Newton steps only for systems of at least this many unknowns
-    /// (see [`CHORD_MIN_UNKNOWNS`]).
+    /// Chord steps only for systems of at least this many unknowns (see
+    /// [`CHORD_MIN_UNKNOWNS`]).
     pub chord_min_unknowns: usize,
-    /// Most CG iterations of an inexact Newton step, preconditioned with the previous
-    /// factorization, where a chord step is not contracted enough; 0 never (a new
-    /// factorization instead). See [`KRYLOV_MAX_ITERATIONS`].
-    pub krylov_max_iterations: usize,
 }
 
 impl Default for NewtonSettings {
@@ -115,7 +111,6 @@ impl Default for NewtonSettings {
             max_iterations: 200,
             chord_contraction: CHORD_CONTRACTION,
             chord_min_unknowns: CHORD_MIN_UNKNOWNS,
-            krylov_max_iterations: KRYLOV_MAX_ITERATIONS,
         }
     }
 }
@@ -185,11 +180,6 @@ pub struct NewtonTimings {
     /// Chord steps: iterations that reused the previous exact factorization instead of
     /// a new one (see [`CHORD_CONTRACTION`]).
     pub chord_steps: usize,
-    /// Inexact Newton steps: iterations whose exact-Hessian system was solved by
-    /// conjugate gradients preconditioned with the previous factorization instead of a
-    /// new one (see [`KRYLOV_MAX_ITERATIONS`]), and their CG iterations in all.
-    pub krylov_steps: usize,
-    pub krylov_iterations: usize,
     /// Symbolic re-analyses of the sparse pattern for new boundary-barrier pairs
     /// (their time is in `symbolic`).
     pub pattern_rebuilds: usize,
@@ -254,27 +244,6 @@ const EXACT_SWITCH: f64 = 1e-3;
 /// solves, same energies to 9 digits; on the shared discs (three presets) 20 % more
 /// iterations but less time (13.8 → 13.0 s in all, one run), same energies to 6 digits.
 pub const CHORD_CONTRACTION: f64 = 0.1;
-
-/// Default of [`NewtonSettings::krylov_max_iterations`].
-///
-/// Inexact Newton steps (Newton–Krylov, Dembo, Eisenstat & Steihaug 1982; Kelley 1995
-/// §6): where a chord step is not contracted enough (near the minimum, on systems of
-/// [`CHORD_MIN_UNKNOWNS`] and more), the exact Hessian `H(u)` is assembled but not
-/// factorized: `H p = −∇E` is solved by conjugate gradients preconditioned with the
-/// factorization still held (`H_k`, of the last factorized step), from the chord
-/// direction `H_k⁻¹(−∇E)`. `H = H_k + O(‖p_k‖)` there, so CG needs a few iterations
-/// (one triangular solve and one product with `H` each) where a factorization costs
-/// ten solves. CG that meets non-positive curvature or has not converged within this
-/// many iterations gives up, and `H` is factorized as before. Measured (BENCHMARKS.md,
-/// "Scale"): on a 1.07M-face disc 4 factorizations become 2 (13 CG iterations in
-/// all, 7 Newton iterations instead of 6); the whole flattening 21.8 → 21.0 s (medians
-/// of 3, one process), the same energy to 9 digits. No shared mesh has the size.
-const KRYLOV_MAX_ITERATIONS: usize = 8;
-
-/// The inexact Newton step's forcing term `η`: CG stops when the residual's
-/// `H_k⁻¹`-norm is `η` times the gradient's. 10⁻¹ took 9 Newton iterations where
-/// 10⁻² takes 7, in the same time (1M faces); 0.3 took 11 and longer.
-const KRYLOV_RELATIVE_RESIDUAL: f64 = 1e-2;
 
 /// Default of [`NewtonSettings::chord_min_unknowns`]: chord steps are taken on systems of
 /// 200k unknowns (100k vertices) and more, where a factorization costs seconds. Below,
@@ -482,8 +451,6 @@ impl<'m> NewtonSolver<'m> {
         let mut exact_blocked_until = 0;
         let mut decrement_prev = f64::INFINITY;
         let mut last_step_full_exact = false;
-        // The last step was at least the Newton step (a doubled one too), of any kind.
-        let mut last_step_full = false;
         let mut crossing_iterations = 0;
         for it in 1..=settings.max_iterations {
             // Far from the minimum (a start that squeezed the boundary together, with
@@ -491,18 +458,7 @@ impl<'m> NewtonSolver<'m> {
             // into new contacts; there each vertex keeps its own block only.
             self.couple_pairs = decrement_prev < COUPLING_SWITCH * energy.abs();
             let mut chord = None;
-            // The exact Hessian is in the matrix already (a CG solve gave up on it).
-            let mut exact_assembled = false;
-            // An inexact Newton step may replace a factorization (large systems, near the
-            // minimum, after a step of at least Newton's length of any kind:
-            // [`NewtonSolver::preconditioned_newton_direction`]).
-            let krylov_ready = settings.krylov_max_iterations > 0
-                && self.dof.count() >= settings.chord_min_unknowns
-                && last_step_full
-                && self.system.holds_factor()
-                && decrement_prev < EXACT_SWITCH * energy.abs().max(1.0);
-            let mut inexact = false;
-            if last_step_full_exact || krylov_ready {
+            if last_step_full_exact {
                 // After a full exact-Newton step the decrement has dropped quadratically:
                 // test convergence with the previous factorization (a Hessian that differs
                 // by O(step), so the estimate is accurate to that order) before paying
@@ -511,7 +467,7 @@ impl<'m> NewtonSolver<'m> {
                 self.assemble(uv, density, HessianKind::None)?;
                 let t1 = Instant::now();
                 let mut q: Vec<f64> = self.gradient.iter().map(|g| -g).collect();
-                self.system.solve_with_held_factor(&mut q)?;
+                self.system.solve_in_place(&mut q)?;
                 let estimate = -self
                     .gradient
                     .iter()
@@ -530,27 +486,6 @@ impl<'m> NewtonSolver<'m> {
                     && self.dof.count() >= settings.chord_min_unknowns
                 {
                     chord = Some(q);
-                } else if krylov_ready && estimate.is_finite() && estimate > 0.0 {
-                    // Not contracted enough for a chord step: the exact Hessian's
-                    // system, solved by CG from the chord direction with the previous
-                    // factorization as the preconditioner.
-                    let t0 = Instant::now();
-                    self.assemble(uv, density, HessianKind::Exact)?;
-                    let t1 = Instant::now();
-                    self.timings.assemble += (t1 - t0).as_secs_f64();
-                    let found = self.preconditioned_newton_direction(
-                        q,
-                        estimate,
-                        settings.krylov_max_iterations,
-                    )?;
-                    self.timings.solve += t1.elapsed().as_secs_f64();
-                    match found {
-                        Some(p) => {
-                            chord = Some(p);
-                            inexact = true;
-                        }
-                        None => exact_assembled = true,
-                    }
                 }
             }
             let try_exact = chord.is_none()
@@ -564,17 +499,11 @@ impl<'m> NewtonSolver<'m> {
                 p = q;
                 solved = true;
                 solved_exact = true;
-                if inexact {
-                    self.timings.krylov_steps += 1;
-                } else {
-                    self.timings.chord_steps += 1;
-                }
+                self.timings.chord_steps += 1;
             }
             if try_exact {
                 let t0 = Instant::now();
-                if !exact_assembled {
-                    self.assemble(uv, density, HessianKind::Exact)?;
-                }
+                self.assemble(uv, density, HessianKind::Exact)?;
                 let t1 = Instant::now();
                 let ok = self.system.factorize_unshifted().is_ok();
                 self.timings.factorizations += 1;
@@ -709,7 +638,6 @@ impl<'m> NewtonSolver<'m> {
             }
             uv.copy_from_slice(&self.trial);
             last_step_full_exact = solved_exact && step == 1.0;
-            last_step_full = step >= 1.0;
             self.timings.line_search += t_search.elapsed().as_secs_f64();
             energy = e_new;
             log(IterationLog {
@@ -736,71 +664,6 @@ impl<'m> NewtonSolver<'m> {
             }
         }
         Ok((StopReason::IterationCap, settings.max_iterations, energy))
-    }
-
-    /// The Newton direction `p` of the assembled (exact) Hessian `H`, `H p = −∇E`, by
-    /// conjugate gradients preconditioned with the last factorization `H_k = L Lᵀ`
-    /// (Newton–Krylov with a frozen factorization: near the minimum `H = H_k + O(‖p_k‖)`,
-    /// so `H_k⁻¹ H` is close to the identity and CG converges in a few iterations, each
-    /// one solve with `L` and one product with `H`, against a new factorization of
-    /// seconds on a million unknowns). Starts from `x0 = H_k⁻¹(−∇E)` (the chord
-    /// direction, whose decrement estimate is `estimate`); stops when the residual's
-    /// `H_k⁻¹`-norm² is below [`KRYLOV_RELATIVE_RESIDUAL`]² · `estimate` (the forcing
-    /// term η of inexact Newton, whose local convergence is linear with rate ≈ η, fast
-    /// for a small one). `None` when `H` shows non-positive curvature, CG has not
-    /// converged in `max_iterations`, or its direction is not one of descent: the
-    /// caller factorizes `H` then.
-    fn preconditioned_newton_direction(
-        &mut self,
-        x0: Vec<f64>,
-        estimate: f64,
-        max_iterations: usize,
-    ) -> Result<Option<Vec<f64>>, SolveError> {
-        let n = x0.len();
-        let mut x = x0;
-        let mut hx = vec![0.0; n];
-        self.system.mul_vec(&x, &mut hx)?;
-        let mut r: Vec<f64> = self.gradient.iter().zip(&hx).map(|(g, h)| -g - h).collect();
-        let mut z = r.clone();
-        self.system.solve_with_held_factor(&mut z)?;
-        let mut rz: f64 = r.iter().zip(&z).map(|(a, b)| a * b).sum();
-        let target = KRYLOV_RELATIVE_RESIDUAL * KRYLOV_RELATIVE_RESIDUAL * estimate;
-        let mut d = z.clone();
-        let mut hd = hx;
-        // A descent direction only (the line search and the stopping test need one).
-        let accept = |x: Vec<f64>, gradient: &[f64]| {
-            let slope: f64 = gradient.iter().zip(&x).map(|(g, x)| g * x).sum();
-            (slope < 0.0).then_some(x)
-        };
-        for _ in 0..max_iterations {
-            if rz.is_finite() && rz <= target {
-                return Ok(accept(x, &self.gradient));
-            }
-            self.timings.krylov_iterations += 1;
-            self.system.mul_vec(&d, &mut hd)?;
-            let dhd: f64 = d.iter().zip(&hd).map(|(a, b)| a * b).sum();
-            if dhd.is_nan() || dhd <= 0.0 || !rz.is_finite() {
-                return Ok(None);
-            }
-            let alpha = rz / dhd;
-            for i in 0..n {
-                x[i] += alpha * d[i];
-                r[i] -= alpha * hd[i];
-            }
-            z.copy_from_slice(&r);
-            self.system.solve_with_held_factor(&mut z)?;
-            let rz_new: f64 = r.iter().zip(&z).map(|(a, b)| a * b).sum();
-            let beta = rz_new / rz;
-            rz = rz_new;
-            for i in 0..n {
-                d[i] = z[i] + beta * d[i];
-            }
-        }
-        Ok(if rz.is_finite() && rz <= target {
-            accept(x, &self.gradient)
-        } else {
-            None
-        })
     }
 
     /// Fills the gradient and the Hessian values of `kind` for the current `uv` (the
@@ -1108,7 +971,6 @@ mod tests {
             let settings = NewtonSettings {
                 chord_contraction,
                 chord_min_unknowns: 0,
-                krylov_max_iterations: 0,
                 ..Default::default()
             };
             let mut uv = start.clone();
@@ -1135,64 +997,6 @@ mod tests {
         let diff = crate::testing::max_uv_difference(&uv_full, &uv_chord);
         assert!(diff < 1e-5, "{diff}");
         assert_eq!(crate::param::count_flipped(&uv_chord, &mesh.triangles), 0);
-    }
-
-    #[test]
-    fn inexact_newton_steps_reach_the_minimum_of_full_newton_with_fewer_factorizations() {
-        // The chord test's disc, from its mean-value start: every step factorized
-        // (neither chord nor inexact steps) against the defaults on a system counted as
-        // large: the same minimum (both converged, energies equal to the tolerance's
-        // order, the same map), the default run with inexact steps whose CG converged
-        // (preconditioned with an earlier factorization) and fewer factorizations.
-        let mesh = bumpy_disc(16, 0.6);
-        let (positions, _) = mesh.unit_area_positions();
-        let disc = Disc::new(&mesh).unwrap();
-        let boundary = disc.boundary();
-        let start = mean_value(&positions, &disc).unwrap();
-        let rest = rest_triangles(&positions, &mesh.triangles).unwrap();
-        let (p0, p1) = (boundary[0], boundary[boundary.len() / 2]);
-        let density = Alpha::balanced();
-        let run = |settings: NewtonSettings| {
-            let mut solver = NewtonSolver::new(
-                start.len(),
-                &mesh.triangles,
-                rest.clone(),
-                &[(p0, 0), (p0, 1), (p1, 1)],
-                None,
-            )
-            .unwrap();
-            let mut uv = start.clone();
-            let (stop, _, energy) = solver
-                .minimize(&mut uv, &density, &settings, 0, Instant::now(), &mut |_| {})
-                .unwrap();
-            assert_eq!(stop, StopReason::Converged);
-            (uv, energy, solver.timings)
-        };
-        let (uv_full, e_full, full) = run(NewtonSettings {
-            chord_contraction: 0.0,
-            krylov_max_iterations: 0,
-            ..Default::default()
-        });
-        let (uv_inexact, e_inexact, inexact) = run(NewtonSettings {
-            chord_min_unknowns: 0,
-            ..Default::default()
-        });
-        assert_eq!(full.krylov_steps + full.chord_steps, 0);
-        assert!(inexact.krylov_steps > 0, "{inexact:?}");
-        assert!(inexact.krylov_iterations >= inexact.krylov_steps);
-        assert!(
-            inexact.factorizations < full.factorizations,
-            "{} vs {}",
-            inexact.factorizations,
-            full.factorizations
-        );
-        assert!(
-            (e_full - e_inexact).abs() <= 1e-10 * e_full,
-            "{e_full} vs {e_inexact}"
-        );
-        let diff = crate::testing::max_uv_difference(&uv_full, &uv_inexact);
-        assert!(diff < 1e-5, "{diff}");
-        assert_eq!(crate::param::count_flipped(&uv_inexact, &mesh.triangles), 0);
     }
 
     /// A strip of `m` quads bent into a ring open by the angle `gap`, radius 1 to 1.2:
