@@ -474,7 +474,7 @@ fn multilevel_start_reaches_the_single_level_minimum_on_a_real_scan() {
         if name == "multi" {
             assert_eq!(r["start"], "multilevel");
             assert!(
-                stdout.contains("multilevel (2000 coarse vertices)"),
+                stdout.contains("multilevel (2000 coarse vertices"),
                 "{stdout}"
             );
             let m = &r["multilevel"];

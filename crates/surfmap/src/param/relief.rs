@@ -20,9 +20,19 @@
 //! of [`NewtonSolver`]). Its stopping threshold is the full barrier solve's own,
 //! `λ²/2 ≤ 10⁻⁴·E` of the whole map's energy `E`: the patch is relieved as far as the
 //! full solve would resolve it, no further.
+//!
+//! **Hot spots** ([`relieve_hot_spots`]): the same local solve for a multilevel start's
+//! squeezed triangles. Re-inserting the fine vertices one at a time can leave a few
+//! triangles nearly flat in UV where the coarse map was tight (camelhead subdivided 2×,
+//! 363k faces: the two worst triangles held 66 % of the start's energy, 21.1 against
+//! 5.35 at the minimum); the full solve's first steps are then cut to 1–10 % of
+//! Newton's by the flip-free bound, and it took 22 iterations (20 s). The triangles whose
+//! energy density is [`HOT_DENSITY_FACTOR`] times the map's mean or more, and
+//! [`RELIEF_RINGS`] rings around them, are solved as a patch first (0.07 s there; the
+//! full solve then takes 9 iterations).
 
 use super::barrier::BoundaryBarrier;
-use super::element::RestTriangle;
+use super::element::{self, RestTriangle};
 use super::newton::{BARRIER_RELATIVE_TOLERANCE, NewtonSettings, NewtonSolver};
 use crate::energy::Density;
 use crate::linsolve::SolveError;
@@ -72,8 +82,7 @@ pub fn relieve_crushed_contacts<D: Density + ?Sized>(
 ) -> Result<Option<ContactRelief>, SolveError> {
     let clock = Instant::now();
     let barrier = BoundaryBarrier::new(boundary, uv).with_faces(triangles);
-    let n = uv.len();
-    let mut free = vec![false; n];
+    let mut free = vec![false; uv.len()];
     let mut crushed_pairs = 0;
     barrier.for_each_pair_within(uv, CRUSHED_FRACTION, |pair| {
         crushed_pairs += 1;
@@ -82,6 +91,146 @@ pub fn relieve_crushed_contacts<D: Density + ?Sized>(
     if crushed_pairs == 0 {
         return Ok(None);
     }
+    // The full solve's threshold, from the whole map's energy.
+    let whole = NewtonSolver::energy_of(rest, triangles)(uv, density) + barrier.energy(uv);
+    let tolerance = settings.tolerance.max(BARRIER_RELATIVE_TOLERANCE * whole);
+    let Some(patch) = solve_patch(
+        uv,
+        triangles,
+        rest,
+        free,
+        density,
+        settings,
+        tolerance,
+        Some(barrier),
+    )?
+    else {
+        return Ok(None);
+    };
+    Ok(Some(ContactRelief {
+        crushed_pairs,
+        vertices: patch.vertices,
+        iterations: patch.iterations,
+        energy_before: patch.energy_before,
+        energy_after: patch.energy_after,
+        seconds: clock.elapsed().as_secs_f64(),
+    }))
+}
+
+/// A triangle is a hot spot of a start when its energy density (energy per unit 3D
+/// area) is at least this many times the map's mean. Measured on the multilevel starts
+/// of camelhead subdivided 2× (363k faces; full-solve iterations after the relief):
+/// none 22, factor 50 12, 10 9, 4 8 (422 triangles, 0.09 s). Lionhead subdivided 3×
+/// (1.07M faces) has none at 10: its start was already within 0.2 % of the minimum.
+pub const HOT_DENSITY_FACTOR: f64 = 10.0;
+
+/// The patch solve's stopping threshold relative to the whole map's energy: the
+/// patch is brought close to its own minimum (a hot spot limits the full solve's steps
+/// through the flip-free bound, not through its energy).
+const HOT_RELATIVE_TOLERANCE: f64 = 1e-6;
+
+/// What the hot-spot relief did (reports).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct HotSpotRelief {
+    /// Triangles at [`HOT_DENSITY_FACTOR`] times the mean energy density or more.
+    pub hot_triangles: usize,
+    /// Vertices freed for the local solve.
+    pub vertices: usize,
+    /// Its Newton iterations.
+    pub iterations: usize,
+    /// Energy of the patch's triangles (per unit area of the whole surface), before
+    /// and after.
+    pub energy_before: f64,
+    pub energy_after: f64,
+    pub seconds: f64,
+}
+
+/// Relieves the hot spots of the start `uv` (a flip-free map of `triangles`; `rest`:
+/// one rest triangle per triangle, unit-area positions) by a local solve of `density`
+/// around them (module docs), with the boundary barrier of `boundary` when it is given
+/// (the map must then not cross itself, and stays so). `None`, with `uv` untouched,
+/// when there is no hot spot or the patch would hold more than half of the vertices.
+/// The result is flip-free, with every vertex outside the patch where it was.
+pub fn relieve_hot_spots<D: Density + ?Sized>(
+    uv: &mut [[f64; 2]],
+    triangles: &[[u32; 3]],
+    rest: &[RestTriangle],
+    boundary: Option<&[u32]>,
+    density: &D,
+    settings: &NewtonSettings,
+) -> Result<Option<HotSpotRelief>, SolveError> {
+    let clock = Instant::now();
+    let energies: Vec<f64> = triangles
+        .iter()
+        .zip(rest)
+        .map(|(t, r)| {
+            element::energy(
+                r,
+                &[uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]],
+                density,
+            )
+        })
+        .collect();
+    let whole: f64 = energies.iter().sum();
+    let area: f64 = rest.iter().map(|r| r.area).sum();
+    if !(whole.is_finite() && area > 0.0) {
+        return Ok(None);
+    }
+    let hot_density = HOT_DENSITY_FACTOR * whole / area;
+    let mut free = vec![false; uv.len()];
+    let mut hot_triangles = 0;
+    for ((t, r), e) in triangles.iter().zip(rest).zip(&energies) {
+        if *e > hot_density * r.area {
+            hot_triangles += 1;
+            t.iter().for_each(|&v| free[v as usize] = true);
+        }
+    }
+    if hot_triangles == 0 {
+        return Ok(None);
+    }
+    let barrier = boundary.map(|b| BoundaryBarrier::new(b, uv).with_faces(triangles));
+    let tolerance = settings.tolerance.max(HOT_RELATIVE_TOLERANCE * whole);
+    let Some(patch) = solve_patch(
+        uv, triangles, rest, free, density, settings, tolerance, barrier,
+    )?
+    else {
+        return Ok(None);
+    };
+    Ok(Some(HotSpotRelief {
+        hot_triangles,
+        vertices: patch.vertices,
+        iterations: patch.iterations,
+        energy_before: patch.energy_before,
+        energy_after: patch.energy_after,
+        seconds: clock.elapsed().as_secs_f64(),
+    }))
+}
+
+/// What [`solve_patch`] did.
+struct PatchSolve {
+    vertices: usize,
+    iterations: usize,
+    energy_before: f64,
+    energy_after: f64,
+}
+
+/// The local solve of both reliefs: the vertices marked in `seeds` and
+/// [`RELIEF_RINGS`] rings around them are free, every other vertex is pinned, and the
+/// energy (with `barrier`'s term when given) is summed over the triangles with a free
+/// corner, minimized to `tolerance`. `None`, with `uv` untouched, when the patch would
+/// hold more than half of the vertices (the full solve is then no dearer).
+#[allow(clippy::too_many_arguments)]
+fn solve_patch<D: Density + ?Sized>(
+    uv: &mut [[f64; 2]],
+    triangles: &[[u32; 3]],
+    rest: &[RestTriangle],
+    mut free: Vec<bool>,
+    density: &D,
+    settings: &NewtonSettings,
+    tolerance: f64,
+    barrier: Option<BoundaryBarrier>,
+) -> Result<Option<PatchSolve>, SolveError> {
+    let n = uv.len();
     let mut ring = free.clone();
     for _ in 0..RELIEF_RINGS {
         for t in triangles {
@@ -105,25 +254,23 @@ pub fn relieve_crushed_contacts<D: Density + ?Sized>(
         .filter(|&v| !free[v as usize])
         .flat_map(|v| [(v, 0), (v, 1)])
         .collect();
-    // The full solve's threshold, from the whole map's energy.
-    let barrier_start = barrier.energy(uv);
-    let whole = NewtonSolver::energy_of(rest, triangles)(uv, density) + barrier_start;
     let local = NewtonSettings {
-        tolerance: settings.tolerance.max(BARRIER_RELATIVE_TOLERANCE * whole),
+        tolerance,
         ..*settings
     };
     let mut solver = NewtonSolver::new(n, &patch, patch_rest, &pins, None)?;
+    let barrier_start = barrier.as_ref().map_or(0.0, |b| b.energy(uv));
     let energy_before = solver.energy(uv, density) + barrier_start;
-    solver.set_barrier(barrier);
+    if let Some(barrier) = barrier {
+        solver.set_barrier(barrier);
+    }
     let (_, iterations, energy_after) =
-        solver.minimize(uv, density, &local, 0, clock, &mut |_| {})?;
-    Ok(Some(ContactRelief {
-        crushed_pairs,
+        solver.minimize(uv, density, &local, 0, Instant::now(), &mut |_| {})?;
+    Ok(Some(PatchSolve {
         vertices,
         iterations,
         energy_before,
         energy_after,
-        seconds: clock.elapsed().as_secs_f64(),
     }))
 }
 
@@ -257,6 +404,138 @@ mod tests {
             &mesh.triangles,
             &rest,
             disc.boundary(),
+            &Energy::litke(Alpha::balanced()),
+            &NewtonSettings::default(),
+        )
+        .unwrap();
+        assert_eq!(relief, None);
+        assert_eq!(uv, start);
+    }
+
+    /// The flat U (its identity map: an isometry, uniform energy density) with one
+    /// interior vertex pushed towards a neighbour until 0.1 % short of the first flip,
+    /// and that vertex.
+    fn u_with_a_squeezed_vertex() -> (TriMesh, Vec<[f64; 2]>, usize) {
+        let (mesh, _) = squeezed_u(6, 1.0);
+        let mut uv: Vec<[f64; 2]> = mesh.positions.iter().map(|p| [p[0], p[1]]).collect();
+        let near = |v: usize, x: f64, y: f64| (uv[v][0] - x).hypot(uv[v][1] - y);
+        let v = (0..uv.len())
+            .min_by(|&a, &b| near(a, 1.5, 1.5).total_cmp(&near(b, 1.5, 1.5)))
+            .unwrap();
+        let a = mesh.triangles.iter().find(|t| t[0] as usize == v).unwrap()[1] as usize;
+        let mut direction = vec![[0.0; 2]; uv.len()];
+        direction[v] = [uv[a][0] - uv[v][0], uv[a][1] - uv[v][1]];
+        let t = crate::param::flip_free::max_flip_free_step(&uv, &mesh.triangles, &direction);
+        let t = 0.999 * t.min(1.0);
+        uv[v] = [
+            uv[v][0] + t * direction[v][0],
+            uv[v][1] + t * direction[v][1],
+        ];
+        (mesh, uv, v)
+    }
+
+    #[test]
+    fn a_squeezed_triangle_is_relieved_locally_and_the_full_solve_then_needs_fewer_iterations() {
+        let (mesh, start, squeezed) = u_with_a_squeezed_vertex();
+        let (positions, _) = mesh.unit_area_positions();
+        let scale = (mesh.area()).sqrt();
+        let start: Vec<[f64; 2]> = start.iter().map(|p| [p[0] / scale, p[1] / scale]).collect();
+        let rest = rest_triangles(&positions, &mesh.triangles).unwrap();
+        let energy = Energy::litke(Alpha::balanced());
+        assert_eq!(count_flipped(&start, &mesh.triangles), 0);
+        let density = |uv: &[[f64; 2]]| -> (f64, f64) {
+            let e: Vec<f64> = mesh
+                .triangles
+                .iter()
+                .zip(&rest)
+                .map(|(t, r)| {
+                    let c = [uv[t[0] as usize], uv[t[1] as usize], uv[t[2] as usize]];
+                    element::energy(r, &c, &energy) / r.area
+                })
+                .collect();
+            let whole = NewtonSolver::energy_of(&rest, &mesh.triangles)(uv, &energy);
+            (e.iter().copied().fold(0.0, f64::max), whole)
+        };
+        let (worst, whole) = density(&start);
+        assert!(
+            worst > 100.0 * whole,
+            "the squeeze makes a hot spot: {worst} vs {whole}"
+        );
+        let mut uv = start.clone();
+        let relief = relieve_hot_spots(
+            &mut uv,
+            &mesh.triangles,
+            &rest,
+            None,
+            &energy,
+            &NewtonSettings::default(),
+        )
+        .unwrap()
+        .expect("a hot spot");
+        assert!(
+            relief.hot_triangles >= 1 && 2 * relief.vertices < uv.len(),
+            "{relief:?}"
+        );
+        assert!(relief.energy_after < relief.energy_before, "{relief:?}");
+        assert_eq!(count_flipped(&uv, &mesh.triangles), 0);
+        // No hot spot is left, and only the patch moved: the U's far ends stay.
+        let (worst, whole) = density(&uv);
+        assert!(worst < HOT_DENSITY_FACTOR * whole, "{worst} vs {whole}");
+        let moved = |v: usize| (uv[v][0] - start[v][0]).hypot(uv[v][1] - start[v][1]) > 0.0;
+        assert!(moved(squeezed));
+        let far: Vec<usize> = (0..uv.len())
+            .filter(|&v| mesh.positions[v][0] > 5.0)
+            .collect();
+        assert!(!far.is_empty() && far.iter().all(|&v| !moved(v)));
+        // The full solve from each start: the relieved one converges in less than half
+        // the squeezed one's iterations, to the same minimum.
+        let boundary = Disc::new(&mesh).unwrap().boundary().to_vec();
+        let (p0, p1) = (boundary[0], boundary[boundary.len() / 2]);
+        let solve = |from: &[[f64; 2]]| {
+            let mut solver = NewtonSolver::new(
+                from.len(),
+                &mesh.triangles,
+                rest.clone(),
+                &[(p0, 0), (p0, 1), (p1, 1)],
+                None,
+            )
+            .unwrap();
+            let mut uv = from.to_vec();
+            let (stop, iterations, energy_end) = solver
+                .minimize(
+                    &mut uv,
+                    &energy,
+                    &NewtonSettings::default(),
+                    0,
+                    Instant::now(),
+                    &mut |_| {},
+                )
+                .unwrap();
+            assert_eq!(stop, super::super::newton::StopReason::Converged);
+            (iterations, energy_end)
+        };
+        let (it_squeezed, e_squeezed) = solve(&start);
+        let (it_relieved, e_relieved) = solve(&uv);
+        // (14 against 3 iterations when written.)
+        assert!(
+            2 * it_relieved < it_squeezed,
+            "{it_relieved} vs {it_squeezed}"
+        );
+        assert!((e_squeezed - e_relieved).abs() <= 1e-9 * e_squeezed);
+    }
+
+    #[test]
+    fn a_start_without_hot_spots_is_left_alone() {
+        // The U's identity map: every triangle at the same energy density.
+        let (mesh, _) = squeezed_u(6, 1.0);
+        let start: Vec<[f64; 2]> = mesh.positions.iter().map(|p| [p[0], p[1]]).collect();
+        let rest = rest_triangles(&mesh.positions, &mesh.triangles).unwrap();
+        let mut uv = start.clone();
+        let relief = relieve_hot_spots(
+            &mut uv,
+            &mesh.triangles,
+            &rest,
+            None,
             &Energy::litke(Alpha::balanced()),
             &NewtonSettings::default(),
         )

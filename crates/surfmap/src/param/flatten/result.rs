@@ -57,6 +57,9 @@ pub struct MultilevelReport {
     /// The local solve that opened the start's crushed boundary contacts before the
     /// barrier solve, when it had any ([`crate::param::relief`]).
     pub relief: Option<crate::param::relief::ContactRelief>,
+    /// The local solve that relieved the start's squeezed triangles before the full
+    /// solve, when it had any ([`crate::param::relief::relieve_hot_spots`]).
+    pub hot_spots: Option<crate::param::relief::HotSpotRelief>,
 }
 
 /// What the result is guaranteed to be (checked on the result, not assumed).
@@ -151,13 +154,17 @@ impl Flattening {
             StartMap::MeanValue => "mean-value".to_string(),
             StartMap::Given => "given".to_string(),
             StartMap::Multilevel => match &self.multilevel {
-                Some(m) => match m.relief {
-                    Some(r) => format!(
-                        "multilevel ({} coarse vertices, {} crushed boundary contacts relieved)",
-                        m.coarse_vertices, r.crushed_pairs
-                    ),
-                    None => format!("multilevel ({} coarse vertices)", m.coarse_vertices),
-                },
+                Some(m) => {
+                    let mut what = format!("{} coarse vertices", m.coarse_vertices);
+                    if let Some(h) = m.hot_spots {
+                        what += &format!(", {} squeezed triangles relieved", h.hot_triangles);
+                    }
+                    if let Some(r) = m.relief {
+                        what +=
+                            &format!(", {} crushed boundary contacts relieved", r.crushed_pairs);
+                    }
+                    format!("multilevel ({what})")
+                }
                 None => "multilevel".to_string(),
             },
         };

@@ -12,6 +12,7 @@ use super::options::{Bijective, FlattenOptions, Start};
 use super::result::{Flattening, Solved, StartMap, result_of};
 use super::start::{
     FlattenFn, InitialMap, SharedStart, Starts, check_given_length, initial_map, relieve_contacts,
+    relieve_hot_spots,
 };
 use super::warm_start::arap_warm_start;
 use crate::energy::Energy;
@@ -302,6 +303,21 @@ fn solve_disc(
             (p0, p1),
             vertex_ordering,
         )?;
+    }
+    if start.map == StartMap::Multilevel && resume.is_none() {
+        // Where the map must not overlap, the relief keeps it from crossing (and is
+        // skipped for a start that already crosses: its unconstrained solve says so).
+        let guard = options.bijective != Bijective::Off;
+        if !guard || crate::measure::overlap::boundary_crossings(&start.uv, boundary) == 0 {
+            relieve_hot_spots(
+                &mut start,
+                &mesh.triangles,
+                &solving.rest,
+                guard.then_some(boundary),
+                &objective,
+                &options.newton,
+            );
+        }
     }
     if barrier && start.map == StartMap::Multilevel {
         relieve_contacts(

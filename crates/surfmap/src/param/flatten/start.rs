@@ -272,6 +272,35 @@ pub(super) fn relieve_contacts<D: Density + ?Sized>(
     }
 }
 
+/// A multilevel start's squeezed triangles relieved by a local solve before the full
+/// solve ([`crate::param::relief::relieve_hot_spots`]; measured: camelhead subdivided
+/// 2× 22 → 9 full-solve iterations, BENCHMARKS.md "Flattening speed"), with the
+/// boundary barrier where the map must not overlap (`boundary`). It only shortens the
+/// solve: should its linear algebra fail, the full solve starts from the start as it was.
+pub(super) fn relieve_hot_spots<D: Density + ?Sized>(
+    start: &mut InitialMap,
+    triangles: &[[u32; 3]],
+    rest: &[RestTriangle],
+    boundary: Option<&[u32]>,
+    objective: &D,
+    settings: &NewtonSettings,
+) {
+    let mut relieved = start.uv.clone();
+    if let Ok(Some(relief)) = crate::param::relief::relieve_hot_spots(
+        &mut relieved,
+        triangles,
+        rest,
+        boundary,
+        objective,
+        settings,
+    ) {
+        start.uv = relieved;
+        if let Some(report) = start.multilevel.as_mut() {
+            report.hot_spots = Some(relief);
+        }
+    }
+}
+
 /// The multilevel start (see [`crate::param::multilevel`]) in the mesh's units, or `None`
 /// (with the reason in the report) when any stage failed. `flatten` flattens the
 /// decimated copy.
