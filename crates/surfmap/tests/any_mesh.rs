@@ -356,7 +356,7 @@ fn crushed_contacts_of_the_multilevel_start_are_relieved_before_the_barrier_solv
         if let Some(relief) = report.relief {
             assert!(relief.crushed_pairs > 0, "{name}: {relief:?}");
             assert!(
-                relief.energy_after < 0.5 * relief.energy_before,
+                relief.solve.energy_after < 0.5 * relief.solve.energy_before,
                 "{name}: {relief:?}"
             );
             assert!(map.iterations <= 8, "{name}: {} iterations", map.iterations);

@@ -49,19 +49,27 @@ pub const CRUSHED_FRACTION: f64 = 0.1;
 /// Rings of vertices around the crushed pairs that the relief frees.
 pub const RELIEF_RINGS: usize = 4;
 
-/// What the relief did (reports).
+/// What the crushed-contact relief did (reports).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct ContactRelief {
     /// Barrier pairs closer than [`CRUSHED_FRACTION`] of their `ε` at the start.
     pub crushed_pairs: usize,
+    #[serde(flatten)]
+    pub solve: PatchSolve,
+}
+
+/// The local solve of a relief (reports).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct PatchSolve {
     /// Vertices freed for the local solve.
     pub vertices: usize,
     /// Its Newton iterations.
     pub iterations: usize,
-    /// Elastic plus barrier energy of the patch's triangles and the whole boundary,
-    /// before and after.
+    /// Energy of the patch's triangles (per unit area of the whole surface; with the
+    /// barrier's term over the whole boundary when there is one), before and after.
     pub energy_before: f64,
     pub energy_after: f64,
+    /// Seconds, finding what to relieve included.
     pub seconds: f64,
 }
 
@@ -94,7 +102,7 @@ pub fn relieve_crushed_contacts<D: Density + ?Sized>(
     // The full solve's threshold, from the whole map's energy.
     let whole = NewtonSolver::energy_of(rest, triangles)(uv, density) + barrier.energy(uv);
     let tolerance = settings.tolerance.max(BARRIER_RELATIVE_TOLERANCE * whole);
-    let Some(patch) = solve_patch(
+    let solve = solve_patch(
         uv,
         triangles,
         rest,
@@ -103,17 +111,11 @@ pub fn relieve_crushed_contacts<D: Density + ?Sized>(
         settings,
         tolerance,
         Some(barrier),
-    )?
-    else {
-        return Ok(None);
-    };
-    Ok(Some(ContactRelief {
+        clock,
+    )?;
+    Ok(solve.map(|solve| ContactRelief {
         crushed_pairs,
-        vertices: patch.vertices,
-        iterations: patch.iterations,
-        energy_before: patch.energy_before,
-        energy_after: patch.energy_after,
-        seconds: clock.elapsed().as_secs_f64(),
+        solve,
     }))
 }
 
@@ -134,15 +136,8 @@ const HOT_RELATIVE_TOLERANCE: f64 = 1e-6;
 pub struct HotSpotRelief {
     /// Triangles at [`HOT_DENSITY_FACTOR`] times the mean energy density or more.
     pub hot_triangles: usize,
-    /// Vertices freed for the local solve.
-    pub vertices: usize,
-    /// Its Newton iterations.
-    pub iterations: usize,
-    /// Energy of the patch's triangles (per unit area of the whole surface), before
-    /// and after.
-    pub energy_before: f64,
-    pub energy_after: f64,
-    pub seconds: f64,
+    #[serde(flatten)]
+    pub solve: PatchSolve,
 }
 
 /// Relieves the hot spots of the start `uv` (a flip-free map of `triangles`; `rest`:
@@ -190,35 +185,21 @@ pub fn relieve_hot_spots<D: Density + ?Sized>(
     }
     let barrier = boundary.map(|b| BoundaryBarrier::new(b, uv).with_faces(triangles));
     let tolerance = settings.tolerance.max(HOT_RELATIVE_TOLERANCE * whole);
-    let Some(patch) = solve_patch(
-        uv, triangles, rest, free, density, settings, tolerance, barrier,
-    )?
-    else {
-        return Ok(None);
-    };
-    Ok(Some(HotSpotRelief {
+    let solve = solve_patch(
+        uv, triangles, rest, free, density, settings, tolerance, barrier, clock,
+    )?;
+    Ok(solve.map(|solve| HotSpotRelief {
         hot_triangles,
-        vertices: patch.vertices,
-        iterations: patch.iterations,
-        energy_before: patch.energy_before,
-        energy_after: patch.energy_after,
-        seconds: clock.elapsed().as_secs_f64(),
+        solve,
     }))
 }
 
-/// What [`solve_patch`] did.
-struct PatchSolve {
-    vertices: usize,
-    iterations: usize,
-    energy_before: f64,
-    energy_after: f64,
-}
-
-/// The local solve of both reliefs: the vertices marked in `seeds` and
-/// [`RELIEF_RINGS`] rings around them are free, every other vertex is pinned, and the
-/// energy (with `barrier`'s term when given) is summed over the triangles with a free
-/// corner, minimized to `tolerance`. `None`, with `uv` untouched, when the patch would
-/// hold more than half of the vertices (the full solve is then no dearer).
+/// The local solve of both reliefs: the vertices marked in `free` and [`RELIEF_RINGS`]
+/// rings around them are free, every other vertex is pinned, and the energy (with
+/// `barrier`'s term when given) is summed over the triangles with a free corner,
+/// minimized to `tolerance` (`clock`: since the relief began). `None`, with `uv`
+/// untouched, when the patch would hold more than half of the vertices (the full solve
+/// is then no dearer).
 #[allow(clippy::too_many_arguments)]
 fn solve_patch<D: Density + ?Sized>(
     uv: &mut [[f64; 2]],
@@ -229,6 +210,7 @@ fn solve_patch<D: Density + ?Sized>(
     settings: &NewtonSettings,
     tolerance: f64,
     barrier: Option<BoundaryBarrier>,
+    clock: Instant,
 ) -> Result<Option<PatchSolve>, SolveError> {
     let n = uv.len();
     let mut ring = free.clone();
@@ -265,12 +247,13 @@ fn solve_patch<D: Density + ?Sized>(
         solver.set_barrier(barrier);
     }
     let (_, iterations, energy_after) =
-        solver.minimize(uv, density, &local, 0, Instant::now(), &mut |_| {})?;
+        solver.minimize(uv, density, &local, 0, clock, &mut |_| {})?;
     Ok(Some(PatchSolve {
         vertices,
         iterations,
         energy_before,
         energy_after,
+        seconds: clock.elapsed().as_secs_f64(),
     }))
 }
 
@@ -365,9 +348,9 @@ mod tests {
         .unwrap()
         .expect("the slit's sides are crushed together");
         assert!(relief.crushed_pairs > 10, "{relief:?}");
-        assert!(2 * relief.vertices < uv.len(), "{relief:?}");
+        assert!(2 * relief.solve.vertices < uv.len(), "{relief:?}");
         assert!(
-            relief.energy_after < 0.1 * relief.energy_before,
+            relief.solve.energy_after < 0.1 * relief.solve.energy_before,
             "{relief:?}"
         );
         assert_eq!(count_flipped(&uv, &mesh.triangles), 0);
@@ -473,10 +456,13 @@ mod tests {
         .unwrap()
         .expect("a hot spot");
         assert!(
-            relief.hot_triangles >= 1 && 2 * relief.vertices < uv.len(),
+            relief.hot_triangles >= 1 && 2 * relief.solve.vertices < uv.len(),
             "{relief:?}"
         );
-        assert!(relief.energy_after < relief.energy_before, "{relief:?}");
+        assert!(
+            relief.solve.energy_after < relief.solve.energy_before,
+            "{relief:?}"
+        );
         assert_eq!(count_flipped(&uv, &mesh.triangles), 0);
         // No hot spot is left, and only the patch moved: the U's far ends stay.
         let (worst, whole) = density(&uv);

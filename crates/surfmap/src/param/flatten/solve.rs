@@ -10,10 +10,7 @@
 use super::error::FlattenError;
 use super::options::{Bijective, FlattenOptions, Start};
 use super::result::{Flattening, Solved, StartMap, result_of};
-use super::start::{
-    FlattenFn, InitialMap, SharedStart, Starts, check_given_length, initial_map, relieve_contacts,
-    relieve_hot_spots,
-};
+use super::start::{FlattenFn, InitialMap, SharedStart, Starts, check_given_length, initial_map};
 use super::warm_start::arap_warm_start;
 use crate::energy::Energy;
 use crate::linsolve::VertexOrdering;
@@ -24,6 +21,7 @@ use crate::param::newton::{
     CROSSING_PERSISTENCE, IterationLog, NewtonSettings, NewtonSolver, NewtonTimings, StopReason,
 };
 use crate::param::protrusions::StartMaps;
+use crate::param::relief::{relieve_crushed_contacts, relieve_hot_spots};
 use crate::param::tutte;
 use std::time::Instant;
 
@@ -305,28 +303,43 @@ fn solve_disc(
         )?;
     }
     if start.map == StartMap::Multilevel && resume.is_none() {
-        // Where the map must not overlap, the relief keeps it from crossing (and is
-        // skipped for a start that already crosses: its unconstrained solve says so).
+        // Squeezed triangles of the re-insertion (camelhead subdivided 2×: 22 → 9
+        // full-solve iterations, BENCHMARKS.md "Scale"). Where the map must not overlap,
+        // the relief keeps it from crossing (and is skipped for a start that already
+        // crosses: its unconstrained solve says so).
         let guard = options.bijective != Bijective::Off;
         if !guard || crate::measure::overlap::boundary_crossings(&start.uv, boundary) == 0 {
-            relieve_hot_spots(
-                &mut start,
-                &mesh.triangles,
-                &solving.rest,
-                guard.then_some(boundary),
-                &objective,
-                &options.newton,
+            start.relieve(
+                |uv| {
+                    relieve_hot_spots(
+                        uv,
+                        &mesh.triangles,
+                        &solving.rest,
+                        guard.then_some(boundary),
+                        &objective,
+                        &options.newton,
+                    )
+                },
+                |report, relief| report.hot_spots = Some(relief),
             );
         }
     }
     if barrier && start.map == StartMap::Multilevel {
-        relieve_contacts(
-            &mut start,
-            &mesh.triangles,
-            &solving.rest,
-            boundary,
-            &objective,
-            &options.newton,
+        // Crushed boundary contacts (a coarse slit's tip, its re-inserted sides a
+        // sliver apart) opened before the barrier solve (the ICT face id000 opened with
+        // seams: 17 → 5 barrier iterations, BENCHMARKS.md "Hard discs").
+        start.relieve(
+            |uv| {
+                relieve_crushed_contacts(
+                    uv,
+                    &mesh.triangles,
+                    &solving.rest,
+                    boundary,
+                    &objective,
+                    &options.newton,
+                )
+            },
+            |report, relief| report.relief = Some(relief),
         );
     }
     let (outcome, resume) = solving.newton(

@@ -7,11 +7,9 @@
 use super::error::FlattenError;
 use super::options::{Bijective, CoarseLevel, FlattenOptions, Multilevel, Start};
 use super::result::{Flattening, MultilevelReport, StartMap};
-use crate::energy::Density;
+use crate::linsolve::SolveError;
 use crate::measure::overlap::boundary_crossings;
 use crate::mesh::{Disc, TriMesh};
-use crate::param::element::RestTriangle;
-use crate::param::newton::NewtonSettings;
 use crate::param::plan::Cut;
 use crate::param::protrusions::StartMaps;
 use crate::param::{count_flipped, lscm, make_admissible, signed_uv_area, tutte};
@@ -243,60 +241,22 @@ fn lscm_start(
     })
 }
 
-/// A multilevel start's crushed boundary contacts (a coarse slit's tip, its
-/// re-inserted sides a sliver apart) opened by a local barrier solve before the barrier
-/// solve (measured: the ICT face id000 opened with seams 17 → 5 barrier iterations,
-/// BENCHMARKS.md "Hard discs"). It only shortens the solve: should its linear algebra
-/// fail, the full solve starts from the start as it was.
-pub(super) fn relieve_contacts<D: Density + ?Sized>(
-    start: &mut InitialMap,
-    triangles: &[[u32; 3]],
-    rest: &[RestTriangle],
-    boundary: &[u32],
-    objective: &D,
-    settings: &NewtonSettings,
-) {
-    let mut relieved = start.uv.clone();
-    if let Ok(Some(relief)) = crate::param::relief::relieve_crushed_contacts(
-        &mut relieved,
-        triangles,
-        rest,
-        boundary,
-        objective,
-        settings,
+impl InitialMap {
+    /// A local relief of a multilevel start ([`crate::param::relief`]): `relieve` works
+    /// on a copy of the UVs and says what it did; the copy is kept and `record`ed in the
+    /// multilevel report when it did something. A relief only shortens the solve: should
+    /// its linear algebra fail, the full solve starts from the start as it was.
+    pub(super) fn relieve<R>(
+        &mut self,
+        relieve: impl FnOnce(&mut [[f64; 2]]) -> Result<Option<R>, SolveError>,
+        record: impl FnOnce(&mut MultilevelReport, R),
     ) {
-        start.uv = relieved;
-        if let Some(report) = start.multilevel.as_mut() {
-            report.relief = Some(relief);
-        }
-    }
-}
-
-/// A multilevel start's squeezed triangles relieved by a local solve before the full
-/// solve ([`crate::param::relief::relieve_hot_spots`]; measured: camelhead subdivided
-/// 2× 22 → 9 full-solve iterations, BENCHMARKS.md "Flattening speed"), with the
-/// boundary barrier where the map must not overlap (`boundary`). It only shortens the
-/// solve: should its linear algebra fail, the full solve starts from the start as it was.
-pub(super) fn relieve_hot_spots<D: Density + ?Sized>(
-    start: &mut InitialMap,
-    triangles: &[[u32; 3]],
-    rest: &[RestTriangle],
-    boundary: Option<&[u32]>,
-    objective: &D,
-    settings: &NewtonSettings,
-) {
-    let mut relieved = start.uv.clone();
-    if let Ok(Some(relief)) = crate::param::relief::relieve_hot_spots(
-        &mut relieved,
-        triangles,
-        rest,
-        boundary,
-        objective,
-        settings,
-    ) {
-        start.uv = relieved;
-        if let Some(report) = start.multilevel.as_mut() {
-            report.hot_spots = Some(relief);
+        let mut relieved = self.uv.clone();
+        if let Ok(Some(done)) = relieve(&mut relieved) {
+            self.uv = relieved;
+            if let Some(report) = self.multilevel.as_mut() {
+                record(report, done);
+            }
         }
     }
 }
