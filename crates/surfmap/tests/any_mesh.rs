@@ -338,8 +338,10 @@ fn crushed_contacts_of_the_multilevel_start_are_relieved_before_the_barrier_solv
     };
     // ict_id000 opened with seams: the coarse map closes a mouth corner to a sharp tip,
     // and the re-inserted vertices of its two sides sit down to 4·10⁻⁴ of the barrier's
-    // reach apart; without the local relief the barrier solve took 17 iterations (5
-    // with it).
+    // reach apart; without a local relief the barrier solve took 17 iterations (5
+    // with it). The triangles of that tip are squeezed too, so the hot-spot relief
+    // (which carries the barrier) opens it first, and the contact relief finds nothing
+    // left; either way the crushed pairs are gone before the barrier solve.
     // ict_id004's closest pairs sit at 0.7 of the reach: nothing is crushed, nothing
     // is relieved.
     for (name, crushed) in [("ict_id000", true), ("ict_id004", false)] {
@@ -347,19 +349,22 @@ fn crushed_contacts_of_the_multilevel_start_are_relieved_before_the_barrier_solv
         let map = flatten(&mesh, &opened).unwrap();
         let report = map.multilevel.as_ref().expect("a multilevel start");
         assert_eq!(map.start, surfmap::StartMap::Multilevel, "{name}");
-        assert_eq!(
-            report.relief.is_some(),
-            crushed,
-            "{name}: {:?}",
-            report.relief
-        );
-        if let Some(relief) = report.relief {
-            assert!(relief.crushed_pairs > 0, "{name}: {relief:?}");
-            assert!(
-                relief.solve.energy_after < 0.5 * relief.solve.energy_before,
-                "{name}: {relief:?}"
-            );
+        let relieved = [
+            report.relief.map(|r| (r.crushed_pairs > 0, r.solve)),
+            report.hot_spots.map(|h| (h.hot_triangles > 0, h.solve)),
+        ];
+        if crushed {
+            assert!(relieved.iter().any(Option::is_some), "{name}: {report:?}");
+            for (found, solve) in relieved.into_iter().flatten() {
+                assert!(found, "{name}: {report:?}");
+                assert!(
+                    solve.energy_after < 0.5 * solve.energy_before,
+                    "{name}: {report:?}"
+                );
+            }
             assert!(map.iterations <= 8, "{name}: {} iterations", map.iterations);
+        } else {
+            assert_eq!(report.relief, None, "{name}");
         }
         assert!(
             map.barrier && map.converged,
