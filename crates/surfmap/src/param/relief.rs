@@ -1,4 +1,5 @@
-//! Crushed contacts of a barrier solve's start relieved by a local solve.
+//! A multilevel start's crushed boundary contacts and squeezed triangles relieved by a
+//! local solve before the full solve.
 //!
 //! A multilevel start re-inserts the fine vertices into the coarse map; where the coarse
 //! map closes a slit to a sharp tip (the corner of a mouth opened by a seam), the
@@ -26,10 +27,10 @@
 //! triangles nearly flat in UV where the coarse map was tight (camelhead subdivided 2×,
 //! 363k faces: the two worst triangles held 66 % of the start's energy, 21.1 against
 //! 5.35 at the minimum); the full solve's first steps are then cut to 1–10 % of
-//! Newton's by the flip-free bound, and it took 22 iterations (20 s). The triangles whose
+//! Newton's by the flip-free bound, and it took 22 iterations (21 s). The triangles whose
 //! energy density is [`HOT_DENSITY_FACTOR`] times the map's mean or more, and
-//! [`RELIEF_RINGS`] rings around them, are solved as a patch first (0.07 s there; the
-//! full solve then takes 9 iterations).
+//! [`RELIEF_RINGS`] rings around them, are solved as a patch first (0.15 s there; the
+//! full solve then takes 9 iterations), with the barrier where the map must not overlap.
 
 use super::barrier::BoundaryBarrier;
 use super::element::{self, RestTriangle};
@@ -46,7 +47,7 @@ use std::time::Instant;
 /// faces 3–7 % slower (instruction counts, BENCHMARKS.md "Hard discs").
 pub const CRUSHED_FRACTION: f64 = 0.1;
 
-/// Rings of vertices around the crushed pairs that the relief frees.
+/// Rings of vertices around the crushed pairs or hot triangles that a relief frees.
 pub const RELIEF_RINGS: usize = 4;
 
 /// What the crushed-contact relief did (reports).
