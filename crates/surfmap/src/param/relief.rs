@@ -37,6 +37,7 @@ use super::element::{self, RestTriangle};
 use super::newton::{BARRIER_RELATIVE_TOLERANCE, NewtonSettings, NewtonSolver};
 use crate::energy::Density;
 use crate::linsolve::SolveError;
+use rayon::prelude::*;
 use serde::Serialize;
 use std::time::Instant;
 
@@ -156,8 +157,10 @@ pub fn relieve_hot_spots<D: Density + ?Sized>(
     settings: &NewtonSettings,
 ) -> Result<Option<HotSpotRelief>, SolveError> {
     let clock = Instant::now();
+    // Per triangle, in parallel (1.45M triangles on camelhead subdivided 3×); summed
+    // in order below.
     let energies: Vec<f64> = triangles
-        .iter()
+        .par_iter()
         .zip(rest)
         .map(|(t, r)| {
             element::energy(
