@@ -82,12 +82,24 @@ impl Default for Confidence {
 // one registered set, but 0.25–0.37 between faces of two sources matched correctly
 // (ICT against FLAME or libigl's head: nose tip and mouth corners a few millimetres from
 // their place): it says "the shapes differ", which a wrong place and two people both
-// do. So it counts only together with a pose that moved (docs/bench/verdict.md).
+// do. So it counts only together with a pose that moved (docs/bench/verdict.md), or
+// where it is beyond every match that held (a match that followed a wrong alignment
+// in space, whose pose offset is measured from that same alignment).
 
 /// Coarse curvature disagreement ([`Measures::coarse_disagreement`]) from which a match
 /// whose pose moved ([`POSE_MOVED`]) is `failed`: above every match that held in
 /// calibration (0.104), below all but one that failed.
 pub const COARSE_DISAGREEMENT_FAILED: f64 = 0.12;
+
+/// Coarse curvature disagreement from which a match is `failed` even where its pose did
+/// not move ([`POSE_MOVED`]): then the match follows a rigid alignment in space that is
+/// itself wrong — a face crop turned by 180° can lie on another with millimetres of RMS
+/// — and the pose offset, measured from that alignment, cannot see it (found on a FLAME
+/// partial pair matched with `--relief 0 --position-weight 20000`: 0.58 at a pose offset
+/// of 0.040, 0.9 % within 0.05; its default match recovers from the same pose). Above
+/// every match that held: 0.104 within one registered set, 0.13–0.42 between faces of
+/// two sources (docs/bench/verdict.md).
+pub const COARSE_DISAGREEMENT_UNMOVED_FAILED: f64 = 0.5;
 
 /// Coarse curvature disagreement from which a match whose pose moved is `doubtful`
 /// (matches that held on like surfaces: ≤ 0.03; on less alike ones up to 0.10).
@@ -131,10 +143,11 @@ impl Confidence {
             verdict = verdict.max(v);
             reasons.push(reason);
         };
-        // The shapes' disagreement condemns a match only where its pose moved too.
+        // The shapes' disagreement condemns a match only where its pose moved too, or
+        // where it is beyond any match that held.
         let moved = measures.pose_offset.is_none_or(|o| o >= POSE_MOVED);
         if let Some(d) = measures.coarse_disagreement
-            && moved
+            && (moved || d >= COARSE_DISAGREEMENT_UNMOVED_FAILED)
             && let Some(v) = graded(d, COARSE_DISAGREEMENT_DOUBTFUL, COARSE_DISAGREEMENT_FAILED)
         {
             find(
@@ -149,10 +162,17 @@ impl Confidence {
                     measures
                         .unrelated_disagreement
                         .map_or("-".into(), |u| format!("{:.0}%", 100.0 * u)),
-                    measures.pose_offset.map_or(String::new(), |o| format!(
-                        ", and the match moved {o:.3} of B's size from the surfaces' rigid \
-                         alignment"
-                    ))
+                    match measures.pose_offset {
+                        None => String::new(),
+                        Some(o) if moved => format!(
+                            ", and the match moved {o:.3} of B's size from the surfaces' \
+                             rigid alignment"
+                        ),
+                        Some(_) => ", although the match lies where the surfaces' rigid \
+                                    alignment in space puts it: that alignment is probably \
+                                    wrong too"
+                            .into(),
+                    }
                 ),
             );
         }
@@ -350,6 +370,17 @@ mod tests {
         assert_eq!(verdict(0.37, Some(0.003)), Verdict::Ok);
         assert_eq!(verdict(0.67, Some(0.048)), Verdict::Failed);
         assert_eq!(verdict(0.31, Some(0.035)), Verdict::Ok);
+        // Beyond any match that held (cross-source: ≤ 0.42), the disagreement fails a
+        // match that followed a wrong rigid alignment (FLAME partial, turned: 0.58 at
+        // 0.040, 0.9 % correct).
+        assert_eq!(verdict(0.42, Some(0.03)), Verdict::Ok);
+        assert_eq!(verdict(0.58, Some(0.039)), Verdict::Failed);
+        let unmoved = Confidence::of(measures(0.58, Some(0.039)));
+        assert!(
+            unmoved.reasons[0].contains("alignment is probably wrong"),
+            "{:?}",
+            unmoved.reasons
+        );
         assert_eq!(verdict(0.08, Some(0.045)), Verdict::Doubtful);
         assert_eq!(verdict(0.02, Some(0.045)), Verdict::Ok);
         assert_eq!(verdict(0.02, Some(0.07)), Verdict::Doubtful);
