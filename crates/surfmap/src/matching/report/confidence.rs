@@ -168,9 +168,9 @@ impl Confidence {
                             ", and the match moved {o:.3} of B's size from the surfaces' \
                              rigid alignment"
                         ),
-                        Some(_) => ", although the match lies where the surfaces' rigid \
-                                    alignment in space puts it: that alignment is probably \
-                                    wrong too"
+                        Some(_) => " (although the match lies where the surfaces' rigid \
+                                    alignment in space puts it, that alignment is probably \
+                                    wrong too)"
                             .into(),
                     }
                 ),
