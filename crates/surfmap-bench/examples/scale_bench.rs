@@ -44,7 +44,11 @@ fn main() {
         mesh.triangles.len()
     );
     let which = args.get(2).map_or("both", String::as_str);
-    let on = Multilevel::Always(CoarseLevel::default());
+    // Optional 4th argument: the coarse level's vertices (default: CoarseLevel's own).
+    let on = Multilevel::Always(match args.get(3) {
+        Some(v) => CoarseLevel::with_vertices(v.parse().expect("COARSE_VERTICES")),
+        None => CoarseLevel::default(),
+    });
     let runs: Vec<(&str, Multilevel)> = match which {
         "single" => vec![("single-level", Multilevel::Never)],
         "multi" => vec![("multilevel", on)],
