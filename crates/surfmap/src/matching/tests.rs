@@ -1017,3 +1017,72 @@ fn a_start_turned_on_purpose_is_called_failed_and_recovered() {
         ),
     }
 }
+
+/// The same half-turned start on partial overlap: B is the moved copy without the part of
+/// the disc left of x = −0.2, so about two thirds of A have a counterpart. Recovery finds
+/// the right match again, and keeps it, but calls it `doubtful`: on partial overlap the
+/// measures cannot confirm a start kept after the first one failed
+/// (`recover::PARTIAL_OVERLAP`). Without recovery the match is not `ok`.
+#[test]
+fn a_match_recovered_on_partial_overlap_is_kept_but_doubtful() {
+    let motion = moved_copy_motion();
+    let a = surface(18, |p| p);
+    let whole = surface(22, |p| p);
+    let keep: Vec<bool> = whole
+        .triangles
+        .iter()
+        .map(|t| t.iter().all(|&v| whole.positions[v as usize][0] > -0.2))
+        .collect();
+    let mut b = crate::mesh::repair::keep_faces(&whole, &keep);
+    for p in &mut b.positions {
+        *p = motion(*p);
+    }
+    let truth = |v: usize| (a.positions[v][0] > -0.2).then(|| motion(a.positions[v]));
+    let spots = [
+        [0.45, 0.0],
+        [0.0, 0.45],
+        [0.05, -0.45],
+        [0.3, 0.3],
+        [0.1, 0.1],
+    ];
+    let mut guidance = landmarks_at(&a, &b, &spots, &motion);
+    guidance.landmarks.as_mut().unwrap().b = spots
+        .iter()
+        .map(|s| {
+            // Half a turn about (0.15, 0): the images stay on B's part of the disc.
+            let (x, y) = (0.3 - s[0], -s[1]);
+            nearest_vertex(&b, motion([x, y, height(x, y)]))
+        })
+        .collect();
+    let mut o = options();
+    o.align = Align::Features;
+    o.features_start = FeaturesStart::Plane;
+    o.similarity_search = SearchWhen::Off;
+    o.weights.features = 0.0;
+    o.pin_landmarks = false;
+    o.advanced.recover = false;
+    let broken = match_meshes(&a, &b, &guidance, &o).unwrap();
+    let before = broken.report.confidence.verdict;
+    assert_ne!(before, Verdict::Ok, "{:?}", broken.report.confidence);
+    o.advanced.recover = true;
+    let recovered = match_meshes(&a, &b, &guidance, &o).unwrap();
+    let c = &recovered.report.confidence;
+    let r = c.recovery.as_ref().expect("recovery ran");
+    assert!(r.kept && r.verdict_before == before, "{r:?}");
+    assert!(
+        c.measures.matched_fraction_a < recover::PARTIAL_OVERLAP,
+        "{:?}",
+        c.measures
+    );
+    assert_eq!(c.verdict, Verdict::Doubtful, "{c:?}");
+    assert!(
+        c.reasons.iter().any(|r| r.contains("overlap only in part")),
+        "{c:?}"
+    );
+    let (e, matched) = errors(&a, &b, &recovered.correspondence, truth);
+    assert!(
+        matched > 0.9 && quantile(&e, 0.5) < CELL,
+        "matched {matched}, median {}",
+        quantile(&e, 0.5) / CELL
+    );
+}
