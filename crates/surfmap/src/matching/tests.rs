@@ -942,6 +942,19 @@ fn too_few_landmarks_align_by_the_shapes_and_still_guide() {
     }
 }
 
+/// Options under which landmarks only place the start (no feature weight, no pinning, no
+/// search) and recovery is off: a start broken on purpose stays broken.
+fn start_only_options() -> MatchOptions {
+    let mut o = options();
+    o.align = Align::Features;
+    o.features_start = FeaturesStart::Plane;
+    o.similarity_search = SearchWhen::Off;
+    o.weights.features = 0.0;
+    o.pin_landmarks = false;
+    o.advanced.recover = false;
+    o
+}
+
 /// A start turned by half a turn on purpose: landmarks of B placed where A's landmarks
 /// would be after a half turn of the surface about its middle, used only to place the
 /// start (no feature weight, no pinning, no search). The match that results is wrong,
@@ -968,13 +981,7 @@ fn a_start_turned_on_purpose_is_called_failed_and_recovered() {
         .iter()
         .map(|s| nearest_vertex(&b, motion([s[0], s[1], height(s[0], s[1])])))
         .collect();
-    let mut o = options();
-    o.align = Align::Features;
-    o.features_start = FeaturesStart::Plane;
-    o.similarity_search = SearchWhen::Off;
-    o.weights.features = 0.0;
-    o.pin_landmarks = false;
-    o.advanced.recover = false;
+    let mut o = start_only_options();
     let broken = match_meshes(&a, &b, &guidance, &o).unwrap();
     let (e, _) = errors(&a, &b, &broken.correspondence, truth);
     assert!(
@@ -1054,13 +1061,7 @@ fn a_match_recovered_on_partial_overlap_is_kept_but_doubtful() {
             nearest_vertex(&b, motion([x, y, height(x, y)]))
         })
         .collect();
-    let mut o = options();
-    o.align = Align::Features;
-    o.features_start = FeaturesStart::Plane;
-    o.similarity_search = SearchWhen::Off;
-    o.weights.features = 0.0;
-    o.pin_landmarks = false;
-    o.advanced.recover = false;
+    let mut o = start_only_options();
     let broken = match_meshes(&a, &b, &guidance, &o).unwrap();
     let before = broken.report.confidence.verdict;
     assert_ne!(before, Verdict::Ok, "{:?}", broken.report.confidence);
