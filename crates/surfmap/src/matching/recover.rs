@@ -149,11 +149,7 @@ fn doubt_a_recovered_partial_match(confidence: &mut Confidence, before: Verdict)
          surfaces overlap only in part ({:.0}% of A matched, {:.0}% of B covered), where a \
          match can be wrong in one region (often along the crop's rim) while every measure \
          reads like a match that holds: look at it (`surfmap view`), or give landmarks",
-        match before {
-            Verdict::Ok => "ok",
-            Verdict::Doubtful => "doubtful",
-            Verdict::Failed => "failed",
-        },
+        before.name(),
         100.0 * m.matched_fraction_a,
         100.0 * m.covered_fraction_b
     ));

@@ -48,6 +48,17 @@ pub enum Verdict {
     Failed,
 }
 
+impl Verdict {
+    /// The verdict as `match.json` writes it: `ok`, `doubtful` or `failed`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Verdict::Ok => "ok",
+            Verdict::Doubtful => "doubtful",
+            Verdict::Failed => "failed",
+        }
+    }
+}
+
 /// A verdict on a match, why, and what it was drawn from.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Confidence {
@@ -239,11 +250,7 @@ impl Confidence {
             Verdict::Ok => format!("verdict ok: {measures}"),
             v => format!(
                 "verdict {}: {}; {measures}",
-                if v == Verdict::Failed {
-                    "FAILED"
-                } else {
-                    "DOUBTFUL"
-                },
+                v.name().to_uppercase(),
                 self.reasons.join("; ")
             ),
         }
