@@ -194,7 +194,7 @@ pub struct Args {
     #[arg(long)]
     pub no_recover: bool,
     /// Keep the weights as given when one face's mouth is open and the other's closed
-    /// (lip gap over mouth width ≥ 0.4 and at least twice the other's). By default the
+    /// (lip gap over mouth width ≥ 0.8 and at least twice the other's). By default the
     /// lip arcs then lead: the feature weight ×40 and the automatic position weight
     /// capped at 1000, so that the chin follows the jaw; with landmarks or features the
     /// solve starts from their alignment refined in space alone (match.json:
