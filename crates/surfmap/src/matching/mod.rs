@@ -100,6 +100,9 @@ pub fn match_meshes<'m>(
         mut report,
         ..
     } = attempt;
+    report
+        .confidence
+        .doubt_landmarks_left_behind(&report.feature_fit);
     report.seconds_total = begin.elapsed().as_secs_f64();
     let matched = Match {
         correspondence: correspondence.given,

@@ -1087,3 +1087,44 @@ fn a_match_recovered_on_partial_overlap_is_kept_but_doubtful() {
         quantile(&e, 0.5) / CELL
     );
 }
+
+/// A landmark the match leaves behind makes it `doubtful`: B is A turned by 25°, five
+/// landmarks placed where the turn carries them. With all five right the match follows
+/// them and is `ok`. With B's end of one of them moved to another place (where the turn
+/// carries a far spot of A), the surfaces' shape holds the match where it was, that
+/// landmark is left far from B's, and the verdict says so and names it
+/// (`Confidence::doubt_landmarks_left_behind`).
+#[test]
+fn a_landmark_left_behind_makes_the_match_doubtful() {
+    let a = surface(18, |p| p);
+    let turn = rigid(rotation([0.0, 0.0, 1.0], 25f64.to_radians()), [0.0; 3]);
+    let b = surface(20, &turn);
+    let spots = [
+        [0.5, 0.0],
+        [-0.3, 0.45],
+        [-0.2, -0.5],
+        [0.2, -0.1],
+        [0.0, 0.4],
+    ];
+    let right = landmarks_at(&a, &b, &spots, &turn);
+    let options = options();
+    let (m, _) = run(&a, &b, &right, &options);
+    let c = &m.report.confidence;
+    assert_eq!(c.verdict, Verdict::Ok, "{c:?}");
+    assert!(c.measures.landmark_miss.unwrap() < 1.0, "{c:?}");
+    let mut wrong = right.clone();
+    let far = landmarks_at(&a, &b, &[[-0.5, -0.2]], &turn);
+    wrong.landmarks.as_mut().unwrap().b[1] = far.landmarks.unwrap().b[0];
+    let (m, _) = run(&a, &b, &wrong, &options);
+    let c = &m.report.confidence;
+    assert_eq!(c.verdict, Verdict::Doubtful, "{c:?}");
+    assert!(
+        c.measures.landmark_miss.unwrap() >= report::confidence::LANDMARK_MISS_DOUBTFUL,
+        "{c:?}"
+    );
+    assert!(
+        c.reasons.iter().any(|r| r.contains("\"landmark:p1\"")),
+        "{:?}",
+        c.reasons
+    );
+}

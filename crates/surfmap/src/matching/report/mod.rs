@@ -300,6 +300,12 @@ pub(crate) fn report(
             matched_fraction_a: report.matched_fraction_a,
             covered_fraction_b: report.covered_fraction_b,
             area_ratio: report.area_ratio,
+            landmark_miss: report
+                .feature_fit
+                .iter()
+                .filter(|f| f.name.starts_with("landmark:") && f.reach > 0.0)
+                .map(|f| f.after / f.reach)
+                .reduce(f64::max),
         }
         .with_shape_residual(solved.shape_residual, unit / area_b.sqrt()),
     );
