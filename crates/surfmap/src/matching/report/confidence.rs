@@ -258,8 +258,9 @@ impl Confidence {
         }
         let worst = fits
             .iter()
-            .filter(|f| f.name.starts_with("landmark:") && f.reach > 0.0)
-            .max_by(|x, y| (x.after / x.reach).total_cmp(&(y.after / y.reach)));
+            .filter_map(|f| Some((f, f.landmark_miss()?)))
+            .max_by(|x, y| x.1.total_cmp(&y.1))
+            .map(|(f, _)| f);
         self.verdict = Verdict::Doubtful;
         self.reasons.push(format!(
             "the match leaves {} {:.1} times the feature term's reach from B's (matches that \

@@ -45,6 +45,15 @@ pub struct FeatureFit {
     pub reach: f64,
 }
 
+impl FeatureFit {
+    /// For a landmark the user gave (a `landmark:` feature), its distance from B's after
+    /// the solve over the feature term's reach (`Measures::landmark_miss`); `None` for
+    /// other features.
+    pub fn landmark_miss(&self) -> Option<f64> {
+        (self.name.starts_with("landmark:") && self.reach > 0.0).then(|| self.after / self.reach)
+    }
+}
+
 /// One warning per feature whose mean distance from B's ends beyond the feature term's
 /// reach (module docs), worded for the user.
 pub fn feature_warnings(fits: &[FeatureFit]) -> Vec<String> {

@@ -303,8 +303,7 @@ pub(crate) fn report(
             landmark_miss: report
                 .feature_fit
                 .iter()
-                .filter(|f| f.name.starts_with("landmark:") && f.reach > 0.0)
-                .map(|f| f.after / f.reach)
+                .filter_map(super::FeatureFit::landmark_miss)
                 .reduce(f64::max),
         }
         .with_shape_residual(solved.shape_residual, unit / area_b.sqrt()),
