@@ -100,9 +100,13 @@ pub fn match_meshes<'m>(
         mut report,
         ..
     } = attempt;
-    report
-        .confidence
-        .doubt_landmarks_left_behind(&report.feature_fit);
+    // Only landmarks that pulled (a feature weight) can be left behind; with weight 0
+    // they only placed the start.
+    if options.weights.features > 0.0 {
+        report
+            .confidence
+            .doubt_landmarks_left_behind(&report.feature_fit);
+    }
     report.seconds_total = begin.elapsed().as_secs_f64();
     let matched = Match {
         correspondence: correspondence.given,

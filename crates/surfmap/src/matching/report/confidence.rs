@@ -248,7 +248,8 @@ impl Confidence {
     /// lies elsewhere on B than the user said — on partial crops, where every other
     /// measure reads like a match that holds (docs/bench/verdict.md). `fits`: the
     /// report's feature fits, to name the landmark. Applied to the match reported, after
-    /// recovery (a start is not what such a match gets wrong).
+    /// recovery (a start is not what such a match gets wrong), and only where the feature
+    /// term has a weight: with weight 0 the landmarks only placed the start.
     pub(crate) fn doubt_landmarks_left_behind(&mut self, fits: &[super::super::FeatureFit]) {
         let Some(miss) = self.measures.landmark_miss else {
             return;
