@@ -676,21 +676,7 @@ fn progressive(
     let mut rest = Vec::new();
     solver.swap_rest(&mut rest);
     let triangles = solver.triangles();
-    let worst = |uv: &[[f64; 2]]| {
-        triangles
-            .iter()
-            .zip(&rest)
-            .map(|(t, r)| {
-                let j = crate::param::element::jacobian(r, &t.map(|v| uv[v as usize]));
-                let (s1, s2) = crate::measure::jacobian::signed_singular_values(j);
-                s1.ln().abs().max(s2.ln().abs())
-            })
-            .fold(
-                0.0f64,
-                |a, b| if b.is_nan() { f64::INFINITY } else { a.max(b) },
-            )
-    };
-    if worst(uv) <= CRUSHED_LOG {
+    if largest_log_distortion(triangles, &rest, uv) <= CRUSHED_LOG {
         solver.swap_rest(&mut rest);
         return Ok(0);
     }
@@ -750,6 +736,27 @@ fn progressive(
     }
     solver.swap_rest(&mut rest);
     Ok(iterations)
+}
+
+/// `max |ln σ_i|` over the triangles' maps from their rest shapes (σ: the singular values
+/// of the Jacobian; infinite where one is degenerate or flipped).
+fn largest_log_distortion(
+    triangles: &[[u32; 3]],
+    rest: &[crate::param::element::RestTriangle],
+    uv: &[[f64; 2]],
+) -> f64 {
+    triangles
+        .iter()
+        .zip(rest)
+        .map(|(t, r)| {
+            let j = crate::param::element::jacobian(r, &t.map(|v| uv[v as usize]));
+            let (s1, s2) = crate::measure::jacobian::signed_singular_values(j);
+            s1.ln().abs().max(s2.ln().abs())
+        })
+        .fold(
+            0.0f64,
+            |a, b| if b.is_nan() { f64::INFINITY } else { a.max(b) },
+        )
 }
 
 /// The mesh without unreferenced vertices (`None` when all are used) and, for each
