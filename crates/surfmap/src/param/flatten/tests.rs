@@ -313,12 +313,13 @@ fn an_uncut_tube_disc_resumes_its_barrier_solve_in_few_iterations_at_no_higher_e
 
 #[test]
 fn a_tube_disc_crushed_by_far_more_than_e8_is_de_crushed_before_plain_newton() {
-    // Issue 50, item 1: tubes of 8 edges around and 32 rows (length ≈ 12.7 diameters),
-    // never cut: the LSCM start shrinks the tips by about e^{-25}. The progressive phase
-    // goes on while any triangle is distorted beyond e^8 (the test that starts it). When
-    // it also stopped after a step that left more than half of the energy, its second
-    // step (cut short by a flip) ended it with the map still crushed, and plain Newton
-    // took 89 iterations to de-crush it: 112 in all (docs/bench/hard_discs.md).
+    // Issue 50, item 1: tubes of 8 edges around and 32 rows, never cut (longer than
+    // those of octopus:6,8,30,1, whose tips the LSCM start shrinks by e^{-23}). The
+    // progressive phase goes on while any triangle is distorted beyond e^8 (the test
+    // that starts it). When it also stopped after a step that left more than half of the
+    // energy, a step cut short by a flip ended it with the map still crushed, and plain
+    // Newton de-crushed it step by step: 89 iterations before the barrier solve, 112 in
+    // all (docs/bench/hard_discs.md).
     use crate::mesh::generate::{Octopus, octopus_disc};
     use crate::param::plan::Cut;
     let mesh = octopus_disc(&Octopus {
