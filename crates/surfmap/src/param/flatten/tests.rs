@@ -335,7 +335,9 @@ fn a_tube_disc_crushed_by_far_more_than_e8_is_de_crushed_before_plain_newton() {
             solves += 1;
         } else {
             all += 1;
-            // The barrier solve is the last one to start (its iteration 0 is logged).
+            // Progressive steps log no iteration 0; the unconstrained solve's is the first
+            // and the barrier solve's the second, so this counts every iteration before
+            // the barrier solve's Newton iterations.
             before_barrier += usize::from(solves < 2);
         }
     })
