@@ -4,7 +4,7 @@
 //! without it (same run; the multilevel run first, so the peak memory line of the
 //! first run is its own).
 //!
-//! `cargo run --release -p surfmap-bench --example scale_bench -- MESH LEVELS [multi|single|both]`
+//! `cargo run --release -p surfmap-bench --example scale_bench -- MESH LEVELS [multi|single|both] [COARSE_VERTICES|- [SWEEPS [POLISH_STEPS]]]`
 //! e.g. `../shared/data/faces/face_bff.obj 3` (34k → 2.2M faces).
 
 use surfmap::mesh::io::read_mesh;
@@ -45,10 +45,18 @@ fn main() {
     );
     let which = args.get(2).map_or("both", String::as_str);
     // Optional 4th argument: the coarse level's vertices (default: CoarseLevel's own).
-    let on = Multilevel::Always(match args.get(3) {
-        Some(v) => CoarseLevel::with_vertices(v.parse().expect("COARSE_VERTICES")),
-        None => CoarseLevel::default(),
-    });
+    let mut coarse = match args.get(3).map(String::as_str) {
+        Some(v) if v != "-" => CoarseLevel::with_vertices(v.parse().expect("COARSE_VERTICES")),
+        _ => CoarseLevel::default(),
+    };
+    // Optional 5th and 6th: the relaxation sweeps and local steps per re-inserted vertex.
+    if let Some(s) = args.get(4) {
+        coarse.sweeps = s.parse().expect("SWEEPS");
+    }
+    if let Some(s) = args.get(5) {
+        coarse.polish_steps = s.parse().expect("POLISH_STEPS");
+    }
+    let on = Multilevel::Always(coarse);
     let runs: Vec<(&str, Multilevel)> = match which {
         "single" => vec![("single-level", Multilevel::Never)],
         "multi" => vec![("multilevel", on)],

@@ -655,15 +655,19 @@ fn polish<D: Density + ?Sized>(
             .sum()
     };
     let mut p = p;
-    let mut energy = energy_at(uv, p);
+    // The star energy at `p`: summed by the first gradient pass (the same element
+    // energies, in the same order, as `energy_at`), then the line search's.
+    let mut energy = f64::NAN;
     let mut taken = 0;
-    for _ in 0..steps {
+    for step in 0..steps {
         // Gradient and Hessian of v's corner (the first one of every face).
         let (mut g, mut h) = ([0.0; 2], [[0.0; 2]; 2]);
+        let mut star_energy = 0.0;
         for (f, r) in star.iter().zip(rest) {
             let corners = [p, uv[f[1] as usize], uv[f[2] as usize]];
             let (mut eg, mut eh) = ([0.0; 6], [[0.0; 6]; 6]);
-            element::gradient_and_projected_hessian(r, &corners, density, &mut eg, &mut eh);
+            star_energy +=
+                element::gradient_and_projected_hessian(r, &corners, density, &mut eg, &mut eh);
             g[0] += eg[0];
             g[1] += eg[1];
             for i in 0..2 {
@@ -671,6 +675,9 @@ fn polish<D: Density + ?Sized>(
                     h[i][j] += eh[i][j];
                 }
             }
+        }
+        if step == 0 {
+            energy = star_energy;
         }
         let det = h[0][0] * h[1][1] - h[0][1] * h[1][0];
         if !(det > 0.0 && det.is_finite()) {
