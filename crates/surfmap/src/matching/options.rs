@@ -714,6 +714,17 @@ pub(crate) struct SimilaritySearch {
     /// pairs (BENCHMARKS.md).
     pub candidate_angle: f64,
     pub candidate_log_scale: f64,
+    /// Search the scale too (four parameters), else rotation and translation only
+    /// (the scale coordinate held at 0, and `candidate_log_scale` unused). Off by
+    /// default: with the scale, the energy per matched area the search minimizes
+    /// favours a shrunk A where A is the larger face (FLAME identity pairs from
+    /// `registered`: proposals ×0.90–0.99; on the BENCHMARKS pair registered → lmkfit
+    /// ×0.91, which shrank the matched area ratio from 0.94 to 0.73), while the rotation
+    /// alone ends lower in the coarsest level's energy there (10.00 against 10.28) and
+    /// nearer the truth: FLAME identity without input, 48 pairs (the BENCHMARKS set and
+    /// seeds 9–21), 95.5 → 96.4 % within 0.05 (docs/experiments/matching.md, "The
+    /// similarity search without its scale").
+    pub scale: bool,
 }
 
 impl Default for SimilaritySearch {
@@ -726,6 +737,7 @@ impl Default for SimilaritySearch {
             tolerance: 1e-7,
             candidate_angle: 0.0,
             candidate_log_scale: 0.0,
+            scale: false,
         }
     }
 }
@@ -733,7 +745,12 @@ impl Default for SimilaritySearch {
 impl SimilaritySearch {
     /// The starts tried, as `(angle, log scale)` relative to the given φ.
     pub(crate) fn candidates(&self) -> Vec<(f64, f64)> {
-        let (a, s) = (self.candidate_angle, self.candidate_log_scale);
+        let a = self.candidate_angle;
+        let s = if self.scale {
+            self.candidate_log_scale
+        } else {
+            0.0
+        };
         let steps = |x: f64| if x > 0.0 { vec![0.0, -x, x] } else { vec![0.0] };
         let mut out = vec![];
         for &da in &steps(a) {
