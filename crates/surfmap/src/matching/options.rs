@@ -715,7 +715,8 @@ pub(crate) struct SimilaritySearch {
     pub candidate_angle: f64,
     pub candidate_log_scale: f64,
     /// Search the scale too (four parameters), else rotation and translation only
-    /// (the scale coordinate held at 0, and `candidate_log_scale` unused). Off by
+    /// (the scale coordinate held at 0, and `candidate_log_scale` unused). Turned on
+    /// by extra starts with a scale (`Advanced::search_candidates`' `SCALE > 0`). Off by
     /// default: with the scale, the energy per matched area the search minimizes
     /// favours a shrunk A where A is the larger face (FLAME identity pairs from
     /// `registered`: proposals ×0.90–0.99; on the BENCHMARKS pair registered → lmkfit
@@ -921,6 +922,8 @@ impl MatchOptions {
             level: self.advanced.search_level,
             candidate_angle: deg.to_radians(),
             candidate_log_scale: (1.0 + scale).ln(),
+            // Scaled starts are asked for: search the scale too.
+            scale: self.tuning.search.scale || scale > 0.0,
             ..self.tuning.search
         }
     }
@@ -946,6 +949,24 @@ impl MatchOptions {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The search keeps the scale unless scaled starts are asked for; then it searches
+    /// it, from the starts `e^{±ln(1 + SCALE)}` as well as the given one.
+    #[test]
+    fn scaled_extra_starts_turn_the_scale_search_on() {
+        let mut o = MatchOptions::default();
+        let search = o.search();
+        assert!(!search.scale);
+        assert_eq!(search.candidates(), vec![(0.0, 0.0)]);
+        o.advanced.search_candidates = [5.0, 0.0];
+        assert!(!o.search().scale);
+        assert!(o.search().candidates().iter().all(|&(_, s)| s == 0.0));
+        o.advanced.search_candidates = [0.0, 0.05];
+        let search = o.search();
+        assert!(search.scale);
+        let scales: Vec<f64> = search.candidates().iter().map(|c| c.1).collect();
+        assert_eq!(scales, vec![0.0, -(1.05f64).ln(), (1.05f64).ln()]);
+    }
 
     /// Each setting out of range is refused by name, with the value given, worded with
     /// the front end's spelling; the defaults pass.
