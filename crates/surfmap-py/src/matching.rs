@@ -97,8 +97,9 @@ fn landmarks(d: &Bound<'_, PyDict>) -> PyResult<Landmarks> {
 /// more, their alignment refined in space: the coarsest level is solved from both and the
 /// second kept when it ends lower without matching less;
 /// ``report["alignment"]["features_in_space"]``) or ``"plane"`` (the first alone).
-/// ``similarity_search``: search the rotation, scale and translation of φ that lowers the
-/// matching energy per matched area on a coarse level, ``"shape"`` (only when the start
+/// ``similarity_search``: search the rotation and translation of φ (and its scale, when
+/// ``search_candidates`` has a SCALE above 0) that lowers the matching energy per matched
+/// area on a coarse level, ``"shape"`` (only when the start
 /// comes from the shapes in space, without features or landmarks), ``"always"`` or
 /// ``"off"`` (``report["alignment"]["search"]``). ``search_candidates``: the search's extra
 /// starts ``(DEG, SCALE)``, rotated by ±DEG degrees and scaled by (1 ± SCALE), DEG ≥ 0 and

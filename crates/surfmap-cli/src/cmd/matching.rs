@@ -122,14 +122,16 @@ pub struct Args {
     /// Where φ starts with features or landmarks (`--align auto` or `features`).
     #[arg(long, value_enum, default_value = "both")]
     pub features_start: FeaturesStartArg,
-    /// Search the rotation, scale and translation of φ that lowers the matching energy
-    /// per matched area on a coarse level, and go on from it when the coarsest level
+    /// Search the rotation and translation of φ (and its scale, with --search-candidates
+    /// DEG,SCALE and SCALE > 0) that lowers the matching energy per matched area on a
+    /// coarse level, and go on from it when the coarsest level
     /// solved from it ends lower without matching less (and, when the alignment's start
     /// matches A at a plausible size, 1/3–3 times its area on B, does too).
     #[arg(long, value_enum, default_value = "shape")]
     pub similarity_search: SearchArg,
     /// Extra starts of the similarity search: rotated by ±DEG degrees and scaled by
-    /// (1 ± SCALE) (the lowest energy is kept); 0,0 searches from the start alone.
+    /// (1 ± SCALE) (the lowest energy is kept); 0,0 searches from the start alone. A SCALE
+    /// above 0 also lets the search change the scale (by default it keeps it).
     #[arg(long, value_name = "DEG,SCALE", value_delimiter = ',')]
     pub search_candidates: Option<Vec<f64>>,
     /// Level k of the similarity search's energy (grid 2^k + 1; at least 1, at most the

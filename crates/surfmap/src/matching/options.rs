@@ -715,12 +715,17 @@ pub(crate) struct SimilaritySearch {
     pub candidate_angle: f64,
     pub candidate_log_scale: f64,
     /// Search the scale too (four parameters), else rotation and translation only
-    /// (the scale coordinate held at 0, and `candidate_log_scale` unused). On by
-    /// default. Off, FLAME identity without input gained (48 pairs, 95.5 → 96.4 % within
-    /// 0.05), but on a bent synthetic copy matched by three features (the Python test
-    /// `test_features_as_a_list_with_numpy_ids_are_the_same_features`) the recovery then
-    /// kept a start in space that ended at a mean error of 0.265 instead of 0.034
-    /// (docs/experiments/matching.md, "The similarity search without its scale").
+    /// (the scale coordinate held at 0, and `candidate_log_scale` unused). Turned on
+    /// by extra starts with a scale (`Advanced::search_candidates`' `SCALE > 0`). Off by
+    /// default: with the scale, the energy per matched area the search minimizes
+    /// favours a shrunk A where A is the larger face (FLAME identity pairs from
+    /// `registered`: proposals ×0.90–0.99; on the BENCHMARKS pair registered → lmkfit
+    /// ×0.91, which shrank the matched area ratio from 0.94 to 0.73), while the rotation
+    /// alone ends lower in the coarsest level's energy there (10.00 against 10.28) and
+    /// nearer the truth: FLAME identity without input, 48 pairs (the BENCHMARKS set and
+    /// seeds 9–21), 95.5 → 96.4 % within 0.05; ICT seeds 7, 10, 13: 104 of 108 outputs
+    /// byte-identical, 4 within ±0.1 point (docs/experiments/matching.md, "The
+    /// similarity search without its scale").
     pub scale: bool,
 }
 
@@ -734,7 +739,7 @@ impl Default for SimilaritySearch {
             tolerance: 1e-7,
             candidate_angle: 0.0,
             candidate_log_scale: 0.0,
-            scale: true,
+            scale: false,
         }
     }
 }
@@ -918,6 +923,8 @@ impl MatchOptions {
             level: self.advanced.search_level,
             candidate_angle: deg.to_radians(),
             candidate_log_scale: (1.0 + scale).ln(),
+            // Scaled starts are asked for: search the scale too.
+            scale: self.tuning.search.scale || scale > 0.0,
             ..self.tuning.search
         }
     }
@@ -943,6 +950,24 @@ impl MatchOptions {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The search keeps the scale unless scaled starts are asked for; then it searches
+    /// it, from the starts `e^{±ln(1 + SCALE)}` as well as the given one.
+    #[test]
+    fn scaled_extra_starts_turn_the_scale_search_on() {
+        let mut o = MatchOptions::default();
+        let search = o.search();
+        assert!(!search.scale);
+        assert_eq!(search.candidates(), vec![(0.0, 0.0)]);
+        o.advanced.search_candidates = [5.0, 0.0];
+        assert!(!o.search().scale);
+        assert!(o.search().candidates().iter().all(|&(_, s)| s == 0.0));
+        o.advanced.search_candidates = [0.0, 0.05];
+        let search = o.search();
+        assert!(search.scale);
+        let scales: Vec<f64> = search.candidates().iter().map(|c| c.1).collect();
+        assert_eq!(scales, vec![0.0, -(1.05f64).ln(), (1.05f64).ln()]);
+    }
 
     /// Each setting out of range is refused by name, with the value given, worded with
     /// the front end's spelling; the defaults pass.

@@ -661,10 +661,12 @@ mod tests {
     fn the_search_brings_a_turned_and_scaled_start_back() {
         let (mesh_a, mesh_b) = (bumpy_disc(18, 0.4), bumpy_disc(23, 0.4));
         let unit = shared_length_unit(mesh_a.area(), mesh_b.area());
-        let options = MatchOptions {
+        let mut options = MatchOptions {
             size: 129,
             ..Default::default()
         };
+        // The search with its scale (off by default, `SimilaritySearch::scale`).
+        options.tuning.search.scale = true;
         let surface = |m: &TriMesh| MatchSurface::new(m, None, 129, true, unit).unwrap();
         let (sa, sb) = (surface(&mesh_a), surface(&mesh_b));
         let closest = ClosestPoints::new(&sb.positions);

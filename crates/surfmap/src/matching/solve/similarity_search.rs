@@ -6,8 +6,9 @@
 //! by local residuals, barely points along). Measured on the FLAME pairs (BENCHMARKS.md,
 //! "Faces never tuned on"), a start 6° or 7 % in scale off the similarity the energy
 //! prefers is not corrected by the multiscale solve. Here the energy is minimized over
-//! the four parameters of a similarity `S` of the plane applied to the current φ,
-//! `φ ← S∘φ`, before the solve.
+//! the parameters of a similarity `S` of the plane applied to the current φ,
+//! `φ ← S∘φ`, before the solve: rotation and translation by default, the scale too
+//! when asked (below).
 //!
 //! **Parametrization.** With `c` the centroid of φ over A's domain (node weights
 //! `√det g_A·χ_A`) and `r` the RMS distance of those nodes' images from `c`,
@@ -17,9 +18,11 @@
 //! ```
 //!
 //! so that all four coordinates are lengths in ω (a unit of `q₀` or `q₁` moves a node at
-//! the typical distance `r` by about one unit, as a unit of `q₂` does). With
-//! [`SimilaritySearch::scale`] off, `q₀` is held at 0 (a rotation and translation
-//! only; measured and not the default, see there). `S_0 = id`, and a
+//! the typical distance `r` by about one unit, as a unit of `q₂` does). By default the
+//! scale `q₀` is held at 0 — a rotation and translation only
+//! ([`SimilaritySearch::scale`]): with it, the ratio below favours shrinking A where A
+//! is the larger face, and on the FLAME identity pairs the rotation alone ends lower
+//! after the coarsest level's solve and nearer the truth. `S_0 = id`, and a
 //! similarity of positive scale never folds a triangle, so every trial stays in the
 //! admissible (fold-free) set; the energy's own `+∞` on a fold is still checked.
 //!
@@ -623,12 +626,16 @@ mod tests {
         assert!((back.scale() * 1.05 - 1.0).abs() < 1e-4, "{back:?}");
     }
 
-    /// Without the scale (`SimilaritySearch::scale` off) the same self-match, started turned *and*
+    /// Without the scale (the default) the same self-match, started turned *and*
     /// scaled, is turned back and moved, and its scale left exactly as it was: the
     /// reported similarity has scale 1 to rounding, and it undoes most of the start's
     /// rotation.
     #[test]
     fn without_the_scale_the_search_turns_back_and_keeps_the_scale() {
+        assert!(
+            !SimilaritySearch::default().scale,
+            "the default searches the scale"
+        );
         let (log, _, start) = search_a_turned_and_scaled_self_match(false);
         let back = log.similarity;
         assert!((back.scale() - 1.0).abs() < 1e-12, "{back:?}");
