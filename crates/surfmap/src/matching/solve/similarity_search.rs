@@ -1,5 +1,5 @@
 //! A search over the plane similarities applied to φ at the coarsest level: the global
-//! rotation, scale and translation that the matching energy prefers.
+//! rotation and translation (and, when asked, the scale) that the matching energy prefers.
 //!
 //! Why: NCG on the full displacement field is a local optimizer, and a global rotation
 //! or scale of φ is its slowest mode (a low-frequency field that the gradient, dominated
